@@ -1,0 +1,461 @@
+//! The subwave container: magic, format version, typed sections with lengths and
+//! checksums, and the limits that keep a hostile file from costing more than it should.
+//!
+//! This crate knows bytes, not meshes: a tool can list and verify a container with it
+//! without decoding any geometry. The layout is normative in `SPEC.md` section 2.
+//!
+//! ```
+//! use subwave_container::{ContainerWriter, Container, SectionKind, Limits};
+//! let mut w = ContainerWriter::new();
+//! w.section(SectionKind::HEADER, b"hello");
+//! let bytes = w.finish();
+//! let c = Container::parse(&bytes, &Limits::default()).unwrap();
+//! assert!(c.complete);
+//! assert_eq!(c.sections[0].payload, b"hello");
+//! ```
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+mod bytes;
+mod limits;
+
+pub use bytes::{ByteReader, ByteWriter};
+pub use limits::Limits;
+
+use std::fmt;
+
+/// The eight bytes every container starts with (SPEC.md 2.1). The high first byte and
+/// the CR LF / SUB / LF tail catch 7-bit transfers and newline translation, as PNG's do.
+pub const MAGIC: [u8; 8] = [0x89, b'S', b'W', b'V', b'\r', b'\n', 0x1a, b'\n'];
+
+/// The format version this crate writes and the newest it reads.
+pub const FORMAT_VERSION: u16 = 1;
+
+/// Bytes before the first section: magic, version, reserved.
+pub const PREAMBLE_LEN: usize = 12;
+
+/// Bytes a section adds around its payload: kind, length, CRC.
+pub const SECTION_OVERHEAD: usize = 12;
+
+/// Errors from reading a container. Sorted by who is at fault.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// The bytes are not a subwave container at all.
+    #[error("not a subwave container (wrong magic bytes)")]
+    BadMagic,
+    /// The container was written by a newer version of the format.
+    #[error("format version {found} is newer than this build supports (up to {supported}); upgrade subwave")]
+    NewerVersion {
+        /// The version in the file.
+        found: u16,
+        /// The newest version this build reads.
+        supported: u16,
+    },
+    /// The container is damaged or was not produced by a conforming encoder.
+    #[error("corrupt container at byte {offset}: {what}")]
+    Malformed {
+        /// Byte offset in the container where the problem was found.
+        offset: u64,
+        /// What is wrong.
+        what: String,
+    },
+    /// A section's checksum does not match its bytes.
+    #[error("corrupt container: checksum mismatch in section {kind} at byte {offset}")]
+    Checksum {
+        /// The section's kind, as written.
+        kind: SectionKind,
+        /// Byte offset of the section's start.
+        offset: u64,
+    },
+    /// The container ends before it is complete.
+    #[error("truncated container: {what}")]
+    Truncated {
+        /// What was expected when the bytes ran out.
+        what: String,
+    },
+    /// A declared size is larger than the limits allow.
+    #[error("limit exceeded: {what} = {requested} is more than the limit {limit}")]
+    Limit {
+        /// Which quantity.
+        what: &'static str,
+        /// The value the input asked for.
+        requested: u64,
+        /// The limit in force.
+        limit: u64,
+    },
+}
+
+impl Error {
+    /// Shorthand for [`Error::Malformed`].
+    pub fn malformed(offset: u64, what: impl Into<String>) -> Self {
+        Error::Malformed {
+            offset,
+            what: what.into(),
+        }
+    }
+}
+
+/// A section's four-byte kind code (SPEC.md 2.2).
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+pub struct SectionKind(pub [u8; 4]);
+
+impl SectionKind {
+    /// Counts, family, transform and quantisation.
+    pub const HEADER: SectionKind = SectionKind(*b"HEAD");
+    /// The base mesh: connectivity and positions.
+    pub const BASE: SectionKind = SectionKind(*b"BASE");
+    /// One refinement level's coefficients.
+    pub const LEVEL: SectionKind = SectionKind(*b"LEVL");
+    /// The permutation back to the input's vertex order.
+    pub const ORDER: SectionKind = SectionKind(*b"ORDR");
+    /// Marks the end of a complete container.
+    pub const END: SectionKind = SectionKind(*b"SEND");
+}
+
+impl fmt::Display for SectionKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for &b in &self.0 {
+            if b.is_ascii_graphic() {
+                write!(f, "{}", b as char)?;
+            } else {
+                write!(f, "\\x{b:02x}")?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl fmt::Debug for SectionKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "SectionKind({self})")
+    }
+}
+
+/// One section as found in a container.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Section<'a> {
+    /// The kind code.
+    pub kind: SectionKind,
+    /// Byte offset of the section's first byte (its kind code) in the container.
+    pub offset: u64,
+    /// The payload, checksum verified.
+    pub payload: &'a [u8],
+}
+
+impl Section<'_> {
+    /// Bytes the section occupies in the container, overhead included.
+    pub fn total_len(&self) -> usize {
+        self.payload.len() + SECTION_OVERHEAD
+    }
+}
+
+/// A parsed container: its version and the sections whose checksums verified.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Container<'a> {
+    /// The format version in the preamble.
+    pub version: u16,
+    /// Every whole section, in file order, up to and including the end marker.
+    pub sections: Vec<Section<'a>>,
+    /// Whether the end marker was found. A container read with
+    /// [`Container::parse_prefix`] may stop early.
+    pub complete: bool,
+}
+
+impl<'a> Container<'a> {
+    /// Parses a complete container: every section must be whole, checksums must match,
+    /// and the end marker must be the last thing in the bytes.
+    pub fn parse(bytes: &'a [u8], limits: &Limits) -> Result<Self, Error> {
+        let c = Self::parse_inner(bytes, limits, false)?;
+        if !c.complete {
+            return Err(Error::Truncated {
+                what: format!("no end marker after {} bytes", bytes.len()),
+            });
+        }
+        Ok(c)
+    }
+
+    /// Parses as much of a possibly cut-off container as is whole. A section cut off in
+    /// the middle ends the list without error (so a decoder can use the levels before
+    /// it); a checksum mismatch in a whole section is still an error.
+    pub fn parse_prefix(bytes: &'a [u8], limits: &Limits) -> Result<Self, Error> {
+        Self::parse_inner(bytes, limits, true)
+    }
+
+    fn parse_inner(bytes: &'a [u8], limits: &Limits, lenient: bool) -> Result<Self, Error> {
+        if bytes.len() < MAGIC.len() {
+            if MAGIC.starts_with(bytes) && !bytes.is_empty() {
+                return Err(Error::Truncated {
+                    what: format!("only {} bytes, not even the magic", bytes.len()),
+                });
+            }
+            return Err(Error::BadMagic);
+        }
+        if bytes[..MAGIC.len()] != MAGIC {
+            return Err(Error::BadMagic);
+        }
+        if bytes.len() < PREAMBLE_LEN {
+            return Err(Error::Truncated {
+                what: "the preamble (version) is cut off".into(),
+            });
+        }
+        let version = u16::from_le_bytes([bytes[8], bytes[9]]);
+        if version > FORMAT_VERSION {
+            return Err(Error::NewerVersion {
+                found: version,
+                supported: FORMAT_VERSION,
+            });
+        }
+        if version == 0 {
+            return Err(Error::malformed(8, "format version 0 does not exist"));
+        }
+        let reserved = u16::from_le_bytes([bytes[10], bytes[11]]);
+        if reserved != 0 {
+            return Err(Error::malformed(
+                10,
+                format!("reserved preamble field is {reserved:#06x}, must be 0"),
+            ));
+        }
+        let mut sections = Vec::new();
+        let mut pos = PREAMBLE_LEN;
+        let mut complete = false;
+        while pos < bytes.len() {
+            if sections.len() >= limits.max_sections {
+                return Err(Error::Limit {
+                    what: "sections",
+                    requested: sections.len() as u64 + 1,
+                    limit: limits.max_sections as u64,
+                });
+            }
+            let rest = &bytes[pos..];
+            if rest.len() < 8 {
+                if lenient {
+                    break;
+                }
+                return Err(Error::Truncated {
+                    what: format!("section header at byte {pos} is cut off"),
+                });
+            }
+            let kind = SectionKind([rest[0], rest[1], rest[2], rest[3]]);
+            let len = u32::from_le_bytes([rest[4], rest[5], rest[6], rest[7]]) as u64;
+            if len > limits.max_section_bytes {
+                return Err(Error::Limit {
+                    what: "section length",
+                    requested: len,
+                    limit: limits.max_section_bytes,
+                });
+            }
+            // len <= u32::MAX, so this cannot overflow u64.
+            let needed = len + SECTION_OVERHEAD as u64;
+            if needed > rest.len() as u64 {
+                if lenient {
+                    break;
+                }
+                return Err(Error::Truncated {
+                    what: format!(
+                        "section {kind} at byte {pos} declares {len} payload bytes, only {} remain",
+                        rest.len().saturating_sub(SECTION_OVERHEAD)
+                    ),
+                });
+            }
+            let len = len as usize;
+            let payload = &rest[8..8 + len];
+            let crc_stored = u32::from_le_bytes([
+                rest[8 + len],
+                rest[9 + len],
+                rest[10 + len],
+                rest[11 + len],
+            ]);
+            if crc32fast::hash(&rest[..8 + len]) != crc_stored {
+                return Err(Error::Checksum {
+                    kind,
+                    offset: pos as u64,
+                });
+            }
+            sections.push(Section {
+                kind,
+                offset: pos as u64,
+                payload,
+            });
+            pos += needed as usize;
+            if kind == SectionKind::END {
+                if !payload.is_empty() {
+                    return Err(Error::malformed(
+                        pos as u64,
+                        "end marker section must be empty",
+                    ));
+                }
+                complete = true;
+                break;
+            }
+        }
+        if complete && pos != bytes.len() {
+            return Err(Error::malformed(
+                pos as u64,
+                format!("{} bytes after the end marker", bytes.len() - pos),
+            ));
+        }
+        Ok(Container {
+            version,
+            sections,
+            complete,
+        })
+    }
+}
+
+/// Writes a container: preamble, then sections in the order given, then the end marker.
+#[derive(Debug, Clone)]
+pub struct ContainerWriter {
+    out: Vec<u8>,
+}
+
+impl Default for ContainerWriter {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl ContainerWriter {
+    /// Starts a container with the preamble of [`FORMAT_VERSION`].
+    pub fn new() -> Self {
+        let mut out = Vec::with_capacity(1024);
+        out.extend_from_slice(&MAGIC);
+        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        out.extend_from_slice(&0u16.to_le_bytes());
+        ContainerWriter { out }
+    }
+
+    /// Appends one section.
+    ///
+    /// # Panics
+    /// If the payload is 4 GiB or more (no encoder output comes near that; the codec
+    /// checks its inputs against [`Limits`] first).
+    pub fn section(&mut self, kind: SectionKind, payload: &[u8]) {
+        let len = u32::try_from(payload.len()).expect("section payload under 4 GiB");
+        let start = self.out.len();
+        self.out.extend_from_slice(&kind.0);
+        self.out.extend_from_slice(&len.to_le_bytes());
+        self.out.extend_from_slice(payload);
+        let crc = crc32fast::hash(&self.out[start..]);
+        self.out.extend_from_slice(&crc.to_le_bytes());
+    }
+
+    /// Appends the end marker and returns the bytes.
+    pub fn finish(mut self) -> Vec<u8> {
+        self.section(SectionKind::END, &[]);
+        self.out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> Vec<u8> {
+        let mut w = ContainerWriter::new();
+        w.section(SectionKind::HEADER, &[1, 2, 3]);
+        w.section(SectionKind::BASE, &[9; 40]);
+        w.finish()
+    }
+
+    #[test]
+    fn round_trip() {
+        let b = sample();
+        let c = Container::parse(&b, &Limits::default()).unwrap();
+        assert_eq!(c.version, FORMAT_VERSION);
+        assert_eq!(c.sections.len(), 3);
+        assert_eq!(c.sections[1].payload, &[9; 40][..]);
+        assert_eq!(c.sections[2].kind, SectionKind::END);
+    }
+
+    #[test]
+    fn every_bit_flip_is_an_error() {
+        let b = sample();
+        for i in 0..b.len() * 8 {
+            let mut x = b.clone();
+            x[i / 8] ^= 1 << (i % 8);
+            assert!(
+                Container::parse(&x, &Limits::default()).is_err(),
+                "flip of bit {i} went unnoticed"
+            );
+        }
+    }
+
+    #[test]
+    fn every_truncation_is_an_error() {
+        let b = sample();
+        for n in 0..b.len() {
+            assert!(Container::parse(&b[..n], &Limits::default()).is_err());
+        }
+    }
+
+    #[test]
+    fn prefix_keeps_whole_sections() {
+        let b = sample();
+        let cut = PREAMBLE_LEN + SECTION_OVERHEAD + 3 + 5;
+        let c = Container::parse_prefix(&b[..cut], &Limits::default()).unwrap();
+        assert!(!c.complete);
+        assert_eq!(c.sections.len(), 1);
+    }
+
+    #[test]
+    fn specific_errors() {
+        let b = sample();
+        let mut x = b.clone();
+        x[0] = b'P';
+        assert_eq!(
+            Container::parse(&x, &Limits::default()),
+            Err(Error::BadMagic)
+        );
+        let mut x = b.clone();
+        x[8] = 2;
+        assert!(matches!(
+            Container::parse(&x, &Limits::default()),
+            Err(Error::NewerVersion { found: 2, .. })
+        ));
+        let mut x = b.clone();
+        x[PREAMBLE_LEN + 4..PREAMBLE_LEN + 8].copy_from_slice(&u32::MAX.to_le_bytes());
+        let limits = Limits {
+            max_section_bytes: 1 << 20,
+            ..Limits::default()
+        };
+        assert!(matches!(
+            Container::parse(&x, &limits),
+            Err(Error::Limit {
+                what: "section length",
+                ..
+            })
+        ));
+        let mut x = b.clone();
+        x.push(0);
+        assert!(matches!(
+            Container::parse(&x, &Limits::default()),
+            Err(Error::Malformed { .. })
+        ));
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn arbitrary_sections_round_trip(payloads in proptest::collection::vec(proptest::collection::vec(0u8..=255, 0..200), 0..8)) {
+            let mut w = ContainerWriter::new();
+            for p in &payloads {
+                w.section(SectionKind::LEVEL, p);
+            }
+            let b = w.finish();
+            let c = Container::parse(&b, &Limits::default()).unwrap();
+            proptest::prop_assert_eq!(c.sections.len(), payloads.len() + 1);
+            for (s, p) in c.sections.iter().zip(&payloads) {
+                proptest::prop_assert_eq!(s.payload, &p[..]);
+            }
+        }
+
+        #[test]
+        fn arbitrary_bytes_never_panic(data in proptest::collection::vec(0u8..=255, 0..300)) {
+            let _ = Container::parse(&data, &Limits::default());
+            let mut with_magic = sample()[..PREAMBLE_LEN].to_vec();
+            with_magic.extend_from_slice(&data);
+            let _ = Container::parse(&with_magic, &Limits::default());
+            let _ = Container::parse_prefix(&with_magic, &Limits::default());
+        }
+    }
+}
