@@ -1,1 +1,148 @@
+//! # subwave
+//!
+//! A lossless integer geometry codec for polygon meshes, aimed at meshes with
+//! subdivision connectivity. Mesh file in, small container out, and back, value for
+//! value.
+//!
+//! ```
+//! let obj = b"v 0.0 0.0 0.0\nv 1.0 0.0 0.0\nv 1.0 1.0 0.0\nv 0.0 1.0 0.5\nf 1 2 3 4\n";
+//! let input = subwave::load(obj, None).unwrap();          // exact: the file's own decimals
+//! let enc = subwave::encode_to_vec(&input.mesh, &input.quantization,
+//!     &subwave::EncodeOptions { keep_order: true, ..Default::default() }).unwrap();
+//! let dec = subwave::decode_slice(&enc.bytes).unwrap();
+//! assert_eq!(dec.mesh, input.mesh);                        // every integer, in input order
+//! let mut out = Vec::new();
+//! subwave::write_mesh(&mut out, &dec.mesh, &dec.quantization, subwave::Format::Obj).unwrap();
+//! assert_eq!(out, obj);                                    // and the same text
+//! ```
+//!
+//! The container layout and every arithmetic rule are specified in `SPEC.md`.
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
 
+use std::collections::BTreeSet;
+
+pub use subwave_codec::io::{read_mesh, write_mesh, Format, RawMesh};
+pub use subwave_codec::{
+    decode, encode, inspect, DecodeOptions, Decoded, EncodeOptions, Encoded, Error, Family,
+    FloatWidth, Header, Info, Limits, Mesh, Quantization, RawCoords, Result, SectionInfo, Source,
+    Transform, FORMAT_VERSION, MAX_COORD,
+};
+
+/// A mesh file read and turned into integers.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    /// The integer mesh, in the file's vertex and face order.
+    pub mesh: Mesh,
+    /// How its integers map back to the file's values.
+    pub quantization: Quantization,
+    /// The format that was read.
+    pub format: Format,
+    /// What the file had that subwave does not carry.
+    pub dropped: BTreeSet<String>,
+}
+
+impl Loaded {
+    /// The [`Source`] to record for this file's format.
+    pub fn source(&self) -> Source {
+        match self.format {
+            Format::Obj => Source::Obj,
+            Format::PlyAscii => Source::PlyAscii,
+            Format::PlyBinary | Format::PlyBinaryBigEndian => Source::PlyBinary,
+            Format::Off => Source::Off,
+        }
+    }
+}
+
+/// Reads a mesh file (OBJ, PLY or OFF, sniffed from its bytes) and turns its positions
+/// into integers: exactly when `bits` is `None`, on Draco's `bits`-bit grid otherwise.
+pub fn load(bytes: &[u8], bits: Option<u8>) -> Result<Loaded> {
+    let raw = read_mesh(bytes)?;
+    let (positions, quantization) = subwave_codec::quant::integerize(&raw.coords, bits)?;
+    let mut mesh = raw.topology;
+    mesh.positions = positions;
+    mesh.validate()?;
+    Ok(Loaded {
+        mesh,
+        quantization,
+        format: raw.format,
+        dropped: raw.dropped,
+    })
+}
+
+/// Encodes a mesh into a new container.
+pub fn encode_to_vec(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Encoded> {
+    encode(mesh, q, opts)
+}
+
+/// Decodes a whole container with the default [`Limits`].
+pub fn decode_slice(bytes: &[u8]) -> Result<Decoded> {
+    decode(bytes, &DecodeOptions::default())
+}
+
+/// The format to write when the output's name does not say: the input's own format.
+pub fn default_output_format(source: Source) -> Format {
+    match source {
+        Source::PlyAscii => Format::PlyAscii,
+        Source::PlyBinary => Format::PlyBinary,
+        Source::Off => Format::Off,
+        Source::Obj | Source::Unknown => Format::Obj,
+    }
+}
+
+/// Checks that `decoded` is `original` with its vertices renumbered by `order`
+/// (`order[i]` = the original index of decoded vertex `i`): every position equal, and
+/// the same faces (each with the same cyclic order and orientation) in any face order.
+/// Returns a description of the first difference.
+pub fn compare_up_to_order(
+    original: &Mesh,
+    decoded: &Mesh,
+    order: &[u32],
+) -> std::result::Result<(), String> {
+    if decoded.vertex_count() != original.vertex_count() || order.len() != decoded.vertex_count() {
+        return Err(format!(
+            "{} vertices decoded, {} expected",
+            decoded.vertex_count(),
+            original.vertex_count()
+        ));
+    }
+    if decoded.face_count() != original.face_count() {
+        return Err(format!(
+            "{} faces decoded, {} expected",
+            decoded.face_count(),
+            original.face_count()
+        ));
+    }
+    for (i, &o) in order.iter().enumerate() {
+        let want = original
+            .positions
+            .get(o as usize)
+            .ok_or_else(|| format!("order names vertex {o}, out of range"))?;
+        if decoded.positions[i] != *want {
+            return Err(format!(
+                "vertex {} decoded as {:?}, expected {:?}",
+                o + 1,
+                decoded.positions[i],
+                want
+            ));
+        }
+    }
+    let canon = |face: &[u32]| -> Vec<u32> {
+        let k = (0..face.len()).min_by_key(|&i| face[i]).unwrap_or(0);
+        face[k..].iter().chain(&face[..k]).copied().collect()
+    };
+    let mut a: Vec<Vec<u32>> = original.iter_faces().map(canon).collect();
+    let mut b: Vec<Vec<u32>> = decoded
+        .iter_faces()
+        .map(|f| canon(&f.iter().map(|&v| order[v as usize]).collect::<Vec<_>>()))
+        .collect();
+    a.sort_unstable();
+    b.sort_unstable();
+    if let Some(i) = (0..a.len()).find(|&i| a[i] != b[i]) {
+        return Err(format!(
+            "faces differ: expected {:?}, decoded {:?}",
+            a[i], b[i]
+        ));
+    }
+    Ok(())
+}

@@ -1,1 +1,399 @@
-fn main(){}
+//! The `subwave` command: a thin layer over the `subwave` library.
+
+use std::io::{IsTerminal, Read, Write};
+use std::path::Path;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use clap::{Parser, Subcommand, ValueEnum};
+use serde_json::json;
+use subwave::{DecodeOptions, EncodeOptions, Format, Limits, Quantization};
+
+const EXAMPLES: &str = "\
+Examples:
+  subwave compress corpus/cube_cc3.obj cube.swv          exact: the file's own values
+  subwave compress scan.ply scan.swv --bits 16           Draco's 16-bit grid
+  subwave decompress cube.swv cube.obj                   format follows the extension
+  subwave decompress cube.swv - --format off > cube.off  '-' is stdout (stdin for input)
+  subwave info cube.swv --json
+  subwave verify corpus/cube_cc3.obj                     compress + decompress in memory";
+
+#[derive(Parser)]
+#[command(
+    name = "subwave",
+    version,
+    about = "Lossless integer geometry codec for meshes with subdivision connectivity",
+    after_help = EXAMPLES
+)]
+struct Cli {
+    /// Do not print warnings.
+    #[arg(short, long, global = true)]
+    quiet: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Compress a mesh file (OBJ, PLY or OFF) into a .swv container.
+    #[command(after_help = EXAMPLES)]
+    Compress {
+        /// Input mesh file, or - for standard input.
+        input: String,
+        /// Output container, or - for standard output.
+        output: String,
+        /// Quantise to Draco's Q-bit grid (1..=30) instead of keeping the exact values.
+        #[arg(long, value_name = "Q", value_parser = clap::value_parser!(u8).range(1..=30))]
+        bits: Option<u8>,
+        /// Store the input's vertex order so decompression restores it.
+        #[arg(long)]
+        keep_order: bool,
+    },
+    /// Decompress a .swv container into a mesh file.
+    #[command(after_help = EXAMPLES)]
+    Decompress {
+        /// Input container, or - for standard input.
+        input: String,
+        /// Output mesh file, or - for standard output.
+        output: String,
+        /// Output format; by default the output's extension, else the input's format.
+        #[arg(long, value_enum)]
+        format: Option<OutFormat>,
+        /// Write the mesh of refinement level K (0 = base mesh); works on a file cut off
+        /// after level K's section.
+        #[arg(long, value_name = "K")]
+        max_level: Option<u8>,
+    },
+    /// Describe a container: counts, family, transform, quantisation, section sizes.
+    Info {
+        /// The container, or - for standard input.
+        file: String,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Compress and decompress in memory and check the result is exact.
+    Verify {
+        /// Input mesh file, or - for standard input.
+        input: String,
+        /// Quantise to Draco's Q-bit grid first.
+        #[arg(long, value_name = "Q", value_parser = clap::value_parser!(u8).range(1..=30))]
+        bits: Option<u8>,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum OutFormat {
+    Obj,
+    /// Binary little-endian PLY.
+    Ply,
+    /// ASCII PLY.
+    PlyAscii,
+    Off,
+}
+
+/// An error for the user: the file it concerns and what went wrong.
+struct Failure {
+    file: String,
+    message: String,
+}
+
+fn fail(file: &str, e: impl std::fmt::Display) -> Failure {
+    Failure {
+        file: file.to_string(),
+        message: e.to_string(),
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(&cli) {
+        Ok(code) => code,
+        Err(f) => {
+            let name = if f.file == "-" {
+                "<stdin/stdout>"
+            } else {
+                &f.file
+            };
+            eprintln!("subwave: error: {name}: {}", f.message);
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// A spinner on stderr that shows itself only after a second of work, and only when
+/// stderr is a terminal.
+struct Progress {
+    bar: indicatif::ProgressBar,
+}
+
+impl Progress {
+    fn new() -> Self {
+        let bar = indicatif::ProgressBar::hidden();
+        if std::io::stderr().is_terminal() {
+            let b = bar.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_secs(1));
+                if !b.is_finished() {
+                    b.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+                    b.enable_steady_tick(Duration::from_millis(120));
+                }
+            });
+        }
+        Progress { bar }
+    }
+
+    fn stage(&self, what: &'static str) {
+        self.bar.set_message(what);
+    }
+}
+
+impl Drop for Progress {
+    fn drop(&mut self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+fn read_input(path: &str) -> Result<Vec<u8>, Failure> {
+    if path == "-" {
+        let mut v = Vec::new();
+        std::io::stdin()
+            .read_to_end(&mut v)
+            .map_err(|e| fail(path, e))?;
+        return Ok(v);
+    }
+    std::fs::read(path).map_err(|e| fail(path, e))
+}
+
+fn write_output(path: &str, bytes: &[u8]) -> Result<(), Failure> {
+    if path == "-" {
+        let mut out = std::io::stdout().lock();
+        return out
+            .write_all(bytes)
+            .and_then(|_| out.flush())
+            .map_err(|e| fail(path, e));
+    }
+    std::fs::write(path, bytes).map_err(|e| fail(path, e))
+}
+
+fn warn_dropped(quiet: bool, file: &str, loaded: &subwave::Loaded) {
+    if !quiet && !loaded.dropped.is_empty() {
+        let list: Vec<&str> = loaded.dropped.iter().map(String::as_str).collect();
+        eprintln!(
+            "subwave: warning: {file}: not carried (positions and faces only): {}",
+            list.join(", ")
+        );
+    }
+}
+
+fn run(cli: &Cli) -> Result<ExitCode, Failure> {
+    match &cli.command {
+        Command::Compress {
+            input,
+            output,
+            bits,
+            keep_order,
+        } => {
+            let progress = Progress::new();
+            progress.stage("reading");
+            let bytes = read_input(input)?;
+            let loaded = subwave::load(&bytes, *bits).map_err(|e| fail(input, e))?;
+            warn_dropped(cli.quiet, input, &loaded);
+            progress.stage("encoding");
+            let opts = EncodeOptions {
+                keep_order: *keep_order,
+                source: loaded.source(),
+            };
+            let enc = subwave::encode_to_vec(&loaded.mesh, &loaded.quantization, &opts)
+                .map_err(|e| fail(input, e))?;
+            progress.stage("writing");
+            write_output(output, &enc.bytes)?;
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Decompress {
+            input,
+            output,
+            format,
+            max_level,
+        } => {
+            let progress = Progress::new();
+            progress.stage("reading");
+            let bytes = read_input(input)?;
+            progress.stage("decoding");
+            let opts = DecodeOptions {
+                limits: Limits::default(),
+                max_level: *max_level,
+            };
+            let dec = subwave::decode(&bytes, &opts).map_err(|e| fail(input, e))?;
+            let fmt = match format {
+                Some(OutFormat::Obj) => Format::Obj,
+                Some(OutFormat::Ply) => Format::PlyBinary,
+                Some(OutFormat::PlyAscii) => Format::PlyAscii,
+                Some(OutFormat::Off) => Format::Off,
+                None => {
+                    let src = subwave::default_output_format(dec.header.source);
+                    match Format::from_path(output) {
+                        // A .ply name keeps the input's PLY flavour when it was PLY.
+                        Some(f) if f.is_ply() && src.is_ply() => src,
+                        Some(f) => f,
+                        None => src,
+                    }
+                }
+            };
+            progress.stage("writing");
+            let mut buf = Vec::new();
+            subwave::write_mesh(&mut buf, &dec.mesh, &dec.quantization, fmt)
+                .map_err(|e| fail(output, e))?;
+            write_output(output, &buf)?;
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Info { file, json } => {
+            let bytes = read_input(file)?;
+            let info = subwave::inspect(&bytes, &Limits::default()).map_err(|e| fail(file, e))?;
+            print_info(&info, *json);
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Verify { input, bits, json } => verify(cli, input, *bits, *json),
+    }
+}
+
+fn quant_json(q: &Quantization) -> serde_json::Value {
+    match *q {
+        Quantization::Decimal { decimals } => json!({"kind": "decimal", "decimals": decimals}),
+        Quantization::Float { width, exponent } => json!({
+            "kind": "float",
+            "width": match width { subwave::FloatWidth::F32 => 32, subwave::FloatWidth::F64 => 64 },
+            "exponent": exponent,
+        }),
+        Quantization::Grid { bits, origin, step } => json!({
+            "kind": "grid", "bits": bits, "origin": origin, "step": step,
+        }),
+    }
+}
+
+fn bpv(bytes: usize, vertices: u64) -> f64 {
+    if vertices == 0 {
+        0.0
+    } else {
+        bytes as f64 * 8.0 / vertices as f64
+    }
+}
+
+fn print_info(info: &subwave::Info, as_json: bool) {
+    let h = &info.header;
+    let bits_per_vertex = bpv(info.bytes, h.vertices);
+    if as_json {
+        let v = json!({
+            "format_version": info.version,
+            "vertices": h.vertices,
+            "faces": h.faces,
+            "corners": h.corners,
+            "base_vertices": h.base_vertices,
+            "base_faces": h.base_faces,
+            "levels": h.levels,
+            "family": h.family.name(),
+            "transform": h.transform.name(),
+            "quantization": quant_json(&h.quantization),
+            "keep_order": h.has_order,
+            "sections": info.sections.iter().map(|s| json!({"kind": s.kind, "bytes": s.bytes})).collect::<Vec<_>>(),
+            "bytes": info.bytes,
+            "bits_per_vertex": bits_per_vertex,
+        });
+        println!("{v}");
+        return;
+    }
+    println!("format version  {}", info.version);
+    println!("vertices        {}", h.vertices);
+    println!("faces           {} ({} corners)", h.faces, h.corners);
+    println!(
+        "base mesh       {} vertices, {} faces",
+        h.base_vertices, h.base_faces
+    );
+    println!("levels          {}", h.levels);
+    println!("family          {}", h.family.name());
+    println!("transform       {}", h.transform.name());
+    println!("quantisation    {}", h.quantization.describe());
+    println!(
+        "vertex order    {}",
+        if h.has_order {
+            "input order (stored)"
+        } else {
+            "canonical"
+        }
+    );
+    let secs: Vec<String> = info
+        .sections
+        .iter()
+        .map(|s| format!("{} {} B", s.kind, s.bytes))
+        .collect();
+    println!("sections        {}", secs.join(", "));
+    println!(
+        "size            {} bytes, {:.3} bits per vertex",
+        info.bytes, bits_per_vertex
+    );
+}
+
+fn verify(cli: &Cli, input: &str, bits: Option<u8>, as_json: bool) -> Result<ExitCode, Failure> {
+    let progress = Progress::new();
+    progress.stage("reading");
+    let bytes = read_input(input)?;
+    let loaded = subwave::load(&bytes, bits).map_err(|e| fail(input, e))?;
+    warn_dropped(cli.quiet, input, &loaded);
+    progress.stage("encoding");
+    let t0 = Instant::now();
+    let enc = subwave::encode_to_vec(
+        &loaded.mesh,
+        &loaded.quantization,
+        &EncodeOptions::default(),
+    )
+    .map_err(|e| fail(input, e))?;
+    let encode_ms = t0.elapsed().as_secs_f64() * 1e3;
+    progress.stage("decoding");
+    let t1 = Instant::now();
+    let dec = subwave::decode_slice(&enc.bytes).map_err(|e| fail(input, e))?;
+    let decode_ms = t1.elapsed().as_secs_f64() * 1e3;
+    drop(progress);
+    let check = subwave::compare_up_to_order(&loaded.mesh, &dec.mesh, &enc.order);
+    let exact = check.is_ok() && dec.quantization == loaded.quantization;
+    let n = loaded.mesh.vertex_count() as u64;
+    if as_json {
+        let v = json!({
+            "file": input,
+            "vertices": n,
+            "faces": loaded.mesh.face_count(),
+            "bytes": enc.bytes.len(),
+            "bits_per_vertex": bpv(enc.bytes.len(), n),
+            "encode_ms": encode_ms,
+            "decode_ms": decode_ms,
+            "exact": exact,
+            "levels": enc.header.levels,
+            "family": enc.header.family.name(),
+            "transform": enc.header.transform.name(),
+            "quantization": quant_json(&loaded.quantization),
+        });
+        println!("{v}");
+    } else {
+        println!(
+            "{}: {} vertices, {} faces -> {} bytes, {:.3} bits per vertex; encode {:.1} ms, decode {:.1} ms; {}",
+            Path::new(input).file_name().map_or(input.into(), |f| f.to_string_lossy()),
+            n,
+            loaded.mesh.face_count(),
+            enc.bytes.len(),
+            bpv(enc.bytes.len(), n),
+            encode_ms,
+            decode_ms,
+            if exact { "exact" } else { "MISMATCH" }
+        );
+    }
+    if let Err(why) = check {
+        return Err(fail(input, format!("round trip is not exact: {why}")));
+    }
+    Ok(if exact {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}

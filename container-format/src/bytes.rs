@@ -29,7 +29,10 @@ impl<'a> ByteReader<'a> {
     }
 
     fn short(&self, what: &str) -> Error {
-        Error::malformed(self.offset(), format!("{what} runs past the end of its section"))
+        Error::malformed(
+            self.offset(),
+            format!("{what} runs past the end of its section"),
+        )
     }
 
     /// One byte.
@@ -64,7 +67,10 @@ impl<'a> ByteReader<'a> {
             let b = self.u8(what)?;
             let group = (b & 0x7f) as u64;
             if i == 9 && group > 1 {
-                return Err(Error::malformed(start, format!("{what}: varint overflows 64 bits")));
+                return Err(Error::malformed(
+                    start,
+                    format!("{what}: varint overflows 64 bits"),
+                ));
             }
             value |= group << (7 * i);
             if b & 0x80 == 0 {
@@ -74,7 +80,10 @@ impl<'a> ByteReader<'a> {
                 return Ok(value);
             }
         }
-        Err(Error::malformed(start, format!("{what}: varint longer than 10 bytes")))
+        Err(Error::malformed(
+            start,
+            format!("{what}: varint longer than 10 bytes"),
+        ))
     }
 
     /// A varint that must not exceed `max`.
@@ -82,7 +91,10 @@ impl<'a> ByteReader<'a> {
         let start = self.offset();
         let v = self.varint(what)?;
         if v > max {
-            return Err(Error::malformed(start, format!("{what} = {v}, more than {max}")));
+            return Err(Error::malformed(
+                start,
+                format!("{what} = {v}, more than {max}"),
+            ));
         }
         Ok(v)
     }

@@ -260,12 +260,8 @@ impl<'a> Container<'a> {
             }
             let len = len as usize;
             let payload = &rest[8..8 + len];
-            let crc_stored = u32::from_le_bytes([
-                rest[8 + len],
-                rest[9 + len],
-                rest[10 + len],
-                rest[11 + len],
-            ]);
+            let crc_stored =
+                u32::from_le_bytes([rest[8 + len], rest[9 + len], rest[10 + len], rest[11 + len]]);
             if crc32fast::hash(&rest[..8 + len]) != crc_stored {
                 return Err(Error::Checksum {
                     kind,

@@ -1,0 +1,492 @@
+//! Entropy coding: constriction's range coder driven by adaptive frequency models of our
+//! own, updated with integer arithmetic only, so encoder and decoder stay in lockstep on
+//! every platform (SPEC.md 4).
+
+use std::num::NonZeroU32;
+
+use constriction::stream::model::{DecoderModel, EncoderModel, EntropyModel};
+use constriction::stream::queue::{DefaultRangeDecoder, DefaultRangeEncoder};
+use constriction::stream::{Decode, Encode};
+
+use crate::error::{Error, Result};
+
+/// Probabilities are multiples of 2^-16.
+pub const PRECISION: usize = 16;
+const ONE: u32 = 1 << PRECISION;
+/// Count added per coded symbol.
+const INCREMENT: u32 = 24;
+/// Counts are halved when their sum passes this.
+const MAX_TOTAL: u32 = 1 << 16;
+/// The quantised table is rebuilt after 8, 16, 32, ... symbols, then every 512.
+const FIRST_PERIOD: u32 = 8;
+const MAX_PERIOD: u32 = 512;
+
+/// An adaptive distribution over `0..n` (SPEC.md 4.2).
+#[derive(Debug, Clone)]
+pub struct AdaptiveModel {
+    counts: Vec<u32>,
+    total: u32,
+    /// `cum[s]..cum[s + 1]` is symbol `s`'s quantised range; `cum[n] = 2^16`.
+    cum: Vec<u32>,
+    until_rebuild: u32,
+    period: u32,
+}
+
+impl AdaptiveModel {
+    /// A model over `n` symbols (2 <= n <= 4096), all counts 1.
+    pub fn new(n: usize) -> Self {
+        assert!((2..=4096).contains(&n), "alphabet size {n} out of range");
+        let mut m = AdaptiveModel {
+            counts: vec![1; n],
+            total: n as u32,
+            cum: vec![0; n + 1],
+            until_rebuild: FIRST_PERIOD,
+            period: FIRST_PERIOD,
+        };
+        m.rebuild();
+        m
+    }
+
+    /// Alphabet size.
+    pub fn len(&self) -> usize {
+        self.counts.len()
+    }
+
+    /// Always false: models have at least two symbols.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    fn rebuild(&mut self) {
+        let n = self.counts.len() as u64;
+        let spare = ONE as u64 - n;
+        let total = self.total as u64;
+        let mut acc = 0u32;
+        let mut best = 0usize;
+        for (s, &c) in self.counts.iter().enumerate() {
+            self.cum[s] = acc;
+            acc += 1 + ((c as u64 * spare) / total) as u32;
+            if c > self.counts[best] {
+                best = s;
+            }
+        }
+        // Give the rounding remainder to the most frequent symbol (the first on ties).
+        let rest = ONE - acc;
+        for c in &mut self.cum[best + 1..] {
+            *c += rest;
+        }
+        self.cum[self.counts.len()] = ONE;
+    }
+
+    /// Records one occurrence of `s`.
+    #[inline]
+    pub fn update(&mut self, s: usize) {
+        self.counts[s] += INCREMENT;
+        self.total += INCREMENT;
+        if self.total > MAX_TOTAL {
+            self.total = 0;
+            for c in &mut self.counts {
+                *c = (*c + 1) >> 1;
+                self.total += *c;
+            }
+        }
+        self.until_rebuild -= 1;
+        if self.until_rebuild == 0 {
+            self.rebuild();
+            self.period = (self.period * 2).min(MAX_PERIOD);
+            self.until_rebuild = self.period;
+        }
+    }
+}
+
+impl EntropyModel<PRECISION> for AdaptiveModel {
+    type Symbol = usize;
+    type Probability = u32;
+}
+
+impl EncoderModel<PRECISION> for AdaptiveModel {
+    #[inline]
+    fn left_cumulative_and_probability(
+        &self,
+        symbol: impl std::borrow::Borrow<usize>,
+    ) -> Option<(u32, NonZeroU32)> {
+        let s = *symbol.borrow();
+        let lo = *self.cum.get(s)?;
+        let hi = *self.cum.get(s + 1)?;
+        Some((lo, NonZeroU32::new(hi - lo)?))
+    }
+}
+
+impl DecoderModel<PRECISION> for AdaptiveModel {
+    #[inline]
+    fn quantile_function(&self, quantile: u32) -> (usize, u32, NonZeroU32) {
+        // cum[0] = 0 <= quantile < 2^16 = cum[n]; find the last s with cum[s] <= quantile.
+        let s = self.cum.partition_point(|&c| c <= quantile) - 1;
+        let s = s.min(self.counts.len() - 1);
+        let lo = self.cum[s];
+        let p = self.cum[s + 1] - lo;
+        (s, lo, NonZeroU32::new(p).unwrap_or(NonZeroU32::MIN))
+    }
+}
+
+/// The uniform distribution over `0..n`, 2 <= n <= 2^16 (SPEC.md 4.3).
+#[derive(Debug, Clone, Copy)]
+pub struct Uniform {
+    n: u32,
+    base: u32,
+    extra: u32,
+}
+
+impl Uniform {
+    /// Uniform over `0..n`.
+    pub fn new(n: u32) -> Self {
+        assert!((2..=ONE).contains(&n));
+        Uniform {
+            n,
+            base: ONE / n,
+            extra: ONE % n,
+        }
+    }
+
+    fn left(&self, s: u32) -> u32 {
+        s * self.base + s.min(self.extra)
+    }
+}
+
+impl EntropyModel<PRECISION> for Uniform {
+    type Symbol = u32;
+    type Probability = u32;
+}
+
+impl EncoderModel<PRECISION> for Uniform {
+    fn left_cumulative_and_probability(
+        &self,
+        symbol: impl std::borrow::Borrow<u32>,
+    ) -> Option<(u32, NonZeroU32)> {
+        let s = *symbol.borrow();
+        if s >= self.n {
+            return None;
+        }
+        let p = self.base + (s < self.extra) as u32;
+        Some((self.left(s), NonZeroU32::new(p)?))
+    }
+}
+
+impl DecoderModel<PRECISION> for Uniform {
+    fn quantile_function(&self, q: u32) -> (u32, u32, NonZeroU32) {
+        // Symbols below `extra` have width base + 1.
+        let big = self.extra * (self.base + 1);
+        let s = if q < big {
+            q / (self.base + 1)
+        } else {
+            self.extra + (q - big) / self.base.max(1)
+        };
+        let s = s.min(self.n - 1);
+        let p = self.base + (s < self.extra) as u32;
+        (
+            s,
+            self.left(s),
+            NonZeroU32::new(p).unwrap_or(NonZeroU32::MIN),
+        )
+    }
+}
+
+/// Number of magnitude classes for [`IntModel`]: class `k` holds `2^(k-1) <= |v| < 2^k`,
+/// up to 2^62, plus class 0 for zero.
+pub const INT_CLASSES: usize = 64;
+
+/// Codes signed integers as a magnitude class (adaptive), a sign (adaptive) and the bits
+/// below the leading one (the first adaptive per class, the rest uniform) (SPEC.md 4.4).
+#[derive(Debug, Clone)]
+pub struct IntModel {
+    class: AdaptiveModel,
+    sign: AdaptiveModel,
+    top: Vec<AdaptiveModel>,
+}
+
+impl Default for IntModel {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl IntModel {
+    /// A fresh model.
+    pub fn new() -> Self {
+        IntModel {
+            class: AdaptiveModel::new(INT_CLASSES),
+            sign: AdaptiveModel::new(2),
+            top: (0..INT_CLASSES).map(|_| AdaptiveModel::new(2)).collect(),
+        }
+    }
+}
+
+/// Magnitude class of `v`: 0 for 0, else the bit length of `|v|`.
+#[inline]
+pub fn class_of(v: i64) -> usize {
+    (64 - v.unsigned_abs().leading_zeros()) as usize
+}
+
+/// Writes symbols.
+pub struct Encoder {
+    inner: DefaultRangeEncoder,
+}
+
+impl Default for Encoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Encoder {
+    /// An empty stream.
+    pub fn new() -> Self {
+        Encoder {
+            inner: DefaultRangeEncoder::new(),
+        }
+    }
+
+    /// Codes `s` with `m` and adapts `m`.
+    #[inline]
+    pub fn symbol(&mut self, m: &mut AdaptiveModel, s: usize) {
+        self.inner
+            .encode_symbol(s, &*m)
+            .expect("symbol within the model's alphabet");
+        m.update(s);
+    }
+
+    /// Codes `s` uniformly in `0..n`, any `n >= 1` up to 2^32.
+    pub fn uniform(&mut self, s: u64, n: u64) {
+        debug_assert!(s < n && n <= 1 << 32);
+        if n <= 1 {
+            return;
+        }
+        let bits = 64 - (n - 1).leading_zeros();
+        if bits <= 16 {
+            self.inner
+                .encode_symbol(s as u32, Uniform::new(n as u32))
+                .expect("within range");
+            return;
+        }
+        // Top 16 bits uniformly over the values they can take, then the rest as raw bits.
+        let shift = bits - 16;
+        let top_n = ((n - 1) >> shift) + 1;
+        self.inner
+            .encode_symbol((s >> shift) as u32, Uniform::new(top_n as u32))
+            .expect("within range");
+        self.bits(s & ((1 << shift) - 1), shift);
+    }
+
+    /// Codes the low `k` bits of `v` (k <= 64) as raw bits.
+    pub fn bits(&mut self, v: u64, k: u32) {
+        let mut k = k;
+        while k > 0 {
+            let c = k.min(16);
+            k -= c;
+            let chunk = ((v >> k) & ((1u64 << c) - 1)) as u32;
+            if c == 1 {
+                self.inner
+                    .encode_symbol(chunk, Uniform::new(2))
+                    .expect("bit");
+            } else {
+                self.inner
+                    .encode_symbol(chunk, Uniform::new(1 << c))
+                    .expect("chunk");
+            }
+        }
+    }
+
+    /// Codes a signed integer (|v| < 2^62) with `m`.
+    pub fn int(&mut self, m: &mut IntModel, v: i64) {
+        let c = class_of(v);
+        self.symbol(&mut m.class, c);
+        if c == 0 {
+            return;
+        }
+        self.symbol(&mut m.sign, (v < 0) as usize);
+        if c >= 2 {
+            let a = v.unsigned_abs();
+            let top = ((a >> (c - 2)) & 1) as usize;
+            self.symbol(&mut m.top[c], top);
+            self.bits(a, c as u32 - 2);
+        }
+    }
+
+    /// Finishes the stream and returns it as bytes (little-endian 32-bit words).
+    pub fn finish(self) -> Vec<u8> {
+        let words = self.inner.into_compressed().unwrap_or_default();
+        let mut out = Vec::with_capacity(words.len() * 4);
+        for w in words {
+            out.extend_from_slice(&w.to_le_bytes());
+        }
+        out
+    }
+}
+
+/// Reads what [`Encoder`] wrote.
+pub struct Decoder {
+    inner: DefaultRangeDecoder,
+    section: &'static str,
+}
+
+impl Decoder {
+    /// Reads a stream from a section payload.
+    pub fn new(bytes: &[u8], section: &'static str) -> Result<Self> {
+        if bytes.len() % 4 != 0 {
+            return Err(Error::corrupt(
+                section,
+                "stream length is not a multiple of 4",
+            ));
+        }
+        let words: Vec<u32> = bytes
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        let inner = DefaultRangeDecoder::from_compressed(words)
+            .map_err(|_| Error::corrupt(section, "bad stream start"))?;
+        Ok(Decoder { inner, section })
+    }
+
+    fn bad(&self) -> Error {
+        Error::corrupt(self.section, "invalid range-coder data")
+    }
+
+    /// Decodes a symbol with `m` and adapts `m`.
+    #[inline]
+    pub fn symbol(&mut self, m: &mut AdaptiveModel) -> Result<usize> {
+        let s = self.inner.decode_symbol(&*m).map_err(|_| self.bad())?;
+        m.update(s);
+        Ok(s)
+    }
+
+    /// Decodes what [`Encoder::uniform`] wrote.
+    pub fn uniform(&mut self, n: u64) -> Result<u64> {
+        if n <= 1 {
+            return Ok(0);
+        }
+        if n > 1 << 32 {
+            return Err(Error::corrupt(self.section, "uniform range too large"));
+        }
+        let bits = 64 - (n - 1).leading_zeros();
+        if bits <= 16 {
+            let s = self
+                .inner
+                .decode_symbol(Uniform::new(n as u32))
+                .map_err(|_| self.bad())?;
+            return Ok(s as u64);
+        }
+        let shift = bits - 16;
+        let top_n = ((n - 1) >> shift) + 1;
+        let top = self
+            .inner
+            .decode_symbol(Uniform::new(top_n as u32))
+            .map_err(|_| self.bad())? as u64;
+        let v = (top << shift) | self.bits(shift)?;
+        if v >= n {
+            return Err(Error::corrupt(self.section, "uniform value out of range"));
+        }
+        Ok(v)
+    }
+
+    /// Decodes `k` raw bits.
+    pub fn bits(&mut self, k: u32) -> Result<u64> {
+        let mut v = 0u64;
+        let mut k = k;
+        while k > 0 {
+            let c = k.min(16);
+            k -= c;
+            let chunk = self
+                .inner
+                .decode_symbol(Uniform::new(if c == 1 { 2 } else { 1 << c }))
+                .map_err(|_| self.bad())?;
+            v = (v << c) | chunk as u64;
+        }
+        Ok(v)
+    }
+
+    /// Decodes what [`Encoder::int`] wrote.
+    pub fn int(&mut self, m: &mut IntModel) -> Result<i64> {
+        let c = self.symbol(&mut m.class)?;
+        if c == 0 {
+            return Ok(0);
+        }
+        if c > 62 {
+            return Err(Error::corrupt(self.section, "integer too large"));
+        }
+        let neg = self.symbol(&mut m.sign)? == 1;
+        let mut a: u64 = 1;
+        if c >= 2 {
+            let top = self.symbol(&mut m.top[c])? as u64;
+            a = (a << 1) | top;
+            a = (a << (c - 2)) | self.bits(c as u32 - 2)?;
+        }
+        let v = a as i64;
+        Ok(if neg { -v } else { v })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn model_tables_sum_to_one() {
+        let mut m = AdaptiveModel::new(40);
+        for i in 0..100_000usize {
+            m.update((i * i) % 7);
+            assert_eq!(m.cum[40], ONE);
+            assert!(m.cum.windows(2).all(|w| w[1] > w[0]));
+        }
+    }
+
+    #[test]
+    fn skewed_data_costs_little() {
+        let mut e = Encoder::new();
+        let mut m = AdaptiveModel::new(8);
+        for i in 0..10_000 {
+            e.symbol(&mut m, if i % 100 == 0 { 3 } else { 0 });
+        }
+        let bytes = e.finish();
+        // Entropy of this source is about 0.08 bits per symbol: 100 bytes.
+        assert!(bytes.len() < 250, "{} bytes", bytes.len());
+    }
+
+    proptest! {
+        #[test]
+        fn mixed_stream_round_trips(
+            syms in proptest::collection::vec(0usize..37, 0..300),
+            ints in proptest::collection::vec(-(1i64 << 61)..(1i64 << 61), 0..300),
+            small in proptest::collection::vec(-40i64..40, 0..300),
+            unis in proptest::collection::vec((1u64..=1 << 32, proptest::num::u64::ANY), 0..50),
+        ) {
+            let mut e = Encoder::new();
+            let mut m = AdaptiveModel::new(37);
+            let mut im = IntModel::new();
+            for &s in &syms { e.symbol(&mut m, s); }
+            for &v in ints.iter().chain(&small) { e.int(&mut im, v); }
+            for &(n, r) in &unis { e.uniform(r % n, n); }
+            let bytes = e.finish();
+            let mut d = Decoder::new(&bytes, "test").unwrap();
+            let mut m = AdaptiveModel::new(37);
+            let mut im = IntModel::new();
+            for &s in &syms { prop_assert_eq!(d.symbol(&mut m).unwrap(), s); }
+            for &v in ints.iter().chain(&small) { prop_assert_eq!(d.int(&mut im).unwrap(), v); }
+            for &(n, r) in &unis { prop_assert_eq!(d.uniform(n).unwrap(), r % n); }
+        }
+
+        #[test]
+        fn garbage_never_panics(words in proptest::collection::vec(proptest::num::u32::ANY, 0..40)) {
+            let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+            if let Ok(mut d) = Decoder::new(&bytes, "test") {
+                let mut m = AdaptiveModel::new(5);
+                let mut im = IntModel::new();
+                for _ in 0..200 {
+                    let _ = d.symbol(&mut m);
+                    let _ = d.int(&mut im);
+                    let _ = d.uniform(1_000_003);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,366 @@
+//! Zero-level coding: a mesh without subdivision structure, as connectivity plus
+//! predicted positions in one range-coded stream (SPEC.md 6).
+
+use std::collections::HashMap;
+
+use crate::coder::{class_of, AdaptiveModel, Decoder, Encoder, IntModel};
+use crate::error::{Error, Result};
+use crate::mesh::{Mesh, MAX_COORD};
+
+const SECTION: &str = "BASE";
+/// Recently used vertices a corner can name by position (SPEC.md 6.2).
+const MRU: usize = 32;
+/// Corner symbols: 0 = next new vertex, 1..=32 = recently used, 33 = escape.
+const CORNER_SYMBOLS: usize = MRU + 2;
+const ESCAPE: usize = MRU + 1;
+/// Degree symbols: d - 3 for d in 3..=17, 15 = larger (escape).
+const DEGREE_SYMBOLS: usize = 16;
+
+/// Renumbers vertices by first use in the face list; unreferenced vertices follow in
+/// their original order. Returns `order[new] = old`.
+pub fn canonical_order(mesh: &Mesh) -> Vec<u32> {
+    let n = mesh.vertex_count();
+    let mut seen = vec![false; n];
+    let mut order = Vec::with_capacity(n);
+    for &v in &mesh.faces {
+        if !seen[v as usize] {
+            seen[v as usize] = true;
+            order.push(v);
+        }
+    }
+    order.extend((0..n as u32).filter(|&v| !seen[v as usize]));
+    order
+}
+
+/// Applies `order[new] = old` to a mesh.
+pub fn permute(mesh: &Mesh, order: &[u32]) -> Mesh {
+    let mut inv = vec![0u32; order.len()];
+    for (new, &old) in order.iter().enumerate() {
+        inv[old as usize] = new as u32;
+    }
+    Mesh {
+        positions: order.iter().map(|&o| mesh.positions[o as usize]).collect(),
+        face_starts: mesh.face_starts.clone(),
+        faces: mesh.faces.iter().map(|&v| inv[v as usize]).collect(),
+    }
+}
+
+struct Mru {
+    items: [u32; MRU],
+    len: usize,
+}
+
+impl Mru {
+    fn new() -> Self {
+        Mru {
+            items: [0; MRU],
+            len: 0,
+        }
+    }
+
+    fn find(&self, v: u32) -> Option<usize> {
+        self.items[..self.len].iter().position(|&x| x == v)
+    }
+
+    /// Moves `v`, found at `at` (or new), to the front.
+    fn touch(&mut self, v: u32, at: Option<usize>) {
+        let end = match at {
+            Some(i) => i,
+            None => {
+                if self.len < MRU {
+                    self.len += 1;
+                }
+                self.len - 1
+            }
+        };
+        self.items.copy_within(0..end, 1);
+        self.items[0] = v;
+    }
+}
+
+struct ConnModels {
+    degree: Vec<AdaptiveModel>,
+    big_degree: IntModel,
+    corner: [AdaptiveModel; 2],
+    distance: IntModel,
+}
+
+impl ConnModels {
+    fn new() -> Self {
+        ConnModels {
+            degree: (0..DEGREE_SYMBOLS)
+                .map(|_| AdaptiveModel::new(DEGREE_SYMBOLS))
+                .collect(),
+            big_degree: IntModel::new(),
+            corner: [
+                AdaptiveModel::new(CORNER_SYMBOLS),
+                AdaptiveModel::new(CORNER_SYMBOLS),
+            ],
+            distance: IntModel::new(),
+        }
+    }
+}
+
+/// Prediction kinds, each with its own residual models (SPEC.md 6.3).
+const KINDS: usize = 4;
+
+struct PosModels {
+    res: Vec<IntModel>,
+}
+
+impl PosModels {
+    fn new() -> Self {
+        PosModels {
+            res: (0..KINDS * 3 * 3).map(|_| IntModel::new()).collect(),
+        }
+    }
+
+    fn ctx(kind: usize, axis: usize, prev_class: usize) -> usize {
+        let bin = match prev_class {
+            0..=2 => 0,
+            3..=6 => 1,
+            _ => 2,
+        };
+        (kind * 3 + axis) * 3 + if axis == 0 { 0 } else { bin }
+    }
+}
+
+/// Per vertex: the face where it first occurs and the corner there (`u32::MAX` for
+/// unreferenced vertices).
+fn first_uses(mesh: &Mesh) -> Vec<(u32, u32)> {
+    first_uses_n(mesh, mesh.vertex_count())
+}
+
+/// For triangle edges: the (up to two) triangles on each edge.
+fn triangle_edges(mesh: &Mesh) -> HashMap<(u32, u32), [u32; 2]> {
+    let mut map: HashMap<(u32, u32), [u32; 2]> = HashMap::new();
+    for f in 0..mesh.face_count() {
+        let face = mesh.face(f);
+        if face.len() != 3 {
+            continue;
+        }
+        for i in 0..3 {
+            let (a, b) = (face[i], face[(i + 1) % 3]);
+            let key = (a.min(b), a.max(b));
+            let e = map.entry(key).or_insert([u32::MAX; 2]);
+            if e[0] == u32::MAX {
+                e[0] = f as u32;
+            } else if e[1] == u32::MAX {
+                e[1] = f as u32;
+            }
+        }
+    }
+    map
+}
+
+/// Predicts vertex `v` from vertices `< v` only (SPEC.md 6.3). Returns (kind, prediction).
+fn predict(
+    mesh: &Mesh,
+    pos: &[[i64; 3]],
+    v: usize,
+    first: (u32, u32),
+    tri: &HashMap<(u32, u32), [u32; 2]>,
+) -> (usize, [i64; 3]) {
+    let fallback = if v > 0 { pos[v - 1] } else { [0; 3] };
+    if first.0 == u32::MAX {
+        return (3, fallback);
+    }
+    let face = mesh.face(first.0 as usize);
+    let n = face.len();
+    let c = first.1 as usize;
+    let known = |u: u32| (u as usize) < v;
+    let at = |k: usize| face[(c + k) % n];
+    if n == 4 && known(at(1)) && known(at(2)) && known(at(3)) {
+        let (a, b, o) = (
+            pos[at(3) as usize],
+            pos[at(1) as usize],
+            pos[at(2) as usize],
+        );
+        return (0, [0, 1, 2].map(|k| a[k] + b[k] - o[k]));
+    }
+    if n == 3 && known(at(1)) && known(at(2)) {
+        let (a, b) = (at(1), at(2));
+        if let Some(faces) = tri.get(&(a.min(b), a.max(b))) {
+            for &g in faces {
+                if g == u32::MAX || g == first.0 {
+                    continue;
+                }
+                if let Some(&x) = mesh.face(g as usize).iter().find(|&&x| x != a && x != b) {
+                    if known(x) {
+                        let (pa, pb, px) = (pos[a as usize], pos[b as usize], pos[x as usize]);
+                        return (1, [0, 1, 2].map(|k| pa[k] + pb[k] - px[k]));
+                    }
+                }
+            }
+        }
+    }
+    let mut sum = [0i64; 3];
+    let mut cnt = 0i64;
+    for &u in face {
+        if known(u) {
+            for k in 0..3 {
+                sum[k] += pos[u as usize][k];
+            }
+            cnt += 1;
+        }
+    }
+    if cnt > 0 {
+        return (2, sum.map(|s| s.div_euclid(cnt)));
+    }
+    (3, fallback)
+}
+
+/// Codes a mesh already in canonical order (see [`canonical_order`]).
+pub fn encode(mesh: &Mesh) -> Vec<u8> {
+    let mut e = Encoder::new();
+    let mut m = ConnModels::new();
+    let mut mru = Mru::new();
+    let mut next_new = 0u32;
+    let mut prev_deg = 0usize;
+    for face in mesh.iter_faces() {
+        let d = face.len();
+        let sym = (d - 3).min(DEGREE_SYMBOLS - 1);
+        e.symbol(&mut m.degree[prev_deg], sym);
+        if sym == DEGREE_SYMBOLS - 1 {
+            e.int(&mut m.big_degree, (d - 3 - (DEGREE_SYMBOLS - 1)) as i64);
+        }
+        prev_deg = sym;
+        for (c, &v) in face.iter().enumerate() {
+            let model = &mut m.corner[(c > 0) as usize];
+            let at = mru.find(v);
+            if v == next_new {
+                e.symbol(model, 0);
+                next_new += 1;
+            } else if let Some(i) = at {
+                e.symbol(model, 1 + i);
+            } else {
+                e.symbol(model, ESCAPE);
+                e.int(&mut m.distance, (next_new - 1 - v) as i64);
+            }
+            mru.touch(v, at);
+        }
+    }
+    encode_positions(&mut e, mesh);
+    e.finish()
+}
+
+fn encode_positions(e: &mut Encoder, mesh: &Mesh) {
+    let first = first_uses(mesh);
+    let tri = triangle_edges(mesh);
+    let mut m = PosModels::new();
+    for v in 0..mesh.vertex_count() {
+        let (kind, p) = predict(mesh, &mesh.positions, v, first[v], &tri);
+        let mut prev_class = 0;
+        for k in 0..3 {
+            let r = mesh.positions[v][k] - p[k];
+            e.int(&mut m.res[PosModels::ctx(kind, k, prev_class)], r);
+            prev_class = class_of(r);
+        }
+    }
+}
+
+/// Decodes `vertices` vertices and `faces` faces with `corners` corners in all; the
+/// counts were checked against the limits when the header was read.
+pub fn decode(payload: &[u8], vertices: u64, faces: u64, corners: u64) -> Result<Mesh> {
+    let mut d = Decoder::new(payload, SECTION)?;
+    let mut m = ConnModels::new();
+    let mut mru = Mru::new();
+    let mut next_new = 0u64;
+    let mut prev_deg = 0usize;
+    let mut mesh = Mesh::new();
+    mesh.face_starts.reserve(faces as usize);
+    mesh.faces.reserve(corners as usize);
+    for _ in 0..faces {
+        let sym = d.symbol(&mut m.degree[prev_deg])?;
+        let mut deg = sym as u64 + 3;
+        if sym == DEGREE_SYMBOLS - 1 {
+            let extra = d.int(&mut m.big_degree)?;
+            if extra < 0 {
+                return Err(Error::corrupt(SECTION, "negative face degree"));
+            }
+            deg = deg.saturating_add(extra as u64);
+        }
+        prev_deg = sym;
+        if (mesh.faces.len() as u64).saturating_add(deg) > corners {
+            return Err(Error::corrupt(
+                SECTION,
+                "faces have more corners than the header says",
+            ));
+        }
+        for c in 0..deg {
+            let s = d.symbol(&mut m.corner[(c > 0) as usize])?;
+            let (v, at) = if s == 0 {
+                if next_new >= vertices {
+                    return Err(Error::corrupt(
+                        SECTION,
+                        "more vertices than the header says",
+                    ));
+                }
+                next_new += 1;
+                ((next_new - 1) as u32, None)
+            } else if s <= MRU {
+                if s > mru.len {
+                    return Err(Error::corrupt(
+                        SECTION,
+                        "reference to an empty history slot",
+                    ));
+                }
+                (mru.items[s - 1], Some(s - 1))
+            } else {
+                let dist = d.int(&mut m.distance)?;
+                if dist < 0 || dist as u64 >= next_new {
+                    return Err(Error::corrupt(SECTION, "vertex reference out of range"));
+                }
+                ((next_new - 1 - dist as u64) as u32, None)
+            };
+            let at = if s == ESCAPE { mru.find(v) } else { at };
+            mru.touch(v, at);
+            mesh.faces.push(v);
+        }
+        mesh.face_starts.push(mesh.faces.len() as u32);
+    }
+    if mesh.faces.len() as u64 != corners {
+        return Err(Error::corrupt(
+            SECTION,
+            "faces have fewer corners than the header says",
+        ));
+    }
+    mesh.positions = decode_positions(&mut d, &mesh, vertices as usize)?;
+    Ok(mesh)
+}
+
+fn decode_positions(d: &mut Decoder, topo: &Mesh, n: usize) -> Result<Vec<[i64; 3]>> {
+    let first = first_uses_n(topo, n);
+    let tri = triangle_edges(topo);
+    let mut m = PosModels::new();
+    let mut pos: Vec<[i64; 3]> = Vec::with_capacity(n);
+    for v in 0..n {
+        let (kind, p) = predict(topo, &pos, v, first[v], &tri);
+        let mut q = [0i64; 3];
+        let mut prev_class = 0;
+        for k in 0..3 {
+            let r = d.int(&mut m.res[PosModels::ctx(kind, k, prev_class)])?;
+            prev_class = class_of(r);
+            q[k] = p[k]
+                .checked_add(r)
+                .filter(|x| x.abs() <= MAX_COORD)
+                .ok_or_else(|| Error::corrupt(SECTION, "coordinate out of range"))?;
+        }
+        pos.push(q);
+    }
+    Ok(pos)
+}
+
+fn first_uses_n(topo: &Mesh, n: usize) -> Vec<(u32, u32)> {
+    let mut first = vec![(u32::MAX, 0u32); n];
+    for f in 0..topo.face_count() {
+        for (c, &v) in topo.face(f).iter().enumerate() {
+            if let Some(slot) = first.get_mut(v as usize) {
+                if slot.0 == u32::MAX {
+                    *slot = (f as u32, c as u32);
+                }
+            }
+        }
+    }
+    first
+}

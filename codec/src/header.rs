@@ -1,0 +1,354 @@
+//! The HEAD section (SPEC.md 5).
+
+use subwave_container::{ByteReader, ByteWriter, Limits};
+
+use crate::error::{Error, Result};
+use crate::quant::{FloatWidth, Quantization};
+
+/// Which subdivision family the levels follow.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Family {
+    /// No subdivision structure: a base mesh with zero levels.
+    None,
+    /// Catmull-Clark (1-to-4) refinement.
+    Cc,
+    /// sqrt(2) refinement.
+    Sqrt2,
+    /// Catmull-Clark with polar structures.
+    Polar,
+}
+
+impl Family {
+    /// The name `info` prints.
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::None => "none",
+            Family::Cc => "cc",
+            Family::Sqrt2 => "sqrt2",
+            Family::Polar => "polar",
+        }
+    }
+
+    fn code(self) -> u8 {
+        match self {
+            Family::None => 0,
+            Family::Cc => 1,
+            Family::Sqrt2 => 2,
+            Family::Polar => 3,
+        }
+    }
+}
+
+/// Which wavelet transform codes the levels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Transform {
+    /// No levels, nothing to transform.
+    None,
+}
+
+impl Transform {
+    /// The name `info` prints.
+    pub fn name(self) -> &'static str {
+        match self {
+            Transform::None => "none",
+        }
+    }
+}
+
+/// The file format the mesh was read from, so `decompress` can default to it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Source {
+    /// Unknown or not recorded.
+    Unknown,
+    /// OBJ.
+    Obj,
+    /// ASCII PLY.
+    PlyAscii,
+    /// Binary PLY.
+    PlyBinary,
+    /// OFF.
+    Off,
+}
+
+impl Source {
+    fn code(self) -> u8 {
+        match self {
+            Source::Unknown => 0,
+            Source::Obj => 1,
+            Source::PlyAscii => 2,
+            Source::PlyBinary => 3,
+            Source::Off => 4,
+        }
+    }
+
+    fn from_code(c: u8) -> Source {
+        match c {
+            1 => Source::Obj,
+            2 => Source::PlyAscii,
+            3 => Source::PlyBinary,
+            4 => Source::Off,
+            _ => Source::Unknown,
+        }
+    }
+}
+
+/// Everything the HEAD section says.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Header {
+    /// Vertices of the finest mesh.
+    pub vertices: u64,
+    /// Faces of the finest mesh.
+    pub faces: u64,
+    /// Face corners of the finest mesh.
+    pub corners: u64,
+    /// Vertices of the base mesh.
+    pub base_vertices: u64,
+    /// Faces of the base mesh.
+    pub base_faces: u64,
+    /// Face corners of the base mesh.
+    pub base_corners: u64,
+    /// Refinement levels after the base mesh.
+    pub levels: u8,
+    /// Subdivision family.
+    pub family: Family,
+    /// Wavelet transform.
+    pub transform: Transform,
+    /// How integers map to values.
+    pub quantization: Quantization,
+    /// The input file's format.
+    pub source: Source,
+    /// Whether an ORDR section restores the input vertex order.
+    pub has_order: bool,
+}
+
+const FLAG_ORDER: u64 = 1;
+
+impl Header {
+    /// Serialises the header.
+    pub fn write(&self) -> Vec<u8> {
+        let mut w = ByteWriter::new();
+        for v in [
+            self.vertices,
+            self.faces,
+            self.corners,
+            self.base_vertices,
+            self.base_faces,
+            self.base_corners,
+        ] {
+            w.varint(v);
+        }
+        w.u8(self.levels);
+        w.u8(self.family.code());
+        w.u8(0); // transform: none
+        match self.quantization {
+            Quantization::Decimal { decimals } => {
+                w.u8(0);
+                w.u8(decimals);
+            }
+            Quantization::Float { width, exponent } => {
+                w.u8(1);
+                w.u8(match width {
+                    FloatWidth::F32 => 32,
+                    FloatWidth::F64 => 64,
+                });
+                w.varint_signed(exponent as i64);
+            }
+            Quantization::Grid { bits, origin, step } => {
+                w.u8(2);
+                w.u8(bits);
+                for o in origin {
+                    w.u32_le(o.to_bits());
+                }
+                w.u32_le(step.to_bits());
+            }
+        }
+        w.u8(self.source.code());
+        w.varint(if self.has_order { FLAG_ORDER } else { 0 });
+        w.out
+    }
+
+    /// Parses and validates a header against `limits` (SPEC.md 5).
+    pub fn read(payload: &[u8], offset: u64, limits: &Limits) -> Result<Header> {
+        let mut r = ByteReader::new(payload, offset);
+        let mut count = |what: &'static str, limit: u64| -> Result<u64> {
+            let at = r.offset();
+            let v = r.varint(what)?;
+            if v > limit {
+                return Err(subwave_container::Error::Limit {
+                    what,
+                    requested: v,
+                    limit,
+                }
+                .into());
+            }
+            let _ = at;
+            Ok(v)
+        };
+        let vertices = count("vertices", limits.max_vertices)?;
+        let faces = count("faces", limits.max_faces)?;
+        let corners = count("face corners", limits.max_corners)?;
+        let base_vertices = count("base vertices", limits.max_vertices)?;
+        let base_faces = count("base faces", limits.max_faces)?;
+        let base_corners = count("base face corners", limits.max_corners)?;
+        let levels = r.u8("levels")?;
+        if levels as u64 > limits.max_levels {
+            return Err(subwave_container::Error::Limit {
+                what: "levels",
+                requested: levels as u64,
+                limit: limits.max_levels,
+            }
+            .into());
+        }
+        let at = r.offset();
+        let family = match r.u8("family")? {
+            0 => Family::None,
+            1 => Family::Cc,
+            2 => Family::Sqrt2,
+            3 => Family::Polar,
+            f => {
+                return Err(Error::Unsupported(format!(
+                    "subdivision family code {f} (byte {at})"
+                )))
+            }
+        };
+        let at = r.offset();
+        let transform = match r.u8("transform")? {
+            0 => Transform::None,
+            t => {
+                return Err(Error::Unsupported(format!(
+                    "transform code {t} (byte {at})"
+                )))
+            }
+        };
+        let at = r.offset();
+        let quantization = match r.u8("quantisation kind")? {
+            0 => {
+                let decimals = r.u8("decimals")?;
+                if decimals > crate::quant::MAX_DECIMALS {
+                    return Err(malformed(at, format!("{decimals} decimals, at most 18")));
+                }
+                Quantization::Decimal { decimals }
+            }
+            1 => {
+                let width = match r.u8("float width")? {
+                    32 => FloatWidth::F32,
+                    64 => FloatWidth::F64,
+                    w => return Err(malformed(at, format!("float width {w}"))),
+                };
+                let e = r.varint_signed("float exponent")?;
+                if !(-1100..=1100).contains(&e) {
+                    return Err(malformed(at, format!("float exponent {e}")));
+                }
+                Quantization::Float {
+                    width,
+                    exponent: e as i32,
+                }
+            }
+            2 => {
+                let bits = r.u8("grid bits")?;
+                if !(1..=30).contains(&bits) {
+                    return Err(malformed(at, format!("grid of {bits} bits")));
+                }
+                let mut origin = [0f32; 3];
+                for o in &mut origin {
+                    *o = f32::from_bits(r.u32_le("grid origin")?);
+                }
+                let step = f32::from_bits(r.u32_le("grid step")?);
+                if !step.is_finite() || origin.iter().any(|o| !o.is_finite()) {
+                    return Err(malformed(at, "grid origin or step is not finite"));
+                }
+                Quantization::Grid { bits, origin, step }
+            }
+            k => {
+                return Err(Error::Unsupported(format!(
+                    "quantisation kind {k} (byte {at})"
+                )))
+            }
+        };
+        let source = Source::from_code(r.u8("source format")?);
+        let at = r.offset();
+        let flags = r.varint("flags")?;
+        if flags & !FLAG_ORDER != 0 {
+            return Err(Error::Unsupported(format!(
+                "header flags {flags:#x} (byte {at})"
+            )));
+        }
+        r.finish("the header")?;
+        let h = Header {
+            vertices,
+            faces,
+            corners,
+            base_vertices,
+            base_faces,
+            base_corners,
+            levels,
+            family,
+            transform,
+            quantization,
+            source,
+            has_order: flags & FLAG_ORDER != 0,
+        };
+        h.check(offset, limits)?;
+        Ok(h)
+    }
+
+    fn check(&self, offset: u64, limits: &Limits) -> Result<()> {
+        if self.levels == 0
+            && (self.base_vertices != self.vertices
+                || self.base_faces != self.faces
+                || self.base_corners != self.corners)
+        {
+            return Err(malformed(
+                offset,
+                "base counts differ from mesh counts with no levels",
+            ));
+        }
+        if self.levels == 0 && (self.family != Family::None || self.transform != Transform::None) {
+            return Err(malformed(offset, "a family or transform without levels"));
+        }
+        if self.levels > 0 {
+            return Err(Error::Unsupported(
+                "refinement levels (this build codes base meshes only)".into(),
+            ));
+        }
+        if self.corners < 3 * self.faces || (self.faces == 0 && self.corners != 0) {
+            return Err(malformed(
+                offset,
+                format!("{} corners cannot make {} faces", self.corners, self.faces),
+            ));
+        }
+        if self.corners > self.faces.saturating_mul(limits.max_face_degree) {
+            return Err(malformed(
+                offset,
+                format!(
+                    "{} corners in {} faces exceed the face degree limit",
+                    self.corners, self.faces
+                ),
+            ));
+        }
+        if self.faces > 0 && self.vertices < 3 {
+            return Err(malformed(offset, "faces without at least 3 vertices"));
+        }
+        // Decoded mesh plus working state: positions (24 B), canonical-order map and
+        // first-face table (8 B) per vertex; indices (4 B) and an edge table entry (16 B)
+        // per corner; face starts (4 B) per face.
+        let bytes = self
+            .vertices
+            .saturating_mul(40)
+            .saturating_add(self.corners.saturating_mul(20))
+            .saturating_add(self.faces.saturating_mul(4));
+        if bytes > limits.max_alloc_bytes {
+            return Err(subwave_container::Error::Limit {
+                what: "decoder memory (bytes)",
+                requested: bytes,
+                limit: limits.max_alloc_bytes,
+            }
+            .into());
+        }
+        Ok(())
+    }
+}
+
+fn malformed(offset: u64, what: impl Into<String>) -> Error {
+    subwave_container::Error::malformed(offset, what).into()
+}

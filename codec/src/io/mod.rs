@@ -1,0 +1,164 @@
+//! Reading and writing OBJ, PLY (ASCII and binary) and OFF, keeping polygons as they
+//! are and every number exact.
+//!
+//! OBJ is read by this crate's own reader rather than `tobj`: `tobj` renumbers vertices
+//! per object in first-use order and drops unreferenced ones, which loses exactly what a
+//! lossless codec must keep (the tests use `tobj` as an independent reference reader).
+
+mod obj;
+mod off;
+mod ply;
+
+use std::collections::BTreeSet;
+use std::io::Write;
+
+use crate::error::{Error, Result};
+use crate::mesh::Mesh;
+use crate::quant::{Quantization, RawCoords};
+
+/// Mesh file formats.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// Wavefront OBJ.
+    Obj,
+    /// PLY, ASCII.
+    PlyAscii,
+    /// PLY, binary little-endian.
+    PlyBinary,
+    /// PLY, binary big-endian (read only; written as little-endian).
+    PlyBinaryBigEndian,
+    /// Object File Format.
+    Off,
+}
+
+impl Format {
+    /// The format a file name's extension names, if any (`.obj`, `.ply`, `.off`).
+    /// `.ply` gives [`Format::PlyBinary`]; callers choose ASCII where they prefer it.
+    pub fn from_path(path: &str) -> Option<Format> {
+        let ext = path.rsplit_once('.')?.1.to_ascii_lowercase();
+        match ext.as_str() {
+            "obj" => Some(Format::Obj),
+            "ply" => Some(Format::PlyBinary),
+            "off" => Some(Format::Off),
+            _ => None,
+        }
+    }
+
+    /// Guesses the format from a file's first bytes: `ply`, `OFF`, else OBJ.
+    pub fn sniff(bytes: &[u8]) -> Format {
+        let head = &bytes[..bytes.len().min(64)];
+        if head.starts_with(b"ply") {
+            return Format::PlyAscii;
+        }
+        let trimmed: Vec<u8> = head
+            .iter()
+            .copied()
+            .skip_while(|b| b.is_ascii_whitespace())
+            .take(8)
+            .collect();
+        let word: Vec<u8> = trimmed
+            .iter()
+            .copied()
+            .take_while(|b| b.is_ascii_alphabetic())
+            .collect();
+        if word.ends_with(b"OFF") {
+            return Format::Off;
+        }
+        Format::Obj
+    }
+
+    /// The format's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Obj => "OBJ",
+            Format::PlyAscii => "PLY (ASCII)",
+            Format::PlyBinary => "PLY (binary little-endian)",
+            Format::PlyBinaryBigEndian => "PLY (binary big-endian)",
+            Format::Off => "OFF",
+        }
+    }
+
+    /// Whether this is one of the PLY variants.
+    pub fn is_ply(self) -> bool {
+        matches!(
+            self,
+            Format::PlyAscii | Format::PlyBinary | Format::PlyBinaryBigEndian
+        )
+    }
+}
+
+/// A mesh as read from a file, before its numbers become integers.
+#[derive(Debug, Clone)]
+pub struct RawMesh {
+    /// Positions, exactly as written.
+    pub coords: RawCoords,
+    /// Faces (the positions of this value are empty).
+    pub topology: Mesh,
+    /// The format read.
+    pub format: Format,
+    /// What the file had that is not carried (normals, texture coordinates, ...).
+    pub dropped: BTreeSet<String>,
+}
+
+/// Reads a mesh file from bytes. The format is sniffed from the content.
+pub fn read_mesh(bytes: &[u8]) -> Result<RawMesh> {
+    let mut m = match Format::sniff(bytes) {
+        Format::Off => off::read(bytes)?,
+        Format::Obj => obj::read(bytes)?,
+        _ => ply::read(bytes)?,
+    };
+    check_faces(&mut m)?;
+    Ok(m)
+}
+
+fn check_faces(m: &mut RawMesh) -> Result<()> {
+    let n = m.coords.len();
+    for (f, face) in m.topology.iter_faces().enumerate() {
+        if face.len() < 3 {
+            return Err(Error::InvalidMesh(format!(
+                "face {} has {} corners; faces need at least 3",
+                f + 1,
+                face.len()
+            )));
+        }
+        if let Some(&i) = face.iter().find(|&&i| i as usize >= n) {
+            return Err(Error::InvalidMesh(format!(
+                "face {} refers to vertex {} but the file has only {n} vertices",
+                f + 1,
+                i as u64 + 1
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Writes `mesh` in `format`, mapping integers to values with `q`.
+pub fn write_mesh<W: Write>(out: W, mesh: &Mesh, q: &Quantization, format: Format) -> Result<()> {
+    let mut out = std::io::BufWriter::with_capacity(1 << 16, out);
+    match format {
+        Format::Obj => obj::write(&mut out, mesh, q)?,
+        Format::Off => off::write(&mut out, mesh, q)?,
+        Format::PlyAscii => ply::write(&mut out, mesh, q, false)?,
+        Format::PlyBinary | Format::PlyBinaryBigEndian => ply::write(&mut out, mesh, q, true)?,
+    }
+    out.flush()?;
+    Ok(())
+}
+
+/// Writes a mesh to a `String` buffer line by line; shared by the text writers.
+pub(crate) fn coords_line(prefix: &str, p: &[i64; 3], q: &Quantization, line: &mut String) {
+    line.clear();
+    line.push_str(prefix);
+    for (k, &c) in p.iter().enumerate() {
+        if k > 0 || !prefix.is_empty() {
+            line.push(' ');
+        }
+        q.write_text(c, k, line);
+    }
+    line.push('\n');
+}
+
+/// A file-level syntax error with its 1-based line number.
+pub(crate) fn syntax(format: &str, line: usize, what: impl std::fmt::Display) -> Error {
+    Error::MeshFile(format!("{format} line {line}: {what}"))
+}

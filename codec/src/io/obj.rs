@@ -1,0 +1,172 @@
+//! Wavefront OBJ: `v` and `f` statements; everything else is reported as dropped.
+
+use std::collections::BTreeSet;
+use std::io::Write;
+
+use super::{coords_line, syntax, Format, RawMesh};
+use crate::error::Result;
+use crate::mesh::Mesh;
+use crate::quant::{Decimal, Quantization, RawCoords};
+
+pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
+    let text = std::str::from_utf8(bytes)
+        .map_err(|e| syntax("OBJ", line_of(bytes, e.valid_up_to()), "not UTF-8 text"))?;
+    let mut coords: Vec<[Decimal; 3]> = Vec::new();
+    let mut topo = Mesh::new();
+    let mut dropped = BTreeSet::new();
+    let mut face: Vec<u32> = Vec::new();
+    let mut joined = String::new();
+    let mut lines = text.lines().enumerate();
+    while let Some((n, raw)) = lines.next() {
+        let lineno = n + 1;
+        let mut line: &str = raw;
+        // A trailing backslash continues the statement on the next line.
+        if line.trim_end().ends_with('\\') {
+            joined.clear();
+            let mut cur = line;
+            loop {
+                let t = cur.trim_end();
+                if let Some(stripped) = t.strip_suffix('\\') {
+                    joined.push_str(stripped);
+                    joined.push(' ');
+                    match lines.next() {
+                        Some((_, next)) => cur = next,
+                        None => break,
+                    }
+                } else {
+                    joined.push_str(cur);
+                    break;
+                }
+            }
+            line = &joined;
+        }
+        let line = line.split('#').next().unwrap_or("");
+        let mut tok = line.split_ascii_whitespace();
+        let Some(kw) = tok.next() else { continue };
+        match kw {
+            "v" => {
+                let mut p = [Decimal {
+                    mantissa: 0,
+                    decimals: 0,
+                }; 3];
+                for (k, slot) in p.iter_mut().enumerate() {
+                    let t = tok.next().ok_or_else(|| {
+                        syntax(
+                            "OBJ",
+                            lineno,
+                            format!("vertex has {k} coordinates, needs 3"),
+                        )
+                    })?;
+                    *slot = Decimal::parse(t).map_err(|e| syntax("OBJ", lineno, e))?;
+                }
+                match tok.count() {
+                    0 => {}
+                    1 => {
+                        dropped.insert("homogeneous w coordinates".to_string());
+                    }
+                    _ => {
+                        dropped.insert("vertex colors".to_string());
+                    }
+                }
+                coords.push(p);
+            }
+            "f" | "fo" => {
+                face.clear();
+                for t in tok {
+                    let mut parts = t.split('/');
+                    let vi = parts.next().unwrap_or("");
+                    if let Some(vt) = parts.next() {
+                        if !vt.is_empty() {
+                            dropped.insert("texture coordinates".to_string());
+                        }
+                    }
+                    if parts.next().is_some_and(|vn| !vn.is_empty()) {
+                        dropped.insert("normals".to_string());
+                    }
+                    let i: i64 = vi.parse().map_err(|_| {
+                        syntax("OBJ", lineno, format!("'{t}' is not a vertex reference"))
+                    })?;
+                    let idx = if i > 0 {
+                        i - 1
+                    } else if i < 0 {
+                        coords.len() as i64 + i
+                    } else {
+                        -1
+                    };
+                    if idx < 0 || idx >= u32::MAX as i64 {
+                        return Err(syntax(
+                            "OBJ",
+                            lineno,
+                            format!("vertex reference {i} is out of range"),
+                        ));
+                    }
+                    face.push(idx as u32);
+                }
+                if face.len() < 3 {
+                    return Err(syntax(
+                        "OBJ",
+                        lineno,
+                        format!("face has {} corners; faces need at least 3", face.len()),
+                    ));
+                }
+                topo.push_face(&face);
+            }
+            "vt" => {
+                dropped.insert("texture coordinates".to_string());
+            }
+            "vn" => {
+                dropped.insert("normals".to_string());
+            }
+            "vp" => {
+                dropped.insert("parameter-space vertices".to_string());
+            }
+            "l" => {
+                dropped.insert("line elements".to_string());
+            }
+            "p" => {
+                dropped.insert("point elements".to_string());
+            }
+            "o" | "g" => {
+                dropped.insert("object and group names".to_string());
+            }
+            "s" => {
+                dropped.insert("smoothing groups".to_string());
+            }
+            "mtllib" | "usemtl" => {
+                dropped.insert("materials".to_string());
+            }
+            other => {
+                dropped.insert(format!("'{other}' statements"));
+            }
+        }
+    }
+    Ok(RawMesh {
+        coords: RawCoords::Decimal(coords),
+        topology: topo,
+        format: Format::Obj,
+        dropped,
+    })
+}
+
+fn line_of(bytes: &[u8], offset: usize) -> usize {
+    bytes[..offset].iter().filter(|&&b| b == b'\n').count() + 1
+}
+
+pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Result<()> {
+    let mut line = String::with_capacity(128);
+    for p in &mesh.positions {
+        coords_line("v", p, q, &mut line);
+        out.write_all(line.as_bytes())?;
+    }
+    for face in mesh.iter_faces() {
+        line.clear();
+        line.push('f');
+        for &i in face {
+            use std::fmt::Write as _;
+            let _ = write!(line, " {}", i as u64 + 1);
+        }
+        line.push('\n');
+        out.write_all(line.as_bytes())?;
+    }
+    Ok(())
+}

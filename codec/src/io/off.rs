@@ -1,0 +1,167 @@
+//! Object File Format, ASCII: `[ST][C][N]OFF`, counts, vertices, faces.
+
+use std::collections::BTreeSet;
+use std::io::Write;
+
+use super::{coords_line, syntax, Format, RawMesh};
+use crate::error::{Error, Result};
+use crate::mesh::Mesh;
+use crate::quant::{Decimal, Quantization, RawCoords};
+
+pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
+    let text = std::str::from_utf8(bytes).map_err(|_| {
+        Error::MeshFile("OFF file is not UTF-8 text (binary OFF is not supported)".into())
+    })?;
+    // Statements, with comments and blank lines removed, keeping line numbers.
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(n, l)| (n + 1, l.split('#').next().unwrap_or("").trim()))
+        .filter(|(_, l)| !l.is_empty());
+    let (ln, first) = lines
+        .next()
+        .ok_or_else(|| Error::MeshFile("OFF file is empty".into()))?;
+    let mut tok = first.split_ascii_whitespace();
+    let kw = tok.next().unwrap_or("");
+    let prefix = kw
+        .strip_suffix("OFF")
+        .ok_or_else(|| syntax("OFF", ln, format!("expected an OFF keyword, found '{kw}'")))?;
+    let mut dropped = BTreeSet::new();
+    let mut extra_per_vertex = 0usize;
+    let mut rest = prefix;
+    for (p, n, what) in [
+        ("ST", 2, "texture coordinates"),
+        ("C", 4, "vertex colors"),
+        ("N", 3, "normals"),
+    ] {
+        if let Some(r) = rest.strip_prefix(p) {
+            rest = r;
+            extra_per_vertex += n;
+            dropped.insert(what.to_string());
+        }
+    }
+    if !rest.is_empty() {
+        return Err(Error::Unsupported(format!("OFF variant '{kw}'")));
+    }
+    let mut header: Vec<&str> = tok.collect();
+    if header.first() == Some(&"BINARY") {
+        return Err(Error::Unsupported("binary OFF".into()));
+    }
+    let mut count_line = ln;
+    if header.is_empty() {
+        let (n, l) = lines
+            .next()
+            .ok_or_else(|| syntax("OFF", ln, "missing the vertex and face counts"))?;
+        count_line = n;
+        header = l.split_ascii_whitespace().collect();
+    }
+    let count = |i: usize, what: &str| -> Result<usize> {
+        header
+            .get(i)
+            .and_then(|t| t.parse::<u64>().ok())
+            .filter(|&c| c <= u32::MAX as u64)
+            .map(|c| c as usize)
+            .ok_or_else(|| syntax("OFF", count_line, format!("bad {what} count")))
+    };
+    let nv = count(0, "vertex")?;
+    let nf = count(1, "face")?;
+    // Each vertex needs at least 6 bytes of text and each face 8: refuse counts the file
+    // cannot hold before reserving memory for them.
+    if nv.saturating_mul(6).saturating_add(nf.saturating_mul(8)) > bytes.len() {
+        return Err(syntax(
+            "OFF",
+            count_line,
+            format!(
+                "declares {nv} vertices and {nf} faces, more than the file's {} bytes can hold",
+                bytes.len()
+            ),
+        ));
+    }
+    let mut coords = Vec::with_capacity(nv);
+    for i in 0..nv {
+        let (n, l) = lines
+            .next()
+            .ok_or_else(|| Error::MeshFile(format!("OFF file ends after {i} of {nv} vertices")))?;
+        let mut t = l.split_ascii_whitespace();
+        let mut p = [Decimal {
+            mantissa: 0,
+            decimals: 0,
+        }; 3];
+        for (k, slot) in p.iter_mut().enumerate() {
+            let s = t
+                .next()
+                .ok_or_else(|| syntax("OFF", n, format!("vertex has {k} coordinates, needs 3")))?;
+            *slot = Decimal::parse(s).map_err(|e| syntax("OFF", n, e))?;
+        }
+        let extra = t.count();
+        if extra > 0 && extra_per_vertex == 0 {
+            dropped.insert("per-vertex extra values".to_string());
+        }
+        coords.push(p);
+    }
+    let mut topo = Mesh::new();
+    let mut face = Vec::new();
+    for i in 0..nf {
+        let (n, l) = lines
+            .next()
+            .ok_or_else(|| Error::MeshFile(format!("OFF file ends after {i} of {nf} faces")))?;
+        let mut t = l.split_ascii_whitespace();
+        let k: usize = t
+            .next()
+            .and_then(|s| s.parse().ok())
+            .ok_or_else(|| syntax("OFF", n, "bad face corner count"))?;
+        if k < 3 {
+            return Err(syntax(
+                "OFF",
+                n,
+                format!("face has {k} corners; faces need at least 3"),
+            ));
+        }
+        face.clear();
+        for _ in 0..k {
+            let idx: u32 = t
+                .next()
+                .and_then(|s| s.parse().ok())
+                .filter(|&x: &u32| (x as usize) < nv)
+                .ok_or_else(|| {
+                    syntax(
+                        "OFF",
+                        n,
+                        format!("face needs {k} vertex indices below {nv}"),
+                    )
+                })?;
+            face.push(idx);
+        }
+        if t.next().is_some() {
+            dropped.insert("face colors".to_string());
+        }
+        topo.push_face(&face);
+    }
+    Ok(RawMesh {
+        coords: RawCoords::Decimal(coords),
+        topology: topo,
+        format: Format::Off,
+        dropped,
+    })
+}
+
+pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Result<()> {
+    writeln!(out, "OFF")?;
+    writeln!(out, "{} {} 0", mesh.vertex_count(), mesh.face_count())?;
+    let mut line = String::with_capacity(128);
+    for p in &mesh.positions {
+        coords_line("", p, q, &mut line);
+        out.write_all(line.as_bytes())?;
+    }
+    for face in mesh.iter_faces() {
+        use std::fmt::Write as _;
+        line.clear();
+        let _ = write!(line, "{}", face.len());
+        for &i in face {
+            let _ = write!(line, " {i}");
+        }
+        line.push('\n');
+        out.write_all(line.as_bytes())?;
+    }
+    Ok(())
+}

@@ -1,0 +1,512 @@
+//! PLY: ASCII, binary little-endian and big-endian; `vertex` (x, y, z) and `face`
+//! (`vertex_indices`) elements. Other properties and elements are reported as dropped.
+
+use std::collections::BTreeSet;
+use std::io::Write;
+
+use super::{coords_line, Format, RawMesh};
+use crate::error::{Error, Result};
+use crate::mesh::Mesh;
+use crate::quant::{Decimal, Quantization, RawCoords};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Scalar {
+    fn parse(s: &str) -> Option<Scalar> {
+        Some(match s {
+            "char" | "int8" => Scalar::I8,
+            "uchar" | "uint8" => Scalar::U8,
+            "short" | "int16" => Scalar::I16,
+            "ushort" | "uint16" => Scalar::U16,
+            "int" | "int32" => Scalar::I32,
+            "uint" | "uint32" => Scalar::U32,
+            "float" | "float32" => Scalar::F32,
+            "double" | "float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
+
+    fn is_float(self) -> bool {
+        matches!(self, Scalar::F32 | Scalar::F64)
+    }
+}
+
+#[derive(Debug, Clone)]
+enum Prop {
+    Scalar(String, Scalar),
+    List(String, Scalar, Scalar),
+}
+
+#[derive(Debug, Clone)]
+struct Element {
+    name: String,
+    count: u64,
+    props: Vec<Prop>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    Ascii,
+    Le,
+    Be,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Num {
+    Int(i64),
+    F32(f32),
+    F64(f64),
+    Dec(Decimal),
+}
+
+fn err(what: impl std::fmt::Display) -> Error {
+    Error::MeshFile(format!("PLY: {what}"))
+}
+
+struct Body<'a> {
+    data: &'a [u8],
+    pos: usize,
+    mode: Mode,
+}
+
+impl<'a> Body<'a> {
+    fn remaining(&self) -> usize {
+        self.data.len() - self.pos
+    }
+
+    fn token(&mut self) -> Result<&'a str> {
+        while self.pos < self.data.len() && self.data[self.pos].is_ascii_whitespace() {
+            self.pos += 1;
+        }
+        let start = self.pos;
+        while self.pos < self.data.len() && !self.data[self.pos].is_ascii_whitespace() {
+            self.pos += 1;
+        }
+        if start == self.pos {
+            return Err(err("file ends before all elements were read"));
+        }
+        std::str::from_utf8(&self.data[start..self.pos]).map_err(|_| err("body is not ASCII text"))
+    }
+
+    fn take<const N: usize>(&mut self) -> Result<[u8; N]> {
+        if self.remaining() < N {
+            return Err(err("file ends before all elements were read"));
+        }
+        let mut b = [0u8; N];
+        b.copy_from_slice(&self.data[self.pos..self.pos + N]);
+        self.pos += N;
+        if self.mode == Mode::Be {
+            b.reverse();
+        }
+        Ok(b)
+    }
+
+    fn num(&mut self, ty: Scalar) -> Result<Num> {
+        if self.mode == Mode::Ascii {
+            let t = self.token()?;
+            return if ty.is_float() {
+                Decimal::parse(t).map(Num::Dec).map_err(err)
+            } else {
+                t.parse::<i64>()
+                    .map(Num::Int)
+                    .map_err(|_| err(format!("'{t}' is not an integer")))
+            };
+        }
+        Ok(match ty {
+            Scalar::I8 => Num::Int(i8::from_le_bytes(self.take()?) as i64),
+            Scalar::U8 => Num::Int(u8::from_le_bytes(self.take()?) as i64),
+            Scalar::I16 => Num::Int(i16::from_le_bytes(self.take()?) as i64),
+            Scalar::U16 => Num::Int(u16::from_le_bytes(self.take()?) as i64),
+            Scalar::I32 => Num::Int(i32::from_le_bytes(self.take()?) as i64),
+            Scalar::U32 => Num::Int(u32::from_le_bytes(self.take()?) as i64),
+            Scalar::F32 => Num::F32(f32::from_le_bytes(self.take()?)),
+            Scalar::F64 => Num::F64(f64::from_le_bytes(self.take()?)),
+        })
+    }
+
+    fn int(&mut self, ty: Scalar, what: &str) -> Result<i64> {
+        match self.num(ty)? {
+            Num::Int(i) => Ok(i),
+            Num::Dec(d) if d.decimals == 0 => Ok(d.mantissa),
+            Num::F32(x) if x.fract() == 0.0 && x.abs() < 1e9 => Ok(x as i64),
+            Num::F64(x) if x.fract() == 0.0 && x.abs() < 1e18 => Ok(x as i64),
+            _ => Err(err(format!("{what} is not an integer"))),
+        }
+    }
+}
+
+fn parse_header(bytes: &[u8]) -> Result<(Mode, Vec<Element>, usize)> {
+    let end = bytes
+        .windows(10)
+        .position(|w| w == b"end_header")
+        .ok_or_else(|| err("no end_header line"))?;
+    let mut body = end + 10;
+    // The header ends with the line break after end_header (LF or CR LF).
+    if bytes.get(body) == Some(&b'\r') {
+        body += 1;
+    }
+    if bytes.get(body) == Some(&b'\n') {
+        body += 1;
+    } else if body < bytes.len() {
+        return Err(err("end_header is not followed by a line break"));
+    }
+    let head = std::str::from_utf8(&bytes[..end]).map_err(|_| err("header is not text"))?;
+    let mut mode = None;
+    let mut elements: Vec<Element> = Vec::new();
+    for (n, line) in head.lines().enumerate() {
+        let mut t = line.split_ascii_whitespace();
+        let Some(kw) = t.next() else { continue };
+        let bad = |what: &str| err(format!("header line {}: {what}", n + 1));
+        match kw {
+            "ply" if n == 0 => {}
+            "format" => {
+                mode = Some(match t.next() {
+                    Some("ascii") => Mode::Ascii,
+                    Some("binary_little_endian") => Mode::Le,
+                    Some("binary_big_endian") => Mode::Be,
+                    _ => return Err(bad("unknown format")),
+                });
+            }
+            "comment" | "obj_info" => {}
+            "element" => {
+                let name = t.next().ok_or_else(|| bad("element without a name"))?;
+                let count = t
+                    .next()
+                    .and_then(|c| c.parse::<u64>().ok())
+                    .ok_or_else(|| bad("element without a count"))?;
+                elements.push(Element {
+                    name: name.to_string(),
+                    count,
+                    props: Vec::new(),
+                });
+            }
+            "property" => {
+                let el = elements
+                    .last_mut()
+                    .ok_or_else(|| bad("property before any element"))?;
+                let ty = t.next().ok_or_else(|| bad("property without a type"))?;
+                let prop = if ty == "list" {
+                    let c = t
+                        .next()
+                        .and_then(Scalar::parse)
+                        .ok_or_else(|| bad("bad list count type"))?;
+                    let i = t
+                        .next()
+                        .and_then(Scalar::parse)
+                        .ok_or_else(|| bad("bad list item type"))?;
+                    if c.is_float() {
+                        return Err(bad("list count type must be an integer"));
+                    }
+                    let name = t.next().ok_or_else(|| bad("property without a name"))?;
+                    Prop::List(name.to_string(), c, i)
+                } else {
+                    let s = Scalar::parse(ty).ok_or_else(|| bad("unknown property type"))?;
+                    let name = t.next().ok_or_else(|| bad("property without a name"))?;
+                    Prop::Scalar(name.to_string(), s)
+                };
+                el.props.push(prop);
+            }
+            _ if n == 0 => return Err(err("file does not start with 'ply'")),
+            other => return Err(bad(&format!("unknown keyword '{other}'"))),
+        }
+    }
+    Ok((mode.ok_or_else(|| err("no format line"))?, elements, body))
+}
+
+pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
+    let (mode, elements, body_start) = parse_header(bytes)?;
+    let mut body = Body {
+        data: bytes,
+        pos: body_start,
+        mode,
+    };
+    let mut dropped = BTreeSet::new();
+    let mut nums: Vec<[Num; 3]> = Vec::new();
+    let mut have_vertices = false;
+    let mut topo = Mesh::new();
+    let mut face = Vec::new();
+    for el in &elements {
+        // Every record needs at least this many bytes; refuse counts the file cannot hold
+        // before allocating for them.
+        let min_record: usize = el
+            .props
+            .iter()
+            .map(|p| match (mode, p) {
+                (Mode::Ascii, _) => 2,
+                (_, Prop::Scalar(_, s)) => s.size(),
+                (_, Prop::List(_, c, _)) => c.size(),
+            })
+            .sum::<usize>()
+            .max(1);
+        if el.count.saturating_mul(min_record as u64) > body.remaining() as u64 {
+            return Err(err(format!(
+                "element '{}' declares {} records, more than the {} bytes left can hold",
+                el.name,
+                el.count,
+                body.remaining()
+            )));
+        }
+        let is_vertex = el.name == "vertex";
+        let is_face = el.name == "face";
+        let axis_of = |name: &str| ["x", "y", "z"].iter().position(|a| *a == name);
+        if is_vertex {
+            if have_vertices {
+                return Err(err("two vertex elements"));
+            }
+            have_vertices = true;
+            for a in ["x", "y", "z"] {
+                if !el
+                    .props
+                    .iter()
+                    .any(|p| matches!(p, Prop::Scalar(n, _) if n == a))
+                {
+                    return Err(err(format!("vertex element has no '{a}' property")));
+                }
+            }
+            nums.reserve(el.count as usize);
+        } else if is_face {
+            if !el.props.iter().any(|p| matches!(p, Prop::List(n, _, _) if n == "vertex_indices" || n == "vertex_index")) {
+                return Err(err("face element has no vertex_indices list"));
+            }
+        } else {
+            dropped.insert(format!("'{}' elements", el.name));
+        }
+        for p in &el.props {
+            let name = match p {
+                Prop::Scalar(n, _) | Prop::List(n, _, _) => n,
+            };
+            let used = (is_vertex && axis_of(name).is_some() && matches!(p, Prop::Scalar(..)))
+                || (is_face && (name == "vertex_indices" || name == "vertex_index"));
+            if (is_vertex || is_face) && !used {
+                dropped.insert(format!("{} property '{name}'", el.name));
+            }
+        }
+        for _ in 0..el.count {
+            let mut v = [Num::Int(0); 3];
+            let mut took_list = false;
+            for p in &el.props {
+                match p {
+                    Prop::Scalar(name, ty) => {
+                        let x = body.num(*ty)?;
+                        if is_vertex {
+                            if let Some(a) = axis_of(name) {
+                                v[a] = x;
+                            }
+                        }
+                    }
+                    Prop::List(name, cty, ity) => {
+                        let n = body.int(*cty, "list count")?;
+                        if n < 0
+                            || (n as u64).saturating_mul(if mode == Mode::Ascii {
+                                2
+                            } else {
+                                ity.size() as u64
+                            }) > body.remaining() as u64
+                        {
+                            return Err(err(format!("list of {n} items does not fit in the file")));
+                        }
+                        let want = is_face
+                            && !took_list
+                            && (name == "vertex_indices" || name == "vertex_index");
+                        if want {
+                            face.clear();
+                        }
+                        for _ in 0..n {
+                            let i = body.int(*ity, "vertex index")?;
+                            if want {
+                                if !(0..u32::MAX as i64).contains(&i) {
+                                    return Err(err(format!("vertex index {i} is out of range")));
+                                }
+                                face.push(i as u32);
+                            }
+                        }
+                        if want {
+                            took_list = true;
+                            if face.len() < 3 {
+                                return Err(Error::InvalidMesh(format!(
+                                    "PLY face {} has {} corners; faces need at least 3",
+                                    topo.face_count() + 1,
+                                    face.len()
+                                )));
+                            }
+                            topo.push_face(&face);
+                        }
+                    }
+                }
+            }
+            if is_vertex {
+                nums.push(v);
+            }
+        }
+    }
+    if !have_vertices {
+        return Err(err("no vertex element"));
+    }
+    let coords = to_coords(&nums)?;
+    Ok(RawMesh {
+        coords,
+        topology: topo,
+        format: match mode {
+            Mode::Ascii => Format::PlyAscii,
+            Mode::Le => Format::PlyBinary,
+            Mode::Be => Format::PlyBinaryBigEndian,
+        },
+        dropped,
+    })
+}
+
+fn to_coords(nums: &[[Num; 3]]) -> Result<RawCoords> {
+    let (mut any_f32, mut any_f64, mut any_int) = (false, false, false);
+    for v in nums.iter().take(1) {
+        for x in v {
+            match x {
+                Num::F32(_) => any_f32 = true,
+                Num::F64(_) => any_f64 = true,
+                Num::Int(_) => any_int = true,
+                Num::Dec(_) => {}
+            }
+        }
+    }
+    let dec = |x: &Num| match *x {
+        Num::Dec(d) => d,
+        Num::Int(i) => Decimal {
+            mantissa: i,
+            decimals: 0,
+        },
+        _ => unreachable!("types are uniform per property"),
+    };
+    let f64_of = |x: &Num| match *x {
+        Num::F32(f) => f as f64,
+        Num::F64(f) => f,
+        Num::Int(i) => i as f64,
+        Num::Dec(d) => d.to_f64(),
+    };
+    Ok(if any_f64 || (any_f32 && any_int) {
+        RawCoords::F64(nums.iter().map(|v| v.map(|x| f64_of(&x))).collect())
+    } else if any_f32 {
+        RawCoords::F32(
+            nums.iter()
+                .map(|v| {
+                    v.map(|x| {
+                        if let Num::F32(f) = x {
+                            f
+                        } else {
+                            f64_of(&x) as f32
+                        }
+                    })
+                })
+                .collect(),
+        )
+    } else {
+        RawCoords::Decimal(nums.iter().map(|v| v.map(|x| dec(&x))).collect())
+    })
+}
+
+pub(crate) fn write<W: Write>(
+    out: &mut W,
+    mesh: &Mesh,
+    q: &Quantization,
+    binary: bool,
+) -> Result<()> {
+    let f32_out = binary && q.prefers_f32();
+    let cty = if mesh.iter_faces().all(|f| f.len() <= 255) {
+        "uchar"
+    } else {
+        "uint"
+    };
+    let ity = if mesh.vertex_count() <= i32::MAX as usize {
+        "int"
+    } else {
+        "uint"
+    };
+    write!(
+        out,
+        "ply\nformat {} 1.0\ncomment written by subwave\nelement vertex {}\n",
+        if binary {
+            "binary_little_endian"
+        } else {
+            "ascii"
+        },
+        mesh.vertex_count()
+    )?;
+    let fty = if f32_out || (!binary && q.prefers_f32()) {
+        "float"
+    } else {
+        "double"
+    };
+    for a in ["x", "y", "z"] {
+        writeln!(out, "property {fty} {a}")?;
+    }
+    write!(
+        out,
+        "element face {}\nproperty list {cty} {ity} vertex_indices\nend_header\n",
+        mesh.face_count()
+    )?;
+    if binary {
+        let mut buf = Vec::with_capacity(1 << 16);
+        for p in &mesh.positions {
+            for (k, &c) in p.iter().enumerate() {
+                if f32_out {
+                    buf.extend_from_slice(&q.value_f32(c, k).to_le_bytes());
+                } else {
+                    buf.extend_from_slice(&q.value_f64(c, k).to_le_bytes());
+                }
+            }
+            if buf.len() > 60_000 {
+                out.write_all(&buf)?;
+                buf.clear();
+            }
+        }
+        for face in mesh.iter_faces() {
+            if cty == "uchar" {
+                buf.push(face.len() as u8);
+            } else {
+                buf.extend_from_slice(&(face.len() as u32).to_le_bytes());
+            }
+            for &i in face {
+                buf.extend_from_slice(&i.to_le_bytes());
+            }
+            if buf.len() > 60_000 {
+                out.write_all(&buf)?;
+                buf.clear();
+            }
+        }
+        out.write_all(&buf)?;
+    } else {
+        let mut line = String::with_capacity(128);
+        for p in &mesh.positions {
+            coords_line("", p, q, &mut line);
+            out.write_all(line.as_bytes())?;
+        }
+        for face in mesh.iter_faces() {
+            use std::fmt::Write as _;
+            line.clear();
+            let _ = write!(line, "{}", face.len());
+            for &i in face {
+                let _ = write!(line, " {i}");
+            }
+            line.push('\n');
+            out.write_all(line.as_bytes())?;
+        }
+    }
+    Ok(())
+}

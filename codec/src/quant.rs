@@ -1,0 +1,589 @@
+//! From the numbers in a file to integer positions and back (SPEC.md 3).
+//!
+//! Two modes. *Exact* keeps the file's own values: decimal text on its decimal grid,
+//! binary floats on the power-of-two grid that holds all of them. *Grid* (`--bits Q`)
+//! quantises exactly as Draco does, in `f32`, so sizes compare 1:1 with Draco.
+
+use crate::error::{Error, Result};
+use crate::mesh::{COORD_BITS, MAX_COORD};
+
+/// A decimal number as written in a text file: `mantissa * 10^-decimals`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Decimal {
+    /// The digits, as an integer, with the sign.
+    pub mantissa: i64,
+    /// How many digits stood after the decimal point (after applying any exponent).
+    pub decimals: u8,
+}
+
+/// Most decimals a coordinate may have in exact mode (10^18 still fits `i64`).
+pub const MAX_DECIMALS: u8 = 18;
+
+const POW10: [i64; 19] = {
+    let mut t = [1i64; 19];
+    let mut i = 1;
+    while i < 19 {
+        t[i] = t[i - 1] * 10;
+        i += 1;
+    }
+    t
+};
+
+impl Decimal {
+    /// Parses a decimal number the way text mesh formats write them: optional sign,
+    /// digits with an optional point, optional exponent. NaN and infinities are refused.
+    pub fn parse(token: &str) -> std::result::Result<Decimal, String> {
+        let b = token.as_bytes();
+        let mut i = 0;
+        let neg = match b.first() {
+            Some(b'-') => {
+                i += 1;
+                true
+            }
+            Some(b'+') => {
+                i += 1;
+                false
+            }
+            _ => false,
+        };
+        let lower = token.to_ascii_lowercase();
+        let body = lower.trim_start_matches(['+', '-']);
+        if body.starts_with("nan") || body.starts_with("inf") {
+            return Err(format!("'{token}' is not a finite number"));
+        }
+        let mut mant: i64 = 0;
+        let mut digits = 0usize;
+        let mut frac: i32 = 0;
+        let mut seen_point = false;
+        let mut overflow = false;
+        while i < b.len() {
+            match b[i] {
+                c @ b'0'..=b'9' => {
+                    digits += 1;
+                    match mant
+                        .checked_mul(10)
+                        .and_then(|m| m.checked_add((c - b'0') as i64))
+                    {
+                        Some(m) if m <= POW10[18] => mant = m,
+                        _ => overflow = true,
+                    }
+                    if seen_point {
+                        frac += 1;
+                    }
+                }
+                b'.' if !seen_point => seen_point = true,
+                b'e' | b'E' => break,
+                _ => return Err(format!("'{token}' is not a number")),
+            }
+            i += 1;
+        }
+        if digits == 0 {
+            return Err(format!("'{token}' is not a number"));
+        }
+        let mut exp: i32 = 0;
+        if i < b.len() {
+            let e = &token[i + 1..];
+            exp = e
+                .parse::<i32>()
+                .ok()
+                .filter(|e| e.abs() <= 400)
+                .ok_or_else(|| format!("'{token}' has a bad exponent"))?;
+        }
+        if overflow {
+            return Err(format!(
+                "'{token}' has more than 18 significant digits, too many for exact mode"
+            ));
+        }
+        let mut dec = frac - exp;
+        if dec < 0 {
+            if mant != 0 {
+                let scale = POW10.get((-dec) as usize).copied().unwrap_or(i64::MAX);
+                mant = mant
+                    .checked_mul(scale)
+                    .filter(|m| *m <= POW10[18])
+                    .ok_or_else(|| format!("'{token}' is too large for exact mode"))?;
+            }
+            dec = 0;
+        }
+        if dec > MAX_DECIMALS as i32 {
+            return Err(format!(
+                "'{token}' has {dec} decimals; exact mode supports at most {MAX_DECIMALS}"
+            ));
+        }
+        Ok(Decimal {
+            mantissa: if neg { -mant } else { mant },
+            decimals: dec as u8,
+        })
+    }
+
+    /// The nearest `f64` (exact division of exactly representable values when the
+    /// mantissa is below 2^53, so this equals a correctly rounded parse of the text).
+    pub fn to_f64(self) -> f64 {
+        self.mantissa as f64 / POW10[self.decimals as usize] as f64
+    }
+}
+
+/// Coordinates as read from a file, before they become integers.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RawCoords {
+    /// Decimal text (also binary integer properties, with 0 decimals).
+    Decimal(Vec<[Decimal; 3]>),
+    /// Binary `f32`.
+    F32(Vec<[f32; 3]>),
+    /// Binary `f64`.
+    F64(Vec<[f64; 3]>),
+}
+
+impl RawCoords {
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        match self {
+            RawCoords::Decimal(v) => v.len(),
+            RawCoords::F32(v) => v.len(),
+            RawCoords::F64(v) => v.len(),
+        }
+    }
+
+    /// Whether there are no vertices.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn to_f32(&self) -> Vec<[f32; 3]> {
+        match self {
+            RawCoords::Decimal(v) => v.iter().map(|p| p.map(|d| d.to_f64() as f32)).collect(),
+            RawCoords::F32(v) => v.clone(),
+            RawCoords::F64(v) => v.iter().map(|p| p.map(|x| x as f32)).collect(),
+        }
+    }
+}
+
+/// Width of a binary float.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FloatWidth {
+    /// IEEE 754 binary32.
+    F32,
+    /// IEEE 754 binary64.
+    F64,
+}
+
+/// How integer coordinates map to the values written to a file (SPEC.md 3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Quantization {
+    /// `value = n / 10^decimals`, written with exactly `decimals` decimals.
+    Decimal {
+        /// Decimals after the point.
+        decimals: u8,
+    },
+    /// `value = n * 2^exponent`, exactly the binary float that was read.
+    Float {
+        /// The float type the values came from.
+        width: FloatWidth,
+        /// Binary exponent of the integer grid.
+        exponent: i32,
+    },
+    /// Draco's grid: `value = f32(n) * step + origin`, in `f32`.
+    Grid {
+        /// Q, the number of bits.
+        bits: u8,
+        /// Per-axis minimum of the input.
+        origin: [f32; 3],
+        /// One step for all axes: largest extent / (2^Q - 1), in `f32`.
+        step: f32,
+    },
+}
+
+impl Quantization {
+    /// Whether the mode reproduces the file's own values (not a lossy grid).
+    pub fn is_exact(&self) -> bool {
+        !matches!(self, Quantization::Grid { .. })
+    }
+
+    /// A short human description.
+    pub fn describe(&self) -> String {
+        match *self {
+            Quantization::Decimal { decimals } => format!("exact decimal, 1e-{decimals} grid"),
+            Quantization::Float { width, exponent } => format!(
+                "exact binary {}, 2^{exponent} grid",
+                match width {
+                    FloatWidth::F32 => "float32",
+                    FloatWidth::F64 => "float64",
+                }
+            ),
+            Quantization::Grid { bits, step, .. } => format!("{bits}-bit grid, step {step}"),
+        }
+    }
+
+    /// The value of integer `n` on `axis` as `f64` (exact for the exact modes where the
+    /// value is representable; the `f32` value for grids).
+    pub fn value_f64(&self, n: i64, axis: usize) -> f64 {
+        match *self {
+            Quantization::Decimal { decimals } => Decimal {
+                mantissa: n,
+                decimals,
+            }
+            .to_f64(),
+            Quantization::Float { exponent, .. } => scale_pow2(n as f64, exponent),
+            Quantization::Grid { .. } => self.value_f32(n, axis) as f64,
+        }
+    }
+
+    /// The value as `f32` (exact for `Float { width: F32 }` and for grids).
+    pub fn value_f32(&self, n: i64, axis: usize) -> f32 {
+        match *self {
+            Quantization::Grid { origin, step, .. } => (n as f32) * step + origin[axis],
+            _ => self.value_f64(n, axis) as f32,
+        }
+    }
+
+    /// Appends the value's text: exact decimals for the decimal mode, the shortest text
+    /// that reads back as the same float otherwise.
+    pub fn write_text(&self, n: i64, axis: usize, out: &mut String) {
+        use std::fmt::Write;
+        match *self {
+            Quantization::Decimal { decimals } => write_decimal(n, decimals, out),
+            Quantization::Float {
+                width: FloatWidth::F64,
+                ..
+            } => {
+                let _ = write!(out, "{}", self.value_f64(n, axis));
+            }
+            _ => {
+                let _ = write!(out, "{}", self.value_f32(n, axis));
+            }
+        }
+    }
+
+    /// Whether binary output should use `f32` (values are exactly `f32`).
+    pub fn prefers_f32(&self) -> bool {
+        matches!(
+            self,
+            Quantization::Grid { .. }
+                | Quantization::Float {
+                    width: FloatWidth::F32,
+                    ..
+                }
+        )
+    }
+}
+
+fn scale_pow2(x: f64, e: i32) -> f64 {
+    // Two steps so that intermediate powers stay normal for any exponent we accept.
+    let h = e / 2;
+    x * 2f64.powi(h) * 2f64.powi(e - h)
+}
+
+/// Writes `n / 10^decimals` with exactly `decimals` decimals.
+pub fn write_decimal(n: i64, decimals: u8, out: &mut String) {
+    use std::fmt::Write;
+    let a = n.unsigned_abs();
+    if n < 0 {
+        out.push('-');
+    }
+    if decimals == 0 {
+        let _ = write!(out, "{a}");
+        return;
+    }
+    let p = POW10[decimals as usize] as u64;
+    let _ = write!(
+        out,
+        "{}.{:0width$}",
+        a / p,
+        a % p,
+        width = decimals as usize
+    );
+}
+
+fn range_error(what: String) -> Error {
+    Error::Range(format!(
+        "{what}; exact integers would not fit the codec's range of +-(2^{COORD_BITS} - 1): \
+         use --bits Q (1..=30) to quantise"
+    ))
+}
+
+/// Turns the coordinates into integers: exactly when `bits` is `None`, on Draco's
+/// Q-bit grid otherwise.
+pub fn integerize(raw: &RawCoords, bits: Option<u8>) -> Result<(Vec<[i64; 3]>, Quantization)> {
+    check_finite(raw)?;
+    match bits {
+        Some(q) => grid(raw, q),
+        None => match raw {
+            RawCoords::Decimal(v) => exact_decimal(v),
+            RawCoords::F32(v) => exact_float(
+                v.iter().flat_map(|p| p.iter().map(|&x| split_f32(x))),
+                v.len(),
+                FloatWidth::F32,
+            ),
+            RawCoords::F64(v) => exact_float(
+                v.iter().flat_map(|p| p.iter().map(|&x| split_f64(x))),
+                v.len(),
+                FloatWidth::F64,
+            ),
+        },
+    }
+}
+
+fn check_finite(raw: &RawCoords) -> Result<()> {
+    let bad = match raw {
+        RawCoords::Decimal(_) => None,
+        RawCoords::F32(v) => v.iter().position(|p| p.iter().any(|x| !x.is_finite())),
+        RawCoords::F64(v) => v.iter().position(|p| p.iter().any(|x| !x.is_finite())),
+    };
+    match bad {
+        Some(i) => Err(Error::InvalidMesh(format!(
+            "vertex {} has a NaN or infinite coordinate",
+            i + 1
+        ))),
+        None => Ok(()),
+    }
+}
+
+fn exact_decimal(v: &[[Decimal; 3]]) -> Result<(Vec<[i64; 3]>, Quantization)> {
+    let d = v
+        .iter()
+        .flat_map(|p| p.iter().map(|x| x.decimals))
+        .max()
+        .unwrap_or(0);
+    let mut out = Vec::with_capacity(v.len());
+    for (i, p) in v.iter().enumerate() {
+        let mut q = [0i64; 3];
+        for k in 0..3 {
+            let s = POW10[(d - p[k].decimals) as usize];
+            q[k] = p[k]
+                .mantissa
+                .checked_mul(s)
+                .filter(|x| x.abs() <= MAX_COORD)
+                .ok_or_else(|| {
+                    range_error(format!(
+                        "vertex {} coordinate {} on the 1e-{d} grid",
+                        i + 1,
+                        k + 1
+                    ))
+                })?;
+        }
+        out.push(q);
+    }
+    Ok((out, Quantization::Decimal { decimals: d }))
+}
+
+/// `(negative, odd mantissa, exponent)` with `|x| = mantissa * 2^exponent`; zero gives
+/// mantissa 0.
+fn split_f32(x: f32) -> (bool, u64, i32) {
+    let b = x.to_bits();
+    let e = ((b >> 23) & 0xff) as i32;
+    let m = (b & 0x7f_ffff) as u64;
+    let (m, e) = if e == 0 {
+        (m, -149)
+    } else {
+        (m | 0x80_0000, e - 150)
+    };
+    normalise(b >> 31 == 1, m, e)
+}
+
+fn split_f64(x: f64) -> (bool, u64, i32) {
+    let b = x.to_bits();
+    let e = ((b >> 52) & 0x7ff) as i32;
+    let m = b & 0xf_ffff_ffff_ffff;
+    let (m, e) = if e == 0 {
+        (m, -1074)
+    } else {
+        (m | 1 << 52, e - 1075)
+    };
+    normalise(b >> 63 == 1, m, e)
+}
+
+fn normalise(neg: bool, m: u64, e: i32) -> (bool, u64, i32) {
+    if m == 0 {
+        return (false, 0, 0);
+    }
+    let tz = m.trailing_zeros();
+    (neg, m >> tz, e + tz as i32)
+}
+
+fn exact_float(
+    parts: impl Iterator<Item = (bool, u64, i32)> + Clone,
+    n: usize,
+    width: FloatWidth,
+) -> Result<(Vec<[i64; 3]>, Quantization)> {
+    let emin = parts
+        .clone()
+        .filter(|p| p.1 != 0)
+        .map(|p| p.2)
+        .min()
+        .unwrap_or(0);
+    let mut out = vec![[0i64; 3]; n];
+    for (idx, (neg, m, e)) in parts.enumerate() {
+        if m == 0 {
+            continue;
+        }
+        let shift = (e - emin) as u32;
+        let bits = 64 - m.leading_zeros() + shift;
+        if bits > COORD_BITS {
+            return Err(range_error(format!(
+                "vertex {} needs {bits} bits on the 2^{emin} grid that holds every value",
+                idx / 3 + 1
+            )));
+        }
+        let v = (m << shift) as i64;
+        out[idx / 3][idx % 3] = if neg { -v } else { v };
+    }
+    Ok((
+        out,
+        Quantization::Float {
+            width,
+            exponent: emin,
+        },
+    ))
+}
+
+/// Draco's quantiser (AttributeQuantizationTransform with a shared range), in `f32`.
+fn grid(raw: &RawCoords, q: u8) -> Result<(Vec<[i64; 3]>, Quantization)> {
+    if !(1..=30).contains(&q) {
+        return Err(Error::InvalidArgument(format!(
+            "--bits {q} is outside 1..=30"
+        )));
+    }
+    let p = raw.to_f32();
+    if let Some(i) = p.iter().position(|v| v.iter().any(|x| !x.is_finite())) {
+        return Err(Error::Range(format!(
+            "vertex {} overflows f32, which --bits quantises in",
+            i + 1
+        )));
+    }
+    let mut mn = [f32::INFINITY; 3];
+    let mut mx = [f32::NEG_INFINITY; 3];
+    for v in &p {
+        for k in 0..3 {
+            mn[k] = mn[k].min(v[k]);
+            mx[k] = mx[k].max(v[k]);
+        }
+    }
+    if p.is_empty() {
+        mn = [0.0; 3];
+        mx = [0.0; 3];
+    }
+    let mut range = (0..3).map(|k| mx[k] - mn[k]).fold(0f32, f32::max);
+    if range == 0.0 || !range.is_finite() {
+        if !range.is_finite() {
+            return Err(Error::Range("bounding box extent overflows f32".into()));
+        }
+        range = 1.0;
+    }
+    let maxq = ((1u32 << q) - 1) as f32;
+    let inv_delta = maxq / range;
+    let delta = range / maxq;
+    let out = p
+        .iter()
+        .map(|v| {
+            let mut r = [0i64; 3];
+            for k in 0..3 {
+                r[k] = ((v[k] - mn[k]) * inv_delta + 0.5f32).floor() as i64;
+            }
+            r
+        })
+        .collect();
+    Ok((
+        out,
+        Quantization::Grid {
+            bits: q,
+            origin: mn,
+            step: delta,
+        },
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_decimals_exactly() {
+        let d = |s| Decimal::parse(s).unwrap();
+        assert_eq!(
+            d("1.500000"),
+            Decimal {
+                mantissa: 1500000,
+                decimals: 6
+            }
+        );
+        assert_eq!(
+            d("-0.25"),
+            Decimal {
+                mantissa: -25,
+                decimals: 2
+            }
+        );
+        assert_eq!(
+            d("12"),
+            Decimal {
+                mantissa: 12,
+                decimals: 0
+            }
+        );
+        assert_eq!(
+            d("1.5e-3"),
+            Decimal {
+                mantissa: 15,
+                decimals: 4
+            }
+        );
+        assert_eq!(
+            d("1.5E3"),
+            Decimal {
+                mantissa: 1500,
+                decimals: 0
+            }
+        );
+        assert_eq!(
+            d(".5"),
+            Decimal {
+                mantissa: 5,
+                decimals: 1
+            }
+        );
+        for bad in [
+            "nan", "-inf", "Infinity", "1.2.3", "", "-", "abc", "1e", "1e999",
+        ] {
+            assert!(Decimal::parse(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn decimal_text_round_trips() {
+        for s in ["0.000000", "-12.345678", "123456.000001", "7", "-0.5"] {
+            let d = Decimal::parse(s).unwrap();
+            let mut out = String::new();
+            write_decimal(d.mantissa, d.decimals, &mut out);
+            assert_eq!(out, s);
+        }
+    }
+
+    #[test]
+    fn exact_floats_are_exact() {
+        let v = vec![[1.5f32, -0.001, 1000.25], [0.0, 0.5, -7.0]];
+        let (ints, q) = integerize(&RawCoords::F32(v.clone()), None).unwrap();
+        for (p, n) in v.iter().zip(&ints) {
+            for k in 0..3 {
+                assert_eq!(q.value_f32(n[k], k).to_bits(), p[k].to_bits());
+            }
+        }
+    }
+
+    #[test]
+    fn exact_mode_refuses_what_does_not_fit() {
+        let v = vec![[1.0e30f64, 1.0e-30, 0.0]];
+        let e = integerize(&RawCoords::F64(v), None).unwrap_err();
+        assert!(e.to_string().contains("--bits"), "{e}");
+        let nan = vec![[f32::NAN, 0.0, 0.0]];
+        assert!(integerize(&RawCoords::F32(nan), None).is_err());
+    }
+
+    #[test]
+    fn grid_matches_drafts_formula() {
+        let v = vec![[0.0f32, 0.0, 0.0], [2.0, 1.0, 0.5], [1.0, 0.3, 0.1]];
+        let (ints, q) = integerize(&RawCoords::F32(v), Some(8)).unwrap();
+        assert_eq!(ints[1], [255, 128, 64]);
+        assert_eq!(ints[2][0], 128);
+        assert_eq!(q.value_f32(255, 0), 2.0);
+    }
+}
