@@ -19,6 +19,10 @@
 //! The container layout and every arithmetic rule are specified in `SPEC.md`.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
+/// The README's examples, run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
 
 use std::collections::BTreeSet;
 
@@ -58,6 +62,11 @@ impl Loaded {
 /// into integers: exactly when `bits` is `None`, on Draco's `bits`-bit grid otherwise.
 pub fn load(bytes: &[u8], bits: Option<u8>) -> Result<Loaded> {
     let raw = read_mesh(bytes)?;
+    if let (None, Some(why)) = (bits, &raw.inexact) {
+        return Err(Error::Range(format!(
+            "{why}: exact mode cannot keep this file's values; use --bits Q (1..=30) to quantise"
+        )));
+    }
     let (positions, quantization) = subwave_codec::quant::integerize(&raw.coords, bits)?;
     let mut mesh = raw.topology;
     mesh.positions = positions;

@@ -11,12 +11,12 @@ use subwave::{DecodeOptions, EncodeOptions, Format, Limits, Quantization};
 
 const EXAMPLES: &str = "\
 Examples:
-  subwave compress corpus/cube_cc3.obj cube.swv          exact: the file's own values
+  subwave compress corpus/cube_cc4.obj cube.swv          exact: the file's own values
   subwave compress scan.ply scan.swv --bits 16           Draco's 16-bit grid
   subwave decompress cube.swv cube.obj                   format follows the extension
   subwave decompress cube.swv - --format off > cube.off  '-' is stdout (stdin for input)
   subwave info cube.swv --json
-  subwave verify corpus/cube_cc3.obj                     compress + decompress in memory";
+  subwave verify corpus/cube_cc4.obj                     compress + decompress in memory";
 
 #[derive(Parser)]
 #[command(
@@ -56,7 +56,9 @@ enum Command {
         input: String,
         /// Output mesh file, or - for standard output.
         output: String,
-        /// Output format; by default the output's extension, else the input's format.
+        /// Output format. By default the output's extension says (.obj, .off; .ply is
+        /// ASCII for decimal values and binary for float values, so values stay exact),
+        /// else the input's format.
         #[arg(long, value_enum)]
         format: Option<OutFormat>,
         /// Write the mesh of refinement level K (0 = base mesh); works on a file cut off
@@ -88,7 +90,7 @@ enum Command {
 #[derive(Clone, Copy, ValueEnum)]
 enum OutFormat {
     Obj,
-    /// Binary little-endian PLY.
+    /// Binary little-endian PLY (decimal values become the nearest doubles).
     Ply,
     /// ASCII PLY.
     PlyAscii,
@@ -236,8 +238,15 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
                 None => {
                     let src = subwave::default_output_format(dec.header.source);
                     match Format::from_path(output) {
-                        // A .ply name keeps the input's PLY flavour when it was PLY.
-                        Some(f) if f.is_ply() && src.is_ply() => src,
+                        // PLY keeps the values exact: ASCII for decimals (binary floats
+                        // cannot hold them), binary for float and grid values.
+                        Some(f) if f.is_ply() => {
+                            if matches!(dec.quantization, Quantization::Decimal { .. }) {
+                                Format::PlyAscii
+                            } else {
+                                Format::PlyBinary
+                            }
+                        }
                         Some(f) => f,
                         None => src,
                     }

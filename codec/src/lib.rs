@@ -2,6 +2,8 @@
 //! and the container's sections. Most users want the facade crate `subwave`.
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
+// Numeric kernels index several arrays (axes, positions, weights) in lockstep.
+#![allow(clippy::needless_range_loop)]
 
 pub mod coder;
 pub mod error;

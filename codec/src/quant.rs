@@ -33,6 +33,17 @@ impl Decimal {
     /// Parses a decimal number the way text mesh formats write them: optional sign,
     /// digits with an optional point, optional exponent. NaN and infinities are refused.
     pub fn parse(token: &str) -> std::result::Result<Decimal, String> {
+        Self::parse_kind(token).map_err(|(_, e)| e)
+    }
+
+    /// Like [`Decimal::parse`], also saying whether a failure is only that the number
+    /// is too long or too large for exact mode (`true`): such a number still has a
+    /// value as `f64`.
+    pub fn parse_kind(token: &str) -> std::result::Result<Decimal, (bool, String)> {
+        Self::parse_inner(token)
+    }
+
+    fn parse_inner(token: &str) -> std::result::Result<Decimal, (bool, String)> {
         let b = token.as_bytes();
         let mut i = 0;
         let neg = match b.first() {
@@ -49,7 +60,7 @@ impl Decimal {
         let lower = token.to_ascii_lowercase();
         let body = lower.trim_start_matches(['+', '-']);
         if body.starts_with("nan") || body.starts_with("inf") {
-            return Err(format!("'{token}' is not a finite number"));
+            return Err((false, format!("'{token}' is not a finite number")));
         }
         let mut mant: i64 = 0;
         let mut digits = 0usize;
@@ -73,12 +84,12 @@ impl Decimal {
                 }
                 b'.' if !seen_point => seen_point = true,
                 b'e' | b'E' => break,
-                _ => return Err(format!("'{token}' is not a number")),
+                _ => return Err((false, format!("'{token}' is not a number"))),
             }
             i += 1;
         }
         if digits == 0 {
-            return Err(format!("'{token}' is not a number"));
+            return Err((false, format!("'{token}' is not a number")));
         }
         let mut exp: i32 = 0;
         if i < b.len() {
@@ -87,11 +98,12 @@ impl Decimal {
                 .parse::<i32>()
                 .ok()
                 .filter(|e| e.abs() <= 400)
-                .ok_or_else(|| format!("'{token}' has a bad exponent"))?;
+                .ok_or_else(|| (false, format!("'{token}' has a bad exponent")))?;
         }
         if overflow {
-            return Err(format!(
-                "'{token}' has more than 18 significant digits, too many for exact mode"
+            return Err((
+                true,
+                format!("'{token}' has more than 18 significant digits, too many for exact mode"),
             ));
         }
         let mut dec = frac - exp;
@@ -101,13 +113,14 @@ impl Decimal {
                 mant = mant
                     .checked_mul(scale)
                     .filter(|m| *m <= POW10[18])
-                    .ok_or_else(|| format!("'{token}' is too large for exact mode"))?;
+                    .ok_or_else(|| (true, format!("'{token}' is too large for exact mode")))?;
             }
             dec = 0;
         }
         if dec > MAX_DECIMALS as i32 {
-            return Err(format!(
-                "'{token}' has {dec} decimals; exact mode supports at most {MAX_DECIMALS}"
+            return Err((
+                true,
+                format!("'{token}' has {dec} decimals; exact mode supports at most {MAX_DECIMALS}"),
             ));
         }
         Ok(Decimal {
@@ -154,6 +167,85 @@ impl RawCoords {
             RawCoords::Decimal(v) => v.iter().map(|p| p.map(|d| d.to_f64() as f32)).collect(),
             RawCoords::F32(v) => v.clone(),
             RawCoords::F64(v) => v.iter().map(|p| p.map(|x| x as f32)).collect(),
+        }
+    }
+}
+
+/// Collects text coordinates: exact decimals while every number allows it, else
+/// (a number too long or too large for exact mode) the `f64` values, so that `--bits`
+/// still works and exact mode fails with a message that suggests it.
+#[derive(Debug, Default)]
+pub struct TextCoords {
+    exact: Vec<[Decimal; 3]>,
+    inexact: Option<(Vec<[f64; 3]>, String)>,
+}
+
+impl TextCoords {
+    /// Parses and appends one vertex.
+    pub fn push(&mut self, t: [&str; 3]) -> std::result::Result<(), String> {
+        if self.inexact.is_none() {
+            let mut p = [Decimal {
+                mantissa: 0,
+                decimals: 0,
+            }; 3];
+            let mut bad = None;
+            for k in 0..3 {
+                match Decimal::parse_kind(t[k]) {
+                    Ok(d) => p[k] = d,
+                    Err((true, why)) => {
+                        bad = Some(why);
+                        break;
+                    }
+                    Err((false, why)) => return Err(why),
+                }
+            }
+            match bad {
+                None => {
+                    self.exact.push(p);
+                    return Ok(());
+                }
+                Some(why) => {
+                    let v = self
+                        .exact
+                        .drain(..)
+                        .map(|p| p.map(|d| d.to_f64()))
+                        .collect();
+                    self.inexact = Some((v, why));
+                }
+            }
+        }
+        let mut p = [0f64; 3];
+        for k in 0..3 {
+            p[k] = t[k]
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| format!("'{}' is not a finite number", t[k]))?;
+        }
+        if let Some((v, _)) = &mut self.inexact {
+            v.push(p);
+        }
+        Ok(())
+    }
+
+    /// Number of vertices so far.
+    pub fn len(&self) -> usize {
+        match &self.inexact {
+            Some((v, _)) => v.len(),
+            None => self.exact.len(),
+        }
+    }
+
+    /// Whether no vertex was pushed.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The coordinates, and why they are not exact decimals if they are not.
+    pub fn finish(self) -> (RawCoords, Option<String>) {
+        match self.inexact {
+            Some((v, why)) => (RawCoords::F64(v), Some(why)),
+            None => (RawCoords::Decimal(self.exact), None),
         }
     }
 }

@@ -98,6 +98,9 @@ pub struct RawMesh {
     pub format: Format,
     /// What the file had that is not carried (normals, texture coordinates, ...).
     pub dropped: BTreeSet<String>,
+    /// Why the text's decimals cannot be kept exactly, if they cannot (too many digits
+    /// or too large): such a file can only be coded with `--bits`.
+    pub inexact: Option<String>,
 }
 
 /// Reads a mesh file from bytes. The format is sniffed from the content.

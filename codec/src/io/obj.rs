@@ -6,12 +6,12 @@ use std::io::Write;
 use super::{coords_line, syntax, Format, RawMesh};
 use crate::error::Result;
 use crate::mesh::Mesh;
-use crate::quant::{Decimal, Quantization, RawCoords};
+use crate::quant::{Quantization, TextCoords};
 
 pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     let text = std::str::from_utf8(bytes)
         .map_err(|e| syntax("OBJ", line_of(bytes, e.valid_up_to()), "not UTF-8 text"))?;
-    let mut coords: Vec<[Decimal; 3]> = Vec::new();
+    let mut coords = TextCoords::default();
     let mut topo = Mesh::new();
     let mut dropped = BTreeSet::new();
     let mut face: Vec<u32> = Vec::new();
@@ -45,20 +45,17 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         let Some(kw) = tok.next() else { continue };
         match kw {
             "v" => {
-                let mut p = [Decimal {
-                    mantissa: 0,
-                    decimals: 0,
-                }; 3];
+                let mut p = [""; 3];
                 for (k, slot) in p.iter_mut().enumerate() {
-                    let t = tok.next().ok_or_else(|| {
+                    *slot = tok.next().ok_or_else(|| {
                         syntax(
                             "OBJ",
                             lineno,
                             format!("vertex has {k} coordinates, needs 3"),
                         )
                     })?;
-                    *slot = Decimal::parse(t).map_err(|e| syntax("OBJ", lineno, e))?;
                 }
+                coords.push(p).map_err(|e| syntax("OBJ", lineno, e))?;
                 match tok.count() {
                     0 => {}
                     1 => {
@@ -68,7 +65,6 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                         dropped.insert("vertex colors".to_string());
                     }
                 }
-                coords.push(p);
             }
             "f" | "fo" => {
                 face.clear();
@@ -140,11 +136,13 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             }
         }
     }
+    let (coords, inexact) = coords.finish();
     Ok(RawMesh {
-        coords: RawCoords::Decimal(coords),
+        coords,
         topology: topo,
         format: Format::Obj,
         dropped,
+        inexact,
     })
 }
 

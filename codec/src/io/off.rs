@@ -6,7 +6,7 @@ use std::io::Write;
 use super::{coords_line, syntax, Format, RawMesh};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
-use crate::quant::{Decimal, Quantization, RawCoords};
+use crate::quant::{Quantization, TextCoords};
 
 pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     let text = std::str::from_utf8(bytes).map_err(|_| {
@@ -77,27 +77,23 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             ),
         ));
     }
-    let mut coords = Vec::with_capacity(nv);
+    let mut coords = TextCoords::default();
     for i in 0..nv {
         let (n, l) = lines
             .next()
             .ok_or_else(|| Error::MeshFile(format!("OFF file ends after {i} of {nv} vertices")))?;
         let mut t = l.split_ascii_whitespace();
-        let mut p = [Decimal {
-            mantissa: 0,
-            decimals: 0,
-        }; 3];
+        let mut p = [""; 3];
         for (k, slot) in p.iter_mut().enumerate() {
-            let s = t
+            *slot = t
                 .next()
                 .ok_or_else(|| syntax("OFF", n, format!("vertex has {k} coordinates, needs 3")))?;
-            *slot = Decimal::parse(s).map_err(|e| syntax("OFF", n, e))?;
         }
+        coords.push(p).map_err(|e| syntax("OFF", n, e))?;
         let extra = t.count();
         if extra > 0 && extra_per_vertex == 0 {
             dropped.insert("per-vertex extra values".to_string());
         }
-        coords.push(p);
     }
     let mut topo = Mesh::new();
     let mut face = Vec::new();
@@ -137,11 +133,13 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         }
         topo.push_face(&face);
     }
+    let (coords, inexact) = coords.finish();
     Ok(RawMesh {
-        coords: RawCoords::Decimal(coords),
+        coords,
         topology: topo,
         format: Format::Off,
         dropped,
+        inexact,
     })
 }
 

@@ -7,7 +7,7 @@ use std::io::Write;
 use super::{coords_line, Format, RawMesh};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
-use crate::quant::{Decimal, Quantization, RawCoords};
+use crate::quant::{Decimal, Quantization, RawCoords, TextCoords};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Scalar {
@@ -241,6 +241,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     };
     let mut dropped = BTreeSet::new();
     let mut nums: Vec<[Num; 3]> = Vec::new();
+    let mut text = TextCoords::default();
     let mut have_vertices = false;
     let mut topo = Mesh::new();
     let mut face = Vec::new();
@@ -282,7 +283,9 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                     return Err(err(format!("vertex element has no '{a}' property")));
                 }
             }
-            nums.reserve(el.count as usize);
+            if mode != Mode::Ascii {
+                nums.reserve(el.count as usize);
+            }
         } else if is_face {
             if !el.props.iter().any(|p| matches!(p, Prop::List(n, _, _) if n == "vertex_indices" || n == "vertex_index")) {
                 return Err(err("face element has no vertex_indices list"));
@@ -302,14 +305,16 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         }
         for _ in 0..el.count {
             let mut v = [Num::Int(0); 3];
+            let mut toks = [""; 3];
             let mut took_list = false;
             for p in &el.props {
                 match p {
                     Prop::Scalar(name, ty) => {
-                        let x = body.num(*ty)?;
-                        if is_vertex {
-                            if let Some(a) = axis_of(name) {
-                                v[a] = x;
+                        match (is_vertex && mode == Mode::Ascii, axis_of(name)) {
+                            (true, Some(a)) => toks[a] = body.token()?,
+                            (false, Some(a)) if is_vertex => v[a] = body.num(*ty)?,
+                            _ => {
+                                body.num(*ty)?;
                             }
                         }
                     }
@@ -354,16 +359,25 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                 }
             }
             if is_vertex {
-                nums.push(v);
+                if mode == Mode::Ascii {
+                    text.push(toks).map_err(err)?;
+                } else {
+                    nums.push(v);
+                }
             }
         }
     }
     if !have_vertices {
         return Err(err("no vertex element"));
     }
-    let coords = to_coords(&nums)?;
+    let (coords, inexact) = if mode == Mode::Ascii {
+        text.finish()
+    } else {
+        (to_coords(&nums)?, None)
+    };
     Ok(RawMesh {
         coords,
+        inexact,
         topology: topo,
         format: match mode {
             Mode::Ascii => Format::PlyAscii,

@@ -1,0 +1,211 @@
+//! The `subwave` command as a user runs it: exit codes, files and pipes, JSON output.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::{Command, Output, Stdio};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_subwave"))
+}
+
+fn corpus(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../corpus")
+        .join(name)
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("subwave-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().unwrap()
+}
+
+fn json(out: &Output) -> serde_json::Value {
+    serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("not JSON ({e}): {}", String::from_utf8_lossy(&out.stdout)))
+}
+
+#[test]
+fn compress_decompress_files_is_exact() {
+    let input = corpus("cube_cc4.obj");
+    let swv = tmp("cube.swv");
+    let out = tmp("cube.out.obj");
+    let o = run(&[
+        "compress",
+        input.to_str().unwrap(),
+        swv.to_str().unwrap(),
+        "--keep-order",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run(&["decompress", swv.to_str().unwrap(), out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&input).unwrap());
+    // Other formats by extension.
+    for ext in ["ply", "off"] {
+        let p = tmp(&format!("cube.out.{ext}"));
+        let o = run(&["decompress", swv.to_str().unwrap(), p.to_str().unwrap()]);
+        assert!(o.status.success());
+        let m = subwave::load(&std::fs::read(&p).unwrap(), None).unwrap();
+        assert_eq!(m.mesh.vertex_count(), 1538);
+    }
+}
+
+#[test]
+fn pipes_work_both_ways() {
+    let text = std::fs::read(corpus("mixed_cc2.obj")).unwrap();
+    let mut child = bin()
+        .args(["compress", "-", "-", "--keep-order"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child.stdin.take().unwrap().write_all(&text).unwrap();
+    let packed = child.wait_with_output().unwrap();
+    assert!(packed.status.success());
+    let mut child = bin()
+        .args(["decompress", "-", "-", "--format", "obj"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(&packed.stdout)
+        .unwrap();
+    let back = child.wait_with_output().unwrap();
+    assert!(back.status.success());
+    assert_eq!(back.stdout, text);
+}
+
+#[test]
+fn info_and_verify_json_have_their_keys() {
+    let input = corpus("terrain_grid33.obj");
+    let swv = tmp("terrain.swv");
+    assert!(run(&[
+        "compress",
+        input.to_str().unwrap(),
+        swv.to_str().unwrap(),
+        "--bits",
+        "12"
+    ])
+    .status
+    .success());
+    let o = run(&["info", swv.to_str().unwrap(), "--json"]);
+    assert!(o.status.success());
+    let v = json(&o);
+    for k in [
+        "format_version",
+        "vertices",
+        "faces",
+        "base_vertices",
+        "base_faces",
+        "levels",
+        "family",
+        "transform",
+        "quantization",
+        "sections",
+        "bits_per_vertex",
+    ] {
+        assert!(v.get(k).is_some(), "info --json lacks {k}: {v}");
+    }
+    assert_eq!(v["vertices"], 1089);
+    assert_eq!(v["quantization"]["bits"], 12);
+    let o = run(&["verify", input.to_str().unwrap(), "--json"]);
+    assert!(o.status.success());
+    let v = json(&o);
+    for k in [
+        "bytes",
+        "encode_ms",
+        "decode_ms",
+        "exact",
+        "bits_per_vertex",
+    ] {
+        assert!(v.get(k).is_some(), "verify --json lacks {k}: {v}");
+    }
+    assert_eq!(v["exact"], true);
+    let o = run(&["info", swv.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("bits per vertex"));
+}
+
+#[test]
+fn errors_exit_1_with_one_line_naming_the_file() {
+    let bad = tmp("bad.swv");
+    std::fs::write(&bad, b"not a container at all").unwrap();
+    let o = run(&[
+        "decompress",
+        bad.to_str().unwrap(),
+        tmp("x.obj").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("bad.swv") && err.contains("not a subwave container"),
+        "{err}"
+    );
+    let o = run(&[
+        "compress",
+        "/nonexistent/mesh.obj",
+        tmp("y.swv").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("panicked"));
+    let nan = tmp("nan.obj");
+    std::fs::write(&nan, b"v 0 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let o = run(&[
+        "compress",
+        nan.to_str().unwrap(),
+        tmp("z.swv").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not a finite number"));
+}
+
+#[test]
+fn usage_errors_exit_2_and_help_works() {
+    assert_eq!(run(&["compress"]).status.code(), Some(2));
+    assert_eq!(run(&["frobnicate"]).status.code(), Some(2));
+    assert_eq!(
+        run(&["compress", "a", "b", "--bits", "31"]).status.code(),
+        Some(2)
+    );
+    let h = run(&["--help"]);
+    assert!(h.status.success());
+    assert!(String::from_utf8_lossy(&h.stdout).contains("Examples:"));
+    let v = run(&["--version"]);
+    assert!(String::from_utf8_lossy(&v.stdout).contains(env!("CARGO_PKG_VERSION")));
+}
+
+#[test]
+fn warnings_name_what_was_dropped_and_q_silences_them() {
+    let p = tmp("attrs.obj");
+    std::fs::write(
+        &p,
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0\nf 1/1/1 2/1/1 3/1/1\n",
+    )
+    .unwrap();
+    let o = run(&[
+        "compress",
+        p.to_str().unwrap(),
+        tmp("attrs.swv").to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("normals") && err.contains("texture coordinates"),
+        "{err}"
+    );
+    let o = run(&[
+        "-q",
+        "compress",
+        p.to_str().unwrap(),
+        tmp("attrs.swv").to_str().unwrap(),
+    ]);
+    assert!(o.stderr.is_empty());
+}

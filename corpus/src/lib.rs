@@ -1,0 +1,407 @@
+//! Synthetic meshes for subwave's tests and benchmarks, made here so the project needs
+//! no outside data: Catmull-Clark refinements of small polygon base meshes (with
+//! triangles, pentagons, boundaries, several components), height grids, and meshes
+//! without structure. Floating point is fine here: these only *make* inputs.
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+// Numeric kernels index several arrays (axes, positions, weights) in lockstep.
+#![allow(clippy::needless_range_loop)]
+
+use std::collections::HashMap;
+use std::fmt::Write;
+
+/// A polygon mesh with `f64` positions.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PolyMesh {
+    /// Positions.
+    pub positions: Vec<[f64; 3]>,
+    /// Faces as vertex index lists.
+    pub faces: Vec<Vec<u32>>,
+}
+
+/// A tiny deterministic generator (xorshift64*), so meshes are the same everywhere.
+#[derive(Debug, Clone)]
+pub struct Rng(u64);
+
+impl Rng {
+    /// Seeded generator.
+    pub fn new(seed: u64) -> Self {
+        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+    }
+
+    /// Next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    /// Uniform in [0, 1).
+    pub fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Uniform in `0..n`.
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n.max(1) as u64) as usize
+    }
+}
+
+impl PolyMesh {
+    /// One Catmull-Clark step: each k-gon becomes k quads (old vertex, edge point, face
+    /// point, edge point). Vertex order: old vertices, then one edge point per edge in
+    /// order of first appearance walking the faces, then one face point per face.
+    /// Positions follow the Catmull-Clark rules (boundary edges and vertices use the
+    /// cubic B-spline curve rules).
+    pub fn catmull_clark(&self) -> PolyMesh {
+        let nv = self.positions.len();
+        let mut edge_id: HashMap<(u32, u32), usize> = HashMap::new();
+        let mut edges: Vec<(u32, u32)> = Vec::new();
+        let mut edge_faces: Vec<Vec<usize>> = Vec::new();
+        for (fi, f) in self.faces.iter().enumerate() {
+            for i in 0..f.len() {
+                let (a, b) = (f[i], f[(i + 1) % f.len()]);
+                let key = (a.min(b), a.max(b));
+                let id = *edge_id.entry(key).or_insert_with(|| {
+                    edges.push(key);
+                    edge_faces.push(Vec::new());
+                    edges.len() - 1
+                });
+                edge_faces[id].push(fi);
+            }
+        }
+        let ne = edges.len();
+        let face_pt: Vec<[f64; 3]> = self
+            .faces
+            .iter()
+            .map(|f| mean(f.iter().map(|&v| self.positions[v as usize])))
+            .collect();
+        let mut pos = vec![[0.0; 3]; nv + ne + self.faces.len()];
+        let boundary_edge = |e: usize| edge_faces[e].len() < 2;
+        for (e, &(a, b)) in edges.iter().enumerate() {
+            let pa = self.positions[a as usize];
+            let pb = self.positions[b as usize];
+            pos[nv + e] = if boundary_edge(e) {
+                mean([pa, pb].into_iter())
+            } else {
+                mean([pa, pb, face_pt[edge_faces[e][0]], face_pt[edge_faces[e][1]]].into_iter())
+            };
+        }
+        // Old vertices.
+        let mut v_faces: Vec<Vec<usize>> = vec![Vec::new(); nv];
+        for (fi, f) in self.faces.iter().enumerate() {
+            for &v in f {
+                v_faces[v as usize].push(fi);
+            }
+        }
+        let mut v_edges: Vec<Vec<usize>> = vec![Vec::new(); nv];
+        for (e, &(a, b)) in edges.iter().enumerate() {
+            v_edges[a as usize].push(e);
+            v_edges[b as usize].push(e);
+        }
+        for v in 0..nv {
+            let p = self.positions[v];
+            let bnd: Vec<usize> = v_edges[v]
+                .iter()
+                .copied()
+                .filter(|&e| boundary_edge(e))
+                .collect();
+            pos[v] = if v_edges[v].is_empty() {
+                p
+            } else if !bnd.is_empty() {
+                if bnd.len() == 2 {
+                    let mut s = [0.0; 3];
+                    for &e in &bnd {
+                        let (a, b) = edges[e];
+                        let o = if a as usize == v { b } else { a };
+                        for k in 0..3 {
+                            s[k] += self.positions[o as usize][k] / 8.0;
+                        }
+                    }
+                    [0, 1, 2].map(|k| p[k] * 0.75 + s[k])
+                } else {
+                    p
+                }
+            } else {
+                let n = v_edges[v].len() as f64;
+                let q = mean(v_faces[v].iter().map(|&f| face_pt[f]));
+                let r = mean(v_edges[v].iter().map(|&e| {
+                    let (a, b) = edges[e];
+                    mean([self.positions[a as usize], self.positions[b as usize]].into_iter())
+                }));
+                [0, 1, 2].map(|k| (q[k] + 2.0 * r[k] + (n - 3.0) * p[k]) / n)
+            };
+        }
+        for (fi, fp) in face_pt.iter().enumerate() {
+            pos[nv + ne + fi] = *fp;
+        }
+        let mut faces = Vec::with_capacity(self.faces.len() * 4);
+        for (fi, f) in self.faces.iter().enumerate() {
+            let k = f.len();
+            let e_of = |i: usize| {
+                let (a, b) = (f[i], f[(i + 1) % k]);
+                (nv + edge_id[&(a.min(b), a.max(b))]) as u32
+            };
+            let fp = (nv + ne + fi) as u32;
+            for i in 0..k {
+                faces.push(vec![f[i], e_of(i), fp, e_of((i + k - 1) % k)]);
+            }
+        }
+        PolyMesh {
+            positions: pos,
+            faces,
+        }
+    }
+
+    /// `levels` Catmull-Clark steps.
+    pub fn refined(&self, levels: u32) -> PolyMesh {
+        let mut m = self.clone();
+        for _ in 0..levels {
+            m = m.catmull_clark();
+        }
+        m
+    }
+
+    /// Adds a smooth bump field and uniform noise of amplitude `noise` along each axis.
+    pub fn displace(&mut self, bump: f64, noise: f64, rng: &mut Rng) {
+        for p in &mut self.positions {
+            let s = (3.1 * p[0]).sin() * (2.3 * p[1]).cos() * (1.7 * p[2] + 0.5).sin();
+            for k in 0..3 {
+                p[k] += bump * s * (1.0 + 0.3 * k as f64) + noise * (rng.unit() - 0.5);
+            }
+        }
+    }
+
+    /// Randomly renumbers vertices, reorders faces and rotates each face's start
+    /// (orientation kept), like the shared corpus's `.shuffled.obj` copies.
+    pub fn shuffled(&self, rng: &mut Rng) -> PolyMesh {
+        let n = self.positions.len();
+        let mut perm: Vec<u32> = (0..n as u32).collect();
+        for i in (1..n).rev() {
+            perm.swap(i, rng.below(i + 1));
+        }
+        let mut positions = vec![[0.0; 3]; n];
+        for (old, &new) in perm.iter().enumerate() {
+            positions[new as usize] = self.positions[old];
+        }
+        let mut faces: Vec<Vec<u32>> = self
+            .faces
+            .iter()
+            .map(|f| {
+                let r = rng.below(f.len());
+                (0..f.len())
+                    .map(|i| perm[f[(i + r) % f.len()] as usize])
+                    .collect()
+            })
+            .collect();
+        for i in (1..faces.len()).rev() {
+            faces.swap(i, rng.below(i + 1));
+        }
+        PolyMesh { positions, faces }
+    }
+
+    /// Writes OBJ text with `decimals` decimals.
+    pub fn to_obj(&self, decimals: usize) -> String {
+        let mut s = String::with_capacity(self.positions.len() * 40 + self.faces.len() * 30);
+        for p in &self.positions {
+            let _ = writeln!(s, "v {:.d$} {:.d$} {:.d$}", p[0], p[1], p[2], d = decimals);
+        }
+        for f in &self.faces {
+            s.push('f');
+            for &v in f {
+                let _ = write!(s, " {}", v + 1);
+            }
+            s.push('\n');
+        }
+        s
+    }
+}
+
+fn mean(it: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
+    let mut s = [0.0; 3];
+    let mut n = 0.0;
+    for p in it {
+        for k in 0..3 {
+            s[k] += p[k];
+        }
+        n += 1.0;
+    }
+    if n == 0.0 {
+        return s;
+    }
+    s.map(|x| x / n)
+}
+
+/// The unit cube as six quads.
+pub fn cube() -> PolyMesh {
+    let positions = (0..8)
+        .map(|i| [(i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64].map(|c| c - 0.5))
+        .collect();
+    let faces = vec![
+        vec![0, 2, 3, 1],
+        vec![4, 5, 7, 6],
+        vec![0, 1, 5, 4],
+        vec![2, 6, 7, 3],
+        vec![0, 4, 6, 2],
+        vec![1, 3, 7, 5],
+    ];
+    PolyMesh { positions, faces }
+}
+
+/// A closed base mesh with triangles, quads and pentagons and vertices of valence
+/// 3, 4 and 5: a pentagonal prism capped by pyramids on its two pentagons would be all
+/// triangles, so instead: a pentagonal prism (two pentagons, five quads) with one quad
+/// split into two triangles.
+pub fn mixed_polygons() -> PolyMesh {
+    let mut positions = Vec::new();
+    for z in [-0.5, 0.5] {
+        for i in 0..5 {
+            let a = i as f64 * std::f64::consts::TAU / 5.0;
+            positions.push([a.cos(), a.sin(), z]);
+        }
+    }
+    let mut faces = vec![vec![4, 3, 2, 1, 0], vec![5, 6, 7, 8, 9]];
+    for i in 0..5u32 {
+        let j = (i + 1) % 5;
+        if i == 0 {
+            faces.push(vec![i, j, j + 5]);
+            faces.push(vec![i, j + 5, i + 5]);
+        } else {
+            faces.push(vec![i, j, j + 5, i + 5]);
+        }
+    }
+    PolyMesh { positions, faces }
+}
+
+/// An open quad strip with a boundary: `w x h` quads.
+pub fn open_grid(w: u32, h: u32) -> PolyMesh {
+    let mut positions = Vec::new();
+    for y in 0..=h {
+        for x in 0..=w {
+            positions.push([x as f64 / w as f64, y as f64 / h as f64, 0.0]);
+        }
+    }
+    let mut faces = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * (w + 1) + x;
+            faces.push(vec![i, i + 1, i + w + 2, i + w + 1]);
+        }
+    }
+    PolyMesh { positions, faces }
+}
+
+/// A `(2^k + 1)^2` height grid (row-major) over a 1 km square, heights from a few
+/// octaves of smooth noise plus measurement noise.
+pub fn terrain(k: u32, seed: u64) -> PolyMesh {
+    let n = (1u32 << k) + 1;
+    let mut rng = Rng::new(seed);
+    let phases: Vec<f64> = (0..12)
+        .map(|_| rng.unit() * std::f64::consts::TAU)
+        .collect();
+    let mut positions = Vec::with_capacity((n * n) as usize);
+    for y in 0..n {
+        for x in 0..n {
+            let (u, v) = (x as f64 / (n - 1) as f64, y as f64 / (n - 1) as f64);
+            let mut h = 300.0;
+            for o in 0..4 {
+                let f = (1 << o) as f64 * 2.0;
+                h += 60.0 / (1 << o) as f64
+                    * (f * u * 3.0 + phases[3 * o]).sin()
+                    * (f * v * 2.0 + phases[3 * o + 1]).cos();
+            }
+            h += 0.3 * (rng.unit() - 0.5);
+            positions.push([u * 1000.0, v * 1000.0, h]);
+        }
+    }
+    let mut faces = Vec::new();
+    for y in 0..n - 1 {
+        for x in 0..n - 1 {
+            let i = y * n + x;
+            faces.push(vec![i, i + 1, i + n + 1, i + n]);
+        }
+    }
+    PolyMesh { positions, faces }
+}
+
+/// Concatenates meshes into one with several components.
+pub fn union(parts: &[PolyMesh]) -> PolyMesh {
+    let mut m = PolyMesh::default();
+    for p in parts {
+        let off = m.positions.len() as u32;
+        m.positions.extend_from_slice(&p.positions);
+        m.faces
+            .extend(p.faces.iter().map(|f| f.iter().map(|&v| v + off).collect()));
+    }
+    m
+}
+
+/// Moves every vertex by `d`.
+pub fn translate(mut m: PolyMesh, d: [f64; 3]) -> PolyMesh {
+    for p in &mut m.positions {
+        for k in 0..3 {
+            p[k] += d[k];
+        }
+    }
+    m
+}
+
+/// A triangle soup-like unstructured mesh: a jittered triangulated grid, with a few
+/// unreferenced vertices appended.
+pub fn unstructured(n: u32, seed: u64) -> PolyMesh {
+    let mut rng = Rng::new(seed);
+    let mut m = open_grid(n, n);
+    let mut faces = Vec::new();
+    for f in &m.faces {
+        if rng.below(2) == 0 {
+            faces.push(vec![f[0], f[1], f[2]]);
+            faces.push(vec![f[0], f[2], f[3]]);
+        } else {
+            faces.push(vec![f[0], f[1], f[3]]);
+            faces.push(vec![f[1], f[2], f[3]]);
+        }
+    }
+    m.faces = faces;
+    for p in &mut m.positions {
+        p[2] = 0.1 * (p[0] * 7.0).sin() + 0.01 * rng.unit();
+    }
+    for _ in 0..3 {
+        m.positions.push([rng.unit(), rng.unit(), rng.unit()]);
+    }
+    m
+}
+
+/// The small meshes committed in `corpus/`, by file name.
+pub fn small_corpus() -> Vec<(&'static str, String)> {
+    let mut rng = Rng::new(7);
+    let mut cube4 = cube().refined(4);
+    cube4.displace(0.05, 0.002, &mut rng);
+    let mut mixed2 = mixed_polygons().refined(2);
+    mixed2.displace(0.03, 0.001, &mut rng);
+    let mut open2 = open_grid(3, 2).refined(2);
+    open2.displace(0.02, 0.001, &mut rng);
+    let two = union(&[
+        cube().refined(2),
+        translate(mixed_polygons().refined(1), [3.0, 0.0, 0.0]),
+    ]);
+    let shuffled = cube4.shuffled(&mut rng);
+    vec![
+        ("cube_cc4.obj", cube4.to_obj(6)),
+        ("cube_cc4.shuffled.obj", shuffled.to_obj(6)),
+        ("mixed_cc2.obj", mixed2.to_obj(6)),
+        ("open_cc2.obj", open2.to_obj(5)),
+        ("two_components_cc2.obj", two.to_obj(4)),
+        ("terrain_grid33.obj", terrain(5, 3).to_obj(3)),
+        ("unstructured.obj", unstructured(12, 5).to_obj(6)),
+    ]
+}
+
+/// A large mesh for benchmarks: a displaced cube refined `levels` times
+/// (`levels = 9` gives 1,572,866 vertices).
+pub fn large_cube(levels: u32) -> PolyMesh {
+    let mut rng = Rng::new(11);
+    let mut m = cube().refined(levels);
+    m.displace(0.05, 0.0005, &mut rng);
+    m
+}

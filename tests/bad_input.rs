@@ -1,0 +1,179 @@
+//! Malformed containers and mesh files each give a specific error, never a panic.
+
+use subwave::{DecodeOptions, EncodeOptions, Error, Limits};
+use subwave_container::{ContainerWriter, SectionKind, PREAMBLE_LEN};
+
+fn sample() -> Vec<u8> {
+    let obj = b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0.5\nv 2 0 0\nf 1 2 3 4\nf 2 5 3\n";
+    let m = subwave::load(obj, None).unwrap();
+    subwave::encode_to_vec(
+        &m.mesh,
+        &m.quantization,
+        &EncodeOptions {
+            keep_order: true,
+            ..Default::default()
+        },
+    )
+    .unwrap()
+    .bytes
+}
+
+fn container_err(bytes: &[u8]) -> subwave_container::Error {
+    match subwave::decode_slice(bytes) {
+        Err(Error::Container(e)) => e,
+        other => panic!("expected a container error, got {other:?}"),
+    }
+}
+
+#[test]
+fn wrong_magic() {
+    let mut b = sample();
+    b[1] = b'X';
+    assert_eq!(container_err(&b), subwave_container::Error::BadMagic);
+    assert_eq!(
+        container_err(b"v 0 0 0\n"),
+        subwave_container::Error::BadMagic
+    );
+    assert_eq!(container_err(b""), subwave_container::Error::BadMagic);
+}
+
+#[test]
+fn newer_format_version() {
+    let mut b = sample();
+    b[8..10].copy_from_slice(&(subwave::FORMAT_VERSION + 1).to_le_bytes());
+    assert!(matches!(
+        container_err(&b),
+        subwave_container::Error::NewerVersion { found, .. } if found == subwave::FORMAT_VERSION + 1
+    ));
+}
+
+#[test]
+fn every_truncation_is_rejected() {
+    let b = sample();
+    for n in 0..b.len() {
+        match subwave::decode_slice(&b[..n]) {
+            Err(Error::Container(
+                subwave_container::Error::Truncated { .. } | subwave_container::Error::BadMagic,
+            )) => {}
+            other => panic!("cut at {n} of {}: {other:?}", b.len()),
+        }
+    }
+}
+
+#[test]
+fn every_bit_flip_is_rejected() {
+    let b = sample();
+    for bit in 0..b.len() * 8 {
+        let mut x = b.clone();
+        x[bit / 8] ^= 1 << (bit % 8);
+        assert!(
+            subwave::decode_slice(&x).is_err(),
+            "flip of bit {bit} decoded silently"
+        );
+    }
+}
+
+/// A container with a valid checksum around a header declaring `vertices`.
+fn with_header(vertices: u64, faces: u64, corners: u64) -> Vec<u8> {
+    let mut h = subwave_container::ByteWriter::new();
+    for v in [vertices, faces, corners, vertices, faces, corners] {
+        h.varint(v);
+    }
+    h.out.extend_from_slice(&[0, 0, 0, 0, 6, 1, 0]);
+    let mut w = ContainerWriter::new();
+    w.section(SectionKind::HEADER, &h.out);
+    w.section(SectionKind::BASE, &[0; 8]);
+    w.finish()
+}
+
+#[test]
+fn huge_declared_counts_hit_limits_before_allocation() {
+    let b = with_header(1 << 40, 1, 3);
+    assert!(matches!(
+        container_err(&b),
+        subwave_container::Error::Limit { what: "vertices", requested, .. } if requested == 1 << 40
+    ));
+    let b = with_header(10, 1 << 35, 3 << 35);
+    assert!(matches!(
+        container_err(&b),
+        subwave_container::Error::Limit { what: "faces", .. }
+    ));
+    // Within the default limits but over tight ones.
+    let b = with_header(1 << 24, 1 << 24, 1 << 26);
+    let tight = DecodeOptions {
+        limits: Limits::tight(),
+        max_level: None,
+    };
+    assert!(matches!(
+        subwave::decode(&b, &tight),
+        Err(Error::Container(subwave_container::Error::Limit { .. }))
+    ));
+}
+
+#[test]
+fn lying_counts_are_corrupt_not_a_panic() {
+    // Plausible counts over a stream of zeros: the decoder runs out of consistent data.
+    for (v, f, c) in [(4, 1, 4), (100, 50, 200), (3, 0, 0), (5, 2, 7)] {
+        let b = with_header(v, f, c);
+        match subwave::decode_slice(&b) {
+            Err(Error::CorruptStream { .. }) | Err(Error::Container(_)) => {}
+            Ok(d) => {
+                // Any mesh that does come out must at least be well formed.
+                d.mesh.validate().unwrap();
+            }
+            Err(e) => panic!("unexpected error {e}"),
+        }
+    }
+}
+
+#[test]
+fn section_order_is_enforced() {
+    let b = sample();
+    // Drop the BASE section: HEAD then ORDR.
+    let c = subwave_container::Container::parse(&b, &Limits::default()).unwrap();
+    let mut w = ContainerWriter::new();
+    for s in &c.sections {
+        if s.kind != SectionKind::BASE && s.kind != SectionKind::END {
+            w.section(s.kind, s.payload);
+        }
+    }
+    assert!(matches!(
+        container_err(&w.finish()),
+        subwave_container::Error::Malformed { .. }
+    ));
+    assert!(b.len() > PREAMBLE_LEN);
+}
+
+fn mesh_err(text: &[u8]) -> String {
+    match subwave::load(text, None) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("{} loaded", String::from_utf8_lossy(text)),
+    }
+}
+
+#[test]
+fn bad_mesh_files() {
+    assert!(mesh_err(b"v 0 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").contains("not a finite number"));
+    assert!(mesh_err(b"v 0 0 inf\n").contains("not a finite number"));
+    assert!(mesh_err(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").contains("refers to vertex 4"));
+    assert!(mesh_err(b"v 0 0 0\nv 1 0 0\nf 1 2\n").contains("at least 3"));
+    assert!(mesh_err(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n").contains("out of range"));
+    assert!(mesh_err(b"v 0 0\n").contains("needs 3"));
+    assert!(mesh_err(b"ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n")
+        .contains("more than the"));
+    assert!(mesh_err(b"OFF\n4000000000 1 0\n0 0 0\n").contains("more than the file"));
+    assert!(mesh_err(b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n").contains("below 3"));
+    let mut ply = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n".to_vec();
+    for v in [[0f32, 0., 0.], [1., 0., 0.], [f32::NAN, 1., 0.]] {
+        for c in v {
+            ply.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    ply.push(3);
+    for i in [0i32, 1, 2] {
+        ply.extend_from_slice(&i.to_le_bytes());
+    }
+    assert!(mesh_err(&ply).contains("NaN"));
+    // Exact values that do not fit: suggest --bits.
+    assert!(mesh_err(b"v 1e30 1e-30 0\n").contains("--bits"));
+}

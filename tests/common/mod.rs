@@ -1,0 +1,58 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use subwave::Mesh;
+
+/// The project's own small meshes.
+pub fn own_corpus() -> Vec<PathBuf> {
+    list(&Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus"))
+}
+
+/// The shared corpus beside the checkout, when it exists.
+pub fn shared_corpus() -> Option<PathBuf> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/corpus");
+    p.join("manifest.json").exists().then_some(p)
+}
+
+pub fn list(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map(|rd| {
+            rd.filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| {
+                    matches!(
+                        p.extension().and_then(|e| e.to_str()),
+                        Some("obj" | "ply" | "off")
+                    )
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
+/// An order-independent fingerprint of a mesh: its sorted positions and its sorted faces,
+/// each face written as the positions of its corners starting at the smallest one
+/// (orientation kept). Computed without any help from the encoder.
+pub fn fingerprint(m: &Mesh) -> (Vec<[i64; 3]>, Vec<Vec<[i64; 3]>>) {
+    let mut pos = m.positions.clone();
+    pos.sort_unstable();
+    let mut faces: Vec<Vec<[i64; 3]>> = m
+        .iter_faces()
+        .map(|f| {
+            let p: Vec<[i64; 3]> = f.iter().map(|&v| m.positions[v as usize]).collect();
+            let k = (0..p.len())
+                .min_by(|&a, &b| {
+                    let ra = p[a..].iter().chain(&p[..a]);
+                    let rb = p[b..].iter().chain(&p[..b]);
+                    ra.cmp(rb)
+                })
+                .unwrap_or(0);
+            p[k..].iter().chain(&p[..k]).copied().collect()
+        })
+        .collect();
+    faces.sort_unstable();
+    (pos, faces)
+}

@@ -1,0 +1,142 @@
+//! PLY (ASCII, binary LE/BE) and OFF read and write, attributes reported, unreferenced
+//! vertices kept.
+
+use subwave::{EncodeOptions, Format};
+
+fn round_trip(bytes: &[u8], out_format: Format) -> (subwave::Loaded, Vec<u8>) {
+    let input = subwave::load(bytes, None).unwrap();
+    let enc = subwave::encode_to_vec(
+        &input.mesh,
+        &input.quantization,
+        &EncodeOptions {
+            keep_order: true,
+            source: input.source(),
+        },
+    )
+    .unwrap();
+    let dec = subwave::decode_slice(&enc.bytes).unwrap();
+    assert_eq!(dec.mesh, input.mesh);
+    let mut out = Vec::new();
+    subwave::write_mesh(&mut out, &dec.mesh, &dec.quantization, out_format).unwrap();
+    let again = subwave::load(&out, None).unwrap();
+    if out_format == Format::PlyBinary && !input.quantization.prefers_f32() {
+        // Decimals go out as the nearest doubles: the same values on another grid.
+        assert_eq!(again.mesh.faces, input.mesh.faces);
+        for (a, b) in again.mesh.positions.iter().zip(&input.mesh.positions) {
+            for k in 0..3 {
+                assert_eq!(
+                    again.quantization.value_f64(a[k], k),
+                    input.quantization.value_f64(b[k], k)
+                );
+            }
+        }
+    } else {
+        assert_eq!(
+            again.mesh, input.mesh,
+            "{out_format:?} output reads back differently"
+        );
+    }
+    (input, out)
+}
+
+const OBJ: &[u8] = b"# test\nv 0.5 0.25 -1.125\nv 1 0 0\nv 1.5 1 0\nv 0 1 0.5\nv 9 9 9\nv 2 0 0\nvn 0 0 1\nvt 0 0\nf 1/1/1 2/1/1 3/1/1 4/1/1\nf -5 -1 -4\n";
+
+#[test]
+fn obj_keeps_unreferenced_vertices_and_reports_attributes() {
+    let (input, out) = round_trip(OBJ, Format::Obj);
+    assert_eq!(input.mesh.vertex_count(), 6);
+    assert_eq!(input.mesh.face(1), &[1, 5, 2]);
+    let dropped: Vec<&str> = input.dropped.iter().map(String::as_str).collect();
+    assert_eq!(dropped, ["normals", "texture coordinates"]);
+    let text = String::from_utf8(out).unwrap();
+    assert!(
+        text.starts_with("v 0.500 0.250 -1.125\nv 1.000 0.000 0.000\n"),
+        "{text}"
+    );
+    assert!(text.contains("v 9.000 9.000 9.000\n"));
+}
+
+#[test]
+fn every_output_format_reads_back() {
+    for f in [
+        Format::Obj,
+        Format::PlyAscii,
+        Format::PlyBinary,
+        Format::Off,
+    ] {
+        round_trip(OBJ, f);
+    }
+}
+
+#[test]
+fn binary_ply_floats_are_exact() {
+    let pts: [[f32; 3]; 4] = [
+        [0.1, -2.5, 3.0e-3],
+        [1.0e3, 0.7, 0.0],
+        [0.33, 0.66, 0.99],
+        [-0.0, 5.0, 6.0],
+    ];
+    for be in [false, true] {
+        let mut ply = format!(
+            "ply\nformat {} 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n",
+            if be { "binary_big_endian" } else { "binary_little_endian" }
+        )
+        .into_bytes();
+        for p in pts {
+            for c in p {
+                ply.extend_from_slice(&if be { c.to_be_bytes() } else { c.to_le_bytes() });
+            }
+            ply.push(200);
+        }
+        ply.push(4);
+        for i in [0i32, 1, 2, 3] {
+            ply.extend_from_slice(&if be { i.to_be_bytes() } else { i.to_le_bytes() });
+        }
+        let (input, out) = round_trip(&ply, Format::PlyBinary);
+        assert!(input.dropped.contains("vertex property 'red'"));
+        let back = subwave::read_mesh(&out).unwrap();
+        let subwave::RawCoords::F32(v) = back.coords else {
+            panic!("float PLY out")
+        };
+        for (a, b) in v.iter().zip(&pts) {
+            for k in 0..3 {
+                assert_eq!(a[k], b[k], "binary float changed");
+            }
+        }
+    }
+}
+
+#[test]
+fn ascii_ply_and_off_keep_decimals() {
+    let ply = b"ply\nformat ascii 1.0\ncomment x\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0.123456 1 2\n3 4.5 6\n7 8 9.25\n3 0 1 2\n";
+    let (_, out) = round_trip(ply, Format::PlyAscii);
+    let text = String::from_utf8(out).unwrap();
+    assert!(text.contains("0.123456 1.000000 2.000000\n"), "{text}");
+    let off = b"OFF\n# comment\n4 1 0\n0 0 0\n1 0 0.5\n1 1 0\n0 1 0\n4 0 1 2 3 255 0 0\n";
+    let (input, out) = round_trip(off, Format::Off);
+    assert!(input.dropped.contains("face colors"));
+    assert!(String::from_utf8(out)
+        .unwrap()
+        .starts_with("OFF\n4 1 0\n0.0 0.0 0.0\n1.0 0.0 0.5\n"));
+}
+
+#[test]
+fn grid_mode_matches_dracos_dequantisation() {
+    let input = subwave::load(OBJ, Some(8)).unwrap();
+    let subwave::Quantization::Grid { origin, step, .. } = input.quantization else {
+        panic!()
+    };
+    assert_eq!(origin, [0.0, 0.0, -1.125]);
+    assert_eq!(step, 10.125f32 / 255.0);
+    // Every value is within half a step of the input.
+    let raw = subwave::read_mesh(OBJ).unwrap();
+    let subwave::RawCoords::Decimal(d) = raw.coords else {
+        panic!()
+    };
+    for (p, q) in d.iter().zip(&input.mesh.positions) {
+        for k in 0..3 {
+            let back = input.quantization.value_f32(q[k], k) as f64;
+            assert!((back - p[k].to_f64()).abs() <= step as f64 * 0.5 + 1e-6);
+        }
+    }
+}

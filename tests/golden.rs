@@ -1,0 +1,98 @@
+//! Golden vectors: the encoder is deterministic, so the hash of every encoded corpus mesh
+//! is committed (`corpus/golden/hashes.txt`), and frozen containers must keep decoding to
+//! the same mesh. A bitstream change updates them deliberately, with SPEC.md and the
+//! format version: run `SUBWAVE_BLESS=1 cargo test --test golden` and commit the result.
+
+mod common;
+
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+use sha2::{Digest, Sha256};
+use subwave::{EncodeOptions, Format};
+
+fn golden_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus/golden")
+}
+
+fn hashes() -> String {
+    let mut out = String::new();
+    for path in common::own_corpus() {
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        let bytes = std::fs::read(&path).unwrap();
+        for (mode, bits, keep) in [
+            ("exact", None, false),
+            ("exact-keep-order", None, true),
+            ("q16", Some(16), false),
+        ] {
+            let m = subwave::load(&bytes, bits).unwrap();
+            let enc = subwave::encode_to_vec(
+                &m.mesh,
+                &m.quantization,
+                &EncodeOptions {
+                    keep_order: keep,
+                    source: m.source(),
+                },
+            )
+            .unwrap();
+            let h = Sha256::digest(&enc.bytes);
+            let hex: String = h.iter().fold(String::new(), |mut s, b| {
+                let _ = write!(s, "{b:02x}");
+                s
+            });
+            let _ = writeln!(out, "{name} {mode} {} {hex}", enc.bytes.len());
+        }
+    }
+    out
+}
+
+#[test]
+fn encoded_bytes_match_the_golden_hashes() {
+    let file = golden_dir().join("hashes.txt");
+    let now = hashes();
+    if std::env::var_os("SUBWAVE_BLESS").is_some() {
+        std::fs::write(&file, &now).unwrap();
+        return;
+    }
+    let committed = std::fs::read_to_string(&file).expect("corpus/golden/hashes.txt");
+    for (a, b) in committed.lines().zip(now.lines()) {
+        assert_eq!(a, b, "the bitstream changed: see tests/golden.rs");
+    }
+    assert_eq!(committed.lines().count(), now.lines().count());
+}
+
+#[test]
+fn frozen_containers_still_decode() {
+    // (container, the mesh file it must decode to, written as OBJ)
+    let frozen = [
+        ("mixed_cc2.v1.swv", "mixed_cc2.obj"),
+        ("terrain_grid33.v1.swv", "terrain_grid33.obj"),
+    ];
+    for (swv, obj) in frozen {
+        let path = golden_dir().join(swv);
+        let source = std::fs::read(
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("corpus")
+                .join(obj),
+        )
+        .unwrap();
+        if !path.exists() && std::env::var_os("SUBWAVE_BLESS").is_some() {
+            let m = subwave::load(&source, None).unwrap();
+            let enc = subwave::encode_to_vec(
+                &m.mesh,
+                &m.quantization,
+                &EncodeOptions {
+                    keep_order: true,
+                    source: m.source(),
+                },
+            )
+            .unwrap();
+            std::fs::write(&path, enc.bytes).unwrap();
+        }
+        let bytes = std::fs::read(&path).unwrap_or_else(|_| panic!("missing frozen {swv}"));
+        let dec = subwave::decode_slice(&bytes).unwrap();
+        let mut out = Vec::new();
+        subwave::write_mesh(&mut out, &dec.mesh, &dec.quantization, Format::Obj).unwrap();
+        assert!(out == source, "{swv} no longer decodes to {obj}");
+    }
+}
