@@ -1,0 +1,94 @@
+#!/usr/bin/env python3
+"""Measure subwave on meshes and put the numbers beside the peers' (Draco, meshoptimizer,
+zstd, xz) from a peers CSV written by ../shared/tools/peers/peers.py.
+
+    python3 benches/compare.py ../shared/corpus --bits 16,12 \
+        --peers ../shared/corpus/peers/peers-q16-q12.csv --out benches/results.md
+
+Runs `subwave verify --json` (in-memory encode/decode, exactness check) and, with
+--keep-order, `subwave compress --keep-order` for the cost of the stored order.
+"""
+import argparse, csv, json, os, statistics, subprocess, sys, tempfile
+
+def subwave_bin():
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    subprocess.run(["cargo", "build", "--release", "-q", "-p", "subwave-cli"], cwd=root, check=True)
+    return os.path.join(root, "target", "release", "subwave")
+
+def meshes(paths, shuffled):
+    out = []
+    for p in paths:
+        if os.path.isdir(p):
+            for f in sorted(os.listdir(p)):
+                if f.endswith((".obj", ".ply", ".off")) and (shuffled or ".shuffled." not in f):
+                    out.append(os.path.join(p, f))
+        else:
+            out.append(p)
+    return out
+
+def load_peers(path):
+    peers = {}
+    if not path:
+        return peers
+    with open(path) as fh:
+        for r in csv.DictReader(fh):
+            if r.get("status") == "ok":
+                peers[(r["mesh"], int(r["bits"]), r["peer"])] = r
+    return peers
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("paths", nargs="+")
+    ap.add_argument("--bits", default="16,12", help="comma list; 'exact' for the file's own values")
+    ap.add_argument("--peers", default="")
+    ap.add_argument("--peer-names", default="draco_cl10")
+    ap.add_argument("--shuffled", action="store_true", help="include .shuffled copies")
+    ap.add_argument("--keep-order", action="store_true", help="also measure --keep-order")
+    ap.add_argument("--out", default="")
+    a = ap.parse_args()
+    exe = subwave_bin()
+    peers = load_peers(a.peers)
+    names = [n for n in a.peer_names.split(",") if n]
+    rows = []
+    for mesh in meshes(a.paths, a.shuffled):
+        stem = os.path.basename(mesh).rsplit(".", 1)[0]
+        for b in a.bits.split(","):
+            args = [exe, "-q", "verify", mesh, "--json"] + ([] if b == "exact" else ["--bits", b])
+            r = subprocess.run(args, capture_output=True, text=True)
+            if r.returncode != 0:
+                print(f"{stem} {b}: FAILED {r.stderr.strip()}", file=sys.stderr)
+                continue
+            v = json.loads(r.stdout)
+            row = {"mesh": stem, "bits": b, "V": v["vertices"], "bytes": v["bytes"], "bpv": v["bits_per_vertex"],
+                   "enc_ms": v["encode_ms"], "dec_ms": v["decode_ms"], "exact": v["exact"],
+                   "family": v["family"], "transform": v["transform"], "levels": v["levels"]}
+            if a.keep_order:
+                with tempfile.NamedTemporaryFile(suffix=".swv") as t:
+                    subprocess.run([exe, "-q", "compress", mesh, t.name, "--keep-order"] + ([] if b == "exact" else ["--bits", b]), check=True)
+                    row["keep_bpv"] = os.path.getsize(t.name) * 8 / v["vertices"]
+            for n in names:
+                p = peers.get((stem, int(b), n)) if b != "exact" else None
+                row[n] = float(p["bpv"]) if p else None
+                if p and n == names[0]:
+                    row["ratio"] = row["bpv"] / float(p["bpv"])
+                    row["peer_dec_ms"] = float(p["dec_ms"]) if p["dec_ms"] else None
+                    row["peer_enc_ms"] = float(p["enc_ms"]) if p["enc_ms"] else None
+            rows.append(row)
+            print(f"{stem:34s} {b:>5s} {row['bpv']:8.2f} bpv" + (f"  {names[0]} {row[names[0]]:.2f}  ratio {row['ratio']:.3f}" if row.get("ratio") else ""), file=sys.stderr)
+    lines = ["| mesh | Q | V | family | levels | subwave bpv |" + ("keep-order bpv |" if a.keep_order else "") + "".join(f" {n} bpv |" for n in names) + " ratio | enc ms | dec ms |" + (f" {names[0]} enc ms | {names[0]} dec ms |" if names else ""),
+             "|---|---|---|---|---|---|" + ("---|" if a.keep_order else "") + "---|" * len(names) + "---|---|---|" + ("---|---|" if names else "")]
+    fmt = lambda x, d=2: "-" if x is None else f"{x:.{d}f}"
+    for r in rows:
+        lines.append(f"| {r['mesh']} | {r['bits']} | {r['V']} | {r['family']} | {r['levels']} | {r['bpv']:.2f} |" + (f" {r['keep_bpv']:.2f} |" if a.keep_order else "") + "".join(f" {fmt(r.get(n))} |" for n in names) + f" {fmt(r.get('ratio'), 3)} | {r['enc_ms']:.1f} | {r['dec_ms']:.1f} |" + (f" {fmt(r.get('peer_enc_ms'), 1)} | {fmt(r.get('peer_dec_ms'), 1)} |" if names else ""))
+    for b in a.bits.split(","):
+        rs = [r["ratio"] for r in rows if r["bits"] == b and r.get("ratio")]
+        if rs:
+            lines.append(f"\nQ{b}: median ratio to {names[0]} over {len(rs)} meshes: {statistics.median(rs):.3f}")
+    text = "\n".join(lines) + "\n"
+    if a.out:
+        with open(a.out, "w") as fh:
+            fh.write(text)
+    print(text)
+
+if __name__ == "__main__":
+    main()
