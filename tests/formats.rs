@@ -11,6 +11,7 @@ fn round_trip(bytes: &[u8], out_format: Format) -> (subwave::Loaded, Vec<u8>) {
         &EncodeOptions {
             keep_order: true,
             source: input.source(),
+            ..Default::default()
         },
     )
     .unwrap();

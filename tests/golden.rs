@@ -32,6 +32,7 @@ fn hashes() -> String {
                 &EncodeOptions {
                     keep_order: keep,
                     source: m.source(),
+                    ..Default::default()
                 },
             )
             .unwrap();
@@ -67,6 +68,8 @@ fn frozen_containers_still_decode() {
     let frozen = [
         ("mixed_cc2.v1.swv", "mixed_cc2.obj"),
         ("terrain_grid33.v1.swv", "terrain_grid33.obj"),
+        ("cube_cc4.v2.swv", "cube_cc4.obj"),
+        ("unstructured.v2.swv", "unstructured.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);
@@ -84,6 +87,7 @@ fn frozen_containers_still_decode() {
                 &EncodeOptions {
                     keep_order: true,
                     source: m.source(),
+                    ..Default::default()
                 },
             )
             .unwrap();

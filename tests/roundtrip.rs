@@ -20,6 +20,7 @@ fn check_file(path: &Path) -> Result<(), String> {
             &EncodeOptions {
                 keep_order: true,
                 source: input.source(),
+                ..Default::default()
             },
         )
         .map_err(|e| format!("{name}: {e}"))?;

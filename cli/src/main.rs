@@ -7,7 +7,9 @@ use std::time::{Duration, Instant};
 
 use clap::{Parser, Subcommand, ValueEnum};
 use serde_json::json;
-use subwave::{DecodeOptions, EncodeOptions, Format, Limits, Quantization};
+use subwave::{
+    DecodeOptions, EncodeOptions, Format, Limits, Quantization, TransformChoice, Wavelet,
+};
 
 const EXAMPLES: &str = "\
 Examples:
@@ -45,9 +47,16 @@ enum Command {
         /// Quantise to Draco's Q-bit grid (1..=30) instead of keeping the exact values.
         #[arg(long, value_name = "Q", value_parser = clap::value_parser!(u8).range(1..=30))]
         bits: Option<u8>,
-        /// Store the input's vertex order so decompression restores it.
+        /// Store the input's vertex and face order so decompression restores it.
         #[arg(long)]
         keep_order: bool,
+        /// Wavelet for subdivision levels: auto (smallest file), lazy, bilinear, bicubic,
+        /// biquintic.
+        #[arg(long, default_value = "auto", value_parser = parse_transform)]
+        transform: TransformChoice,
+        /// Look for at most N refinement levels (0: code the mesh flat).
+        #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u8).range(0..=16))]
+        levels: u8,
     },
     /// Decompress a .swv container into a mesh file.
     #[command(after_help = EXAMPLES)]
@@ -81,10 +90,27 @@ enum Command {
         /// Quantise to Draco's Q-bit grid first.
         #[arg(long, value_name = "Q", value_parser = clap::value_parser!(u8).range(1..=30))]
         bits: Option<u8>,
+        /// Wavelet for subdivision levels (as for compress).
+        #[arg(long, default_value = "auto", value_parser = parse_transform)]
+        transform: TransformChoice,
+        /// Look for at most N refinement levels.
+        #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u8).range(0..=16))]
+        levels: u8,
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
     },
+}
+
+fn parse_transform(s: &str) -> Result<TransformChoice, String> {
+    if s == "auto" {
+        return Ok(TransformChoice::Auto);
+    }
+    Wavelet::from_name(s)
+        .map(TransformChoice::Fixed)
+        .ok_or_else(|| {
+            format!("unknown transform '{s}'; use auto, lazy, bilinear, bicubic or biquintic")
+        })
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -198,6 +224,8 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
             output,
             bits,
             keep_order,
+            transform,
+            levels,
         } => {
             let progress = Progress::new();
             progress.stage("reading");
@@ -208,6 +236,8 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
             let opts = EncodeOptions {
                 keep_order: *keep_order,
                 source: loaded.source(),
+                transform: *transform,
+                max_levels: *levels,
             };
             let enc = subwave::encode_to_vec(&loaded.mesh, &loaded.quantization, &opts)
                 .map_err(|e| fail(input, e))?;
@@ -265,7 +295,20 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
             print_info(&info, *json);
             Ok(ExitCode::SUCCESS)
         }
-        Command::Verify { input, bits, json } => verify(cli, input, *bits, *json),
+        Command::Verify {
+            input,
+            bits,
+            transform,
+            levels,
+            json,
+        } => {
+            let opts = EncodeOptions {
+                transform: *transform,
+                max_levels: *levels,
+                ..Default::default()
+            };
+            verify(cli, input, *bits, &opts, *json)
+        }
     }
 }
 
@@ -345,7 +388,13 @@ fn print_info(info: &subwave::Info, as_json: bool) {
     );
 }
 
-fn verify(cli: &Cli, input: &str, bits: Option<u8>, as_json: bool) -> Result<ExitCode, Failure> {
+fn verify(
+    cli: &Cli,
+    input: &str,
+    bits: Option<u8>,
+    opts: &EncodeOptions,
+    as_json: bool,
+) -> Result<ExitCode, Failure> {
     let progress = Progress::new();
     progress.stage("reading");
     let bytes = read_input(input)?;
@@ -353,12 +402,8 @@ fn verify(cli: &Cli, input: &str, bits: Option<u8>, as_json: bool) -> Result<Exi
     warn_dropped(cli.quiet, input, &loaded);
     progress.stage("encoding");
     let t0 = Instant::now();
-    let enc = subwave::encode_to_vec(
-        &loaded.mesh,
-        &loaded.quantization,
-        &EncodeOptions::default(),
-    )
-    .map_err(|e| fail(input, e))?;
+    let enc = subwave::encode_to_vec(&loaded.mesh, &loaded.quantization, opts)
+        .map_err(|e| fail(input, e))?;
     let encode_ms = t0.elapsed().as_secs_f64() * 1e3;
     progress.stage("decoding");
     let t1 = Instant::now();

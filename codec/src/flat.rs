@@ -5,7 +5,7 @@ use std::collections::HashMap;
 
 use crate::coder::{class_of, AdaptiveModel, Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
-use crate::mesh::{Mesh, MAX_COORD};
+use crate::mesh::Mesh;
 
 const SECTION: &str = "BASE";
 /// Recently used vertices a corner can name by position (SPEC.md 6.2).
@@ -261,7 +261,14 @@ fn encode_positions(e: &mut Encoder, mesh: &Mesh) {
 
 /// Decodes `vertices` vertices and `faces` faces with `corners` corners in all; the
 /// counts were checked against the limits when the header was read.
-pub fn decode(payload: &[u8], vertices: u64, faces: u64, corners: u64) -> Result<Mesh> {
+/// Decoded coordinates must satisfy `|x| <= max_abs`.
+pub fn decode(
+    payload: &[u8],
+    vertices: u64,
+    faces: u64,
+    corners: u64,
+    max_abs: i64,
+) -> Result<Mesh> {
     let mut d = Decoder::new(payload, SECTION)?;
     let mut m = ConnModels::new();
     let mut mru = Mru::new();
@@ -325,11 +332,11 @@ pub fn decode(payload: &[u8], vertices: u64, faces: u64, corners: u64) -> Result
             "faces have fewer corners than the header says",
         ));
     }
-    mesh.positions = decode_positions(&mut d, &mesh, vertices as usize)?;
+    mesh.positions = decode_positions(&mut d, &mesh, vertices as usize, max_abs)?;
     Ok(mesh)
 }
 
-fn decode_positions(d: &mut Decoder, topo: &Mesh, n: usize) -> Result<Vec<[i64; 3]>> {
+fn decode_positions(d: &mut Decoder, topo: &Mesh, n: usize, max_abs: i64) -> Result<Vec<[i64; 3]>> {
     let first = first_uses_n(topo, n);
     let tri = triangle_edges(topo);
     let mut m = PosModels::new();
@@ -343,7 +350,7 @@ fn decode_positions(d: &mut Decoder, topo: &Mesh, n: usize) -> Result<Vec<[i64; 
             prev_class = class_of(r);
             q[k] = p[k]
                 .checked_add(r)
-                .filter(|x| x.abs() <= MAX_COORD)
+                .filter(|x| x.abs() <= max_abs)
                 .ok_or_else(|| Error::corrupt(SECTION, "coordinate out of range"))?;
         }
         pos.push(q);

@@ -4,6 +4,7 @@ use subwave_container::{ByteReader, ByteWriter, Limits};
 
 use crate::error::{Error, Result};
 use crate::quant::{FloatWidth, Quantization};
+use crate::transform::Wavelet;
 
 /// Which subdivision family the levels follow.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -44,6 +45,8 @@ impl Family {
 pub enum Transform {
     /// No levels, nothing to transform.
     None,
+    /// A lifted wavelet on Catmull-Clark levels.
+    Wavelet(Wavelet),
 }
 
 impl Transform {
@@ -51,6 +54,14 @@ impl Transform {
     pub fn name(self) -> &'static str {
         match self {
             Transform::None => "none",
+            Transform::Wavelet(w) => w.name(),
+        }
+    }
+
+    fn code(self) -> u8 {
+        match self {
+            Transform::None => 0,
+            Transform::Wavelet(w) => w.code(),
         }
     }
 }
@@ -139,7 +150,7 @@ impl Header {
         }
         w.u8(self.levels);
         w.u8(self.family.code());
-        w.u8(0); // transform: none
+        w.u8(self.transform.code());
         match self.quantization {
             Quantization::Decimal { decimals } => {
                 w.u8(0);
@@ -168,7 +179,7 @@ impl Header {
     }
 
     /// Parses and validates a header against `limits` (SPEC.md 5).
-    pub fn read(payload: &[u8], offset: u64, limits: &Limits) -> Result<Header> {
+    pub fn read(payload: &[u8], offset: u64, limits: &Limits, version: u16) -> Result<Header> {
         let mut r = ByteReader::new(payload, offset);
         let mut count = |what: &'static str, limit: u64| -> Result<u64> {
             let at = r.offset();
@@ -199,6 +210,12 @@ impl Header {
             }
             .into());
         }
+        if version < 2 && levels > 0 {
+            return Err(malformed(
+                offset,
+                "format version 1 has no refinement levels",
+            ));
+        }
         let at = r.offset();
         let family = match r.u8("family")? {
             0 => Family::None,
@@ -214,11 +231,14 @@ impl Header {
         let at = r.offset();
         let transform = match r.u8("transform")? {
             0 => Transform::None,
-            t => {
-                return Err(Error::Unsupported(format!(
-                    "transform code {t} (byte {at})"
-                )))
-            }
+            t => match Wavelet::from_code(t) {
+                Some(w) if version >= 2 => Transform::Wavelet(w),
+                _ => {
+                    return Err(Error::Unsupported(format!(
+                        "transform code {t} (byte {at})"
+                    )))
+                }
+            },
         };
         let at = r.offset();
         let quantization = match r.u8("quantisation kind")? {
@@ -307,9 +327,25 @@ impl Header {
             return Err(malformed(offset, "a family or transform without levels"));
         }
         if self.levels > 0 {
-            return Err(Error::Unsupported(
-                "refinement levels (this build codes base meshes only)".into(),
-            ));
+            if self.family != Family::Cc {
+                return Err(Error::Unsupported(format!(
+                    "{} hierarchies",
+                    self.family.name()
+                )));
+            }
+            if self.transform == Transform::None {
+                return Err(malformed(offset, "levels without a transform"));
+            }
+            if self.base_vertices > self.vertices
+                || self.base_faces > self.faces
+                || self.corners != 4 * self.faces
+                || self.base_corners < 3 * self.base_faces
+            {
+                return Err(malformed(
+                    offset,
+                    "base and mesh counts do not fit a refinement",
+                ));
+            }
         }
         if self.corners < 3 * self.faces || (self.faces == 0 && self.corners != 0) {
             return Err(malformed(

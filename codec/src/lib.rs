@@ -9,26 +9,47 @@ pub mod coder;
 pub mod error;
 pub mod flat;
 pub mod header;
+pub mod hierarchy;
 pub mod io;
+pub mod levels;
 pub mod mesh;
 pub mod order;
 pub mod quant;
+pub mod transform;
 
 pub use error::{Error, Result};
 pub use header::{Family, Header, Source, Transform};
 pub use mesh::{Mesh, MAX_COORD};
 pub use quant::{FloatWidth, Quantization, RawCoords};
 pub use subwave_container::{Limits, FORMAT_VERSION};
+pub use transform::Wavelet;
 
+use std::collections::HashMap;
+
+use hierarchy::{Canonical, Level, Topo};
 use subwave_container::{Container, ContainerWriter, SectionKind};
+
+/// Which transform to use on a hierarchy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TransformChoice {
+    /// Try every transform and keep the smallest container.
+    #[default]
+    Auto,
+    /// This one.
+    Fixed(Wavelet),
+}
 
 /// How to encode.
 #[derive(Debug, Clone)]
 pub struct EncodeOptions {
-    /// Store the permutation back to the input's vertex order (ORDR section).
+    /// Store the input's vertex and face order (ORDR section).
     pub keep_order: bool,
     /// The format the mesh was read from, recorded so decoding can default to it.
     pub source: Source,
+    /// The transform for subdivision levels.
+    pub transform: TransformChoice,
+    /// Most refinement levels to look for (0: code the mesh flat).
+    pub max_levels: u8,
 }
 
 impl Default for EncodeOptions {
@@ -36,6 +57,8 @@ impl Default for EncodeOptions {
         EncodeOptions {
             keep_order: false,
             source: Source::Unknown,
+            transform: TransformChoice::Auto,
+            max_levels: 16,
         }
     }
 }
@@ -63,12 +86,21 @@ pub struct Encoded {
     pub sections: Vec<SectionInfo>,
 }
 
-/// Encodes an integer mesh whose values map to the file's through `q`.
-pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Encoded> {
-    mesh.validate()?;
-    let order = flat::canonical_order(mesh);
-    let canon = flat::permute(mesh, &order);
-    let header = Header {
+/// Section payloads before they are wrapped in a container.
+struct Payloads {
+    header: Header,
+    base: Vec<u8>,
+    levels: Vec<Vec<u8>>,
+}
+
+impl Payloads {
+    fn size(&self) -> usize {
+        self.base.len() + self.levels.iter().map(Vec::len).sum::<usize>()
+    }
+}
+
+fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Header {
+    Header {
         vertices: mesh.vertex_count() as u64,
         faces: mesh.face_count() as u64,
         corners: mesh.corner_count() as u64,
@@ -81,7 +113,124 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
         quantization: *q,
         source: opts.source,
         has_order: opts.keep_order,
+    }
+}
+
+/// Codes a canonical hierarchy with wavelet `w` (SPEC.md 9, 10); `None` if a lifted
+/// value leaves the supported range.
+fn code_hierarchy(
+    canon: &Canonical,
+    pos: &[Vec<i64>; 3],
+    w: Wavelet,
+    header: &Header,
+) -> Option<Payloads> {
+    let mut x = pos.clone();
+    for level in canon.levels.iter().rev() {
+        let n = level.fine_nv();
+        for xs in x.iter_mut() {
+            transform::analyse(level, w, &mut xs[..n]);
+        }
+    }
+    if x.iter().flatten().any(|v| v.abs() > levels::MAX_LIFTED) {
+        return None;
+    }
+    let nb = canon.base.nv;
+    let mut base = Mesh::new();
+    base.positions = (0..nb).map(|i| [x[0][i], x[1][i], x[2][i]]).collect();
+    base.faces = canon.base.idx.clone();
+    base.face_starts = canon.base.starts.clone();
+    let base_bytes = flat::encode(&base);
+    let mut act = vec![levels::UNKNOWN; nb];
+    let level_bytes = canon
+        .levels
+        .iter()
+        .map(|l| levels::encode(l, &x, &mut act))
+        .collect();
+    let mut header = header.clone();
+    header.base_vertices = nb as u64;
+    header.base_faces = canon.base.nf() as u64;
+    header.base_corners = canon.base.idx.len() as u64;
+    header.levels = canon.levels.len() as u8;
+    header.family = Family::Cc;
+    header.transform = Transform::Wavelet(w);
+    Some(Payloads {
+        header,
+        base: base_bytes,
+        levels: level_bytes,
+    })
+}
+
+/// Matches canonical faces to the input's: position and first corner (SPEC.md 7).
+fn face_order(mesh: &Mesh, fine: &Topo, vorder: &[u32]) -> Result<(Vec<u32>, Vec<u32>)> {
+    let mut by_edge: HashMap<(u32, u32), (u32, u32)> = HashMap::with_capacity(mesh.corner_count());
+    for (j, face) in mesh.iter_faces().enumerate() {
+        let k = face.len();
+        for r in 0..k {
+            by_edge.insert((face[r], face[(r + 1) % k]), (j as u32, r as u32));
+        }
+    }
+    let mut perm = Vec::with_capacity(fine.nf());
+    let mut rot = Vec::with_capacity(fine.nf());
+    for c in 0..fine.nf() {
+        let f = fine.face(c);
+        let key = (vorder[f[0] as usize], vorder[f[1] as usize]);
+        let &(j, r) = by_edge
+            .get(&key)
+            .ok_or_else(|| Error::InvalidMesh("hierarchy does not match the input faces".into()))?;
+        perm.push(j);
+        rot.push(r);
+    }
+    Ok((perm, rot))
+}
+
+/// Encodes an integer mesh whose values map to the file's through `q`: as a
+/// Catmull-Clark hierarchy when one is found, else flat.
+pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Encoded> {
+    mesh.validate()?;
+    let flat_h = flat_header(mesh, q, opts);
+    let mut topo = Topo::new(mesh.vertex_count());
+    topo.idx = mesh.faces.clone();
+    topo.starts = mesh.face_starts.clone();
+    let mut best: Option<(Payloads, Vec<u32>, Option<Topo>)> = None;
+    if opts.max_levels > 0 {
+        if let Some(rec) =
+            hierarchy::cc::recover(mesh.vertex_count(), &topo, opts.max_levels as usize)
+        {
+            let canon = hierarchy::canonicalise(&rec)?;
+            let pos: [Vec<i64>; 3] = std::array::from_fn(|k| {
+                canon
+                    .order
+                    .iter()
+                    .map(|&o| mesh.positions[o as usize][k])
+                    .collect()
+            });
+            let choices: Vec<Wavelet> = match opts.transform {
+                TransformChoice::Auto => Wavelet::ALL.to_vec(),
+                TransformChoice::Fixed(w) => vec![w],
+            };
+            for w in choices {
+                if let Some(p) = code_hierarchy(&canon, &pos, w, &flat_h) {
+                    if best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
+                        best = Some((p, canon.order.clone(), Some(canon.fine.clone())));
+                    }
+                }
+            }
+        }
+    }
+    let (payloads, order, fine) = match best {
+        Some(b) => b,
+        None => {
+            let order = flat::canonical_order(mesh);
+            let canon = flat::permute(mesh, &order);
+            let p = Payloads {
+                header: flat_h,
+                base: flat::encode(&canon),
+                levels: Vec::new(),
+            };
+            (p, order, None)
+        }
     };
+    let header = payloads.header.clone();
     let mut w = ContainerWriter::new();
     let mut sections = Vec::new();
     let mut put = |w: &mut ContainerWriter, kind: SectionKind, payload: &[u8]| {
@@ -99,9 +248,24 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
         Ok(())
     };
     put(&mut w, SectionKind::HEADER, &header.write())?;
-    put(&mut w, SectionKind::BASE, &flat::encode(&canon))?;
+    put(&mut w, SectionKind::BASE, &payloads.base)?;
+    for l in &payloads.levels {
+        put(&mut w, SectionKind::LEVEL, l)?;
+    }
     if opts.keep_order {
-        put(&mut w, SectionKind::ORDER, &order::encode(&order))?;
+        let (faces, rotations) = match &fine {
+            Some(fine) => face_order(mesh, fine, &order)?,
+            None => (
+                (0..mesh.face_count() as u32).collect(),
+                vec![0; mesh.face_count()],
+            ),
+        };
+        let o = order::InputOrder {
+            vertices: order.clone(),
+            faces,
+            rotations,
+        };
+        put(&mut w, SectionKind::ORDER, &order::encode(&o))?;
     }
     let bytes = w.finish();
     sections.push(SectionInfo {
@@ -129,8 +293,8 @@ pub struct DecodeOptions {
 /// The result of [`decode`].
 #[derive(Debug, Clone)]
 pub struct Decoded {
-    /// The mesh, in the input's vertex order when the container has an ORDR section and
-    /// the finest level was decoded, in canonical order otherwise.
+    /// The mesh, in the input's vertex and face order when the container has an ORDR
+    /// section and the finest level was decoded, in canonical order otherwise.
     pub mesh: Mesh,
     /// How integers map to values.
     pub quantization: Quantization,
@@ -193,7 +357,12 @@ pub fn inspect(bytes: &[u8], limits: &Limits) -> Result<Info> {
 /// container must hold every section; otherwise a prefix is fine.
 fn layout(c: &Container<'_>, limits: &Limits, whole: bool) -> Result<Header> {
     expect_kind(c, 0, SectionKind::HEADER, "header")?;
-    let h = Header::read(c.sections[0].payload, c.sections[0].offset + 8, limits)?;
+    let h = Header::read(
+        c.sections[0].payload,
+        c.sections[0].offset + 8,
+        limits,
+        c.version,
+    )?;
     let mut expected = vec![(SectionKind::BASE, "base mesh")];
     expected.extend((0..h.levels).map(|_| (SectionKind::LEVEL, "level")));
     if h.has_order {
@@ -215,7 +384,7 @@ fn layout(c: &Container<'_>, limits: &Limits, whole: bool) -> Result<Header> {
     Ok(h)
 }
 
-/// Decodes a container (SPEC.md 2-7).
+/// Decodes a container (SPEC.md 2-10).
 pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
     let limits = &opts.limits;
     let c = if opts.max_level.is_some() {
@@ -236,18 +405,37 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
         }
         .into());
     }
+    let bound = if h.levels == 0 {
+        MAX_COORD
+    } else {
+        levels::MAX_LIFTED
+    };
     let base = flat::decode(
         c.sections[1].payload,
         h.base_vertices,
         h.base_faces,
         h.base_corners,
+        bound,
     )?;
-    let mut mesh = base;
+    let mut mesh = if h.levels == 0 {
+        base
+    } else {
+        let Transform::Wavelet(w) = h.transform else {
+            return Err(Error::Unsupported("levels without a wavelet".into()));
+        };
+        synthesise_levels(&c, &h, base, w, level)?
+    };
     let mut input_order = false;
     if h.has_order && level == h.levels {
         if let Some(s) = c.sections.get(2 + h.levels as usize) {
-            let order = order::decode(s.payload, mesh.vertex_count())?;
-            mesh = unpermute(&mesh, &order);
+            if c.version == 1 {
+                let vorder = order::decode_v1(s.payload, mesh.vertex_count())?;
+                mesh = unpermute(&mesh, &vorder);
+            } else {
+                let degrees: Vec<u32> = mesh.face_starts.windows(2).map(|w| w[1] - w[0]).collect();
+                let o = order::decode(s.payload, mesh.vertex_count(), &degrees)?;
+                mesh = restore_order(&mesh, &o);
+            }
             input_order = true;
         }
     }
@@ -258,6 +446,75 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
         level,
         input_order,
     })
+}
+
+/// Rebuilds levels 1..=`upto` from the base mesh (SPEC.md 8-10).
+fn synthesise_levels(
+    c: &Container<'_>,
+    h: &Header,
+    base: Mesh,
+    w: Wavelet,
+    upto: u8,
+) -> Result<Mesh> {
+    let mut topo = Topo::new(base.vertex_count());
+    topo.idx = base.faces;
+    topo.starts = base.face_starts;
+    let mut x: [Vec<i64>; 3] =
+        std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect());
+    let mut act = vec![levels::UNKNOWN; topo.nv];
+    for l in 0..upto as usize {
+        let level = Level::new(&topo)?;
+        // Refuse a refinement larger than the header's finest mesh before building it.
+        if level.fine_nv() as u64 > h.vertices || level.coarse.idx.len() as u64 > h.faces {
+            return Err(Error::corrupt(
+                "HEAD",
+                "the base mesh refines to more than the header's counts",
+            ));
+        }
+        levels::decode(c.sections[2 + l].payload, &level, &mut x, &mut act)?;
+        for xs in x.iter_mut() {
+            transform::synthesise(&level, w, xs);
+        }
+        if x.iter().flatten().any(|v| v.abs() > levels::MAX_LIFTED) {
+            return Err(Error::corrupt("LEVL", "reconstructed value out of range"));
+        }
+        topo = level.fine();
+    }
+    if upto == h.levels
+        && (topo.nv as u64 != h.vertices
+            || topo.nf() as u64 != h.faces
+            || topo.idx.len() as u64 != h.corners)
+    {
+        return Err(Error::corrupt(
+            "HEAD",
+            "the refined mesh does not have the header's counts",
+        ));
+    }
+    // A coarser level's values carry 1/gain of the geometry per level still above it.
+    let gain: i64 = match w {
+        Wavelet::Bicubic => 4,
+        Wavelet::Biquintic => 16,
+        _ => 1,
+    };
+    let mut scale: i64 = 1;
+    for _ in upto..h.levels {
+        scale = scale.saturating_mul(gain);
+    }
+    let mut mesh = Mesh::new();
+    mesh.positions = Vec::with_capacity(topo.nv);
+    for i in 0..topo.nv {
+        let mut p = [0i64; 3];
+        for k in 0..3 {
+            p[k] = x[k][i]
+                .checked_mul(scale)
+                .filter(|v| v.abs() <= MAX_COORD)
+                .ok_or_else(|| Error::corrupt("LEVL", "reconstructed coordinate out of range"))?;
+        }
+        mesh.positions.push(p);
+    }
+    mesh.faces = topo.idx;
+    mesh.face_starts = topo.starts;
+    Ok(mesh)
 }
 
 /// Undoes [`flat::permute`]: `order[new] = old`.
@@ -271,4 +528,32 @@ fn unpermute(mesh: &Mesh, order: &[u32]) -> Mesh {
         face_starts: mesh.face_starts.clone(),
         faces: mesh.faces.iter().map(|&v| order[v as usize]).collect(),
     }
+}
+
+/// Puts vertices and faces back in the input's order (SPEC.md 7).
+fn restore_order(mesh: &Mesh, o: &order::InputOrder) -> Mesh {
+    let mut out = unpermute(mesh, &o.vertices);
+    let nf = mesh.face_count();
+    let mut degree = vec![0u32; nf];
+    for c in 0..nf {
+        degree[o.faces[c] as usize] = mesh.face_starts[c + 1] - mesh.face_starts[c];
+    }
+    let mut starts = Vec::with_capacity(nf + 1);
+    starts.push(0u32);
+    for d in &degree {
+        starts.push(starts.last().copied().unwrap_or(0) + d);
+    }
+    let mut faces = vec![0u32; mesh.faces.len()];
+    for c in 0..nf {
+        let src = &out.faces[mesh.face_starts[c] as usize..mesh.face_starts[c + 1] as usize];
+        let k = src.len();
+        let r = o.rotations[c] as usize;
+        let dst = starts[o.faces[c] as usize] as usize;
+        for i in 0..k {
+            faces[dst + i] = src[(i + k - r) % k];
+        }
+    }
+    out.faces = faces;
+    out.face_starts = starts;
+    out
 }

@@ -2,7 +2,7 @@
 //! (SPEC.md 7). Runs of consecutive indices cost a fraction of a bit each; the rest is
 //! coded as a rank among the indices not yet used, close to log2(n!) bits in all.
 
-use crate::coder::{AdaptiveModel, Decoder, Encoder};
+use crate::coder::{AdaptiveModel, Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
 
 const SECTION: &str = "ORDR";
@@ -66,10 +66,9 @@ impl Unused {
     }
 }
 
-/// Codes `order[new] = old`, a permutation of `0..order.len()`.
-pub fn encode(order: &[u32]) -> Vec<u8> {
+/// Codes a permutation `order[new] = old` of `0..order.len()` (SPEC.md 7.1).
+pub fn put_perm(e: &mut Encoder, order: &[u32]) {
     let n = order.len();
-    let mut e = Encoder::new();
     let mut run = [AdaptiveModel::new(2), AdaptiveModel::new(2)];
     let mut unused = Unused::new(n);
     let mut prev: i64 = -1;
@@ -84,12 +83,10 @@ pub fn encode(order: &[u32]) -> Vec<u8> {
         prev = o as i64;
         prev_hit = hit as usize;
     }
-    e.finish()
 }
 
 /// Decodes a permutation of `0..n` and checks it is one.
-pub fn decode(payload: &[u8], n: usize) -> Result<Vec<u32>> {
-    let mut d = Decoder::new(payload, SECTION)?;
+pub fn get_perm(d: &mut Decoder, n: usize) -> Result<Vec<u32>> {
     let mut run = [AdaptiveModel::new(2), AdaptiveModel::new(2)];
     let mut unused = Unused::new(n);
     let mut used = vec![false; n];
@@ -99,11 +96,7 @@ pub fn decode(payload: &[u8], n: usize) -> Result<Vec<u32>> {
     for i in 0..n {
         let hit = d.symbol(&mut run[prev_hit])? == 1;
         let o = if hit {
-            let o = (prev + 1) as usize;
-            if o >= n || used[o] {
-                return Err(Error::corrupt(SECTION, "not a permutation"));
-            }
-            o
+            (prev + 1) as usize
         } else {
             let r = d.uniform((n - i) as u64)?;
             unused.select(r)
@@ -118,6 +111,57 @@ pub fn decode(payload: &[u8], n: usize) -> Result<Vec<u32>> {
         prev_hit = hit as usize;
     }
     Ok(out)
+}
+
+/// The input's order: vertices, and (format 2) faces with their first corners.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct InputOrder {
+    /// `vertices[c]` = input number of canonical vertex `c`.
+    pub vertices: Vec<u32>,
+    /// `faces[c]` = input position of canonical face `c`.
+    pub faces: Vec<u32>,
+    /// `rotations[c]`: input face `faces[c]` starts at corner `rotations[c]` of the
+    /// canonical face (its corner order otherwise the same).
+    pub rotations: Vec<u32>,
+}
+
+/// Codes the ORDR section of format 2 (SPEC.md 7).
+pub fn encode(o: &InputOrder) -> Vec<u8> {
+    let mut e = Encoder::new();
+    put_perm(&mut e, &o.vertices);
+    put_perm(&mut e, &o.faces);
+    let mut m = IntModel::new();
+    for &r in &o.rotations {
+        e.int(&mut m, r as i64);
+    }
+    e.finish()
+}
+
+/// Decodes a format-2 ORDR section; `degrees[c]` is canonical face c's degree.
+pub fn decode(payload: &[u8], nv: usize, degrees: &[u32]) -> Result<InputOrder> {
+    let mut d = Decoder::new(payload, SECTION)?;
+    let vertices = get_perm(&mut d, nv)?;
+    let faces = get_perm(&mut d, degrees.len())?;
+    let mut m = IntModel::new();
+    let mut rotations = Vec::with_capacity(degrees.len());
+    for &k in degrees {
+        let r = d.int(&mut m)?;
+        if r < 0 || r >= k as i64 {
+            return Err(Error::corrupt(SECTION, "face rotation out of range"));
+        }
+        rotations.push(r as u32);
+    }
+    Ok(InputOrder {
+        vertices,
+        faces,
+        rotations,
+    })
+}
+
+/// Decodes a format-1 ORDR section: the vertex permutation alone.
+pub fn decode_v1(payload: &[u8], nv: usize) -> Result<Vec<u32>> {
+    let mut d = Decoder::new(payload, SECTION)?;
+    get_perm(&mut d, nv)
 }
 
 #[cfg(test)]
@@ -137,14 +181,20 @@ mod tests {
                 let b = ((s >> 20) % n.max(1) as u64) as usize;
                 if n > 0 { p.swap(a, b); }
             }
-            let bytes = encode(&p);
-            prop_assert_eq!(decode(&bytes, n).unwrap(), p);
+            let o = InputOrder { vertices: p.clone(), faces: p.iter().rev().copied().collect(), rotations: p.iter().map(|&x| x % 4).collect() };
+            let bytes = encode(&o);
+            prop_assert_eq!(decode(&bytes, n, &vec![4; n]).unwrap(), o);
         }
     }
 
     #[test]
     fn identity_is_nearly_free() {
         let p: Vec<u32> = (0..100_000).collect();
-        assert!(encode(&p).len() < 64);
+        let o = InputOrder {
+            vertices: p.clone(),
+            faces: p,
+            rotations: vec![0; 100_000],
+        };
+        assert!(encode(&o).len() < 160, "{}", encode(&o).len());
     }
 }

@@ -29,7 +29,7 @@ use std::fmt;
 pub const MAGIC: [u8; 8] = [0x89, b'S', b'W', b'V', b'\r', b'\n', 0x1a, b'\n'];
 
 /// The format version this crate writes and the newest it reads.
-pub const FORMAT_VERSION: u16 = 1;
+pub const FORMAT_VERSION: u16 = 2;
 
 /// Bytes before the first section: magic, version, reserved.
 pub const PREAMBLE_LEN: usize = 12;
@@ -404,10 +404,10 @@ mod tests {
             Err(Error::BadMagic)
         );
         let mut x = b.clone();
-        x[8] = 2;
+        x[8..10].copy_from_slice(&(FORMAT_VERSION + 1).to_le_bytes());
         assert!(matches!(
             Container::parse(&x, &Limits::default()),
-            Err(Error::NewerVersion { found: 2, .. })
+            Err(Error::NewerVersion { found, .. }) if found == FORMAT_VERSION + 1
         ));
         let mut x = b.clone();
         x[PREAMBLE_LEN + 4..PREAMBLE_LEN + 8].copy_from_slice(&u32::MAX.to_le_bytes());

@@ -1,0 +1,594 @@
+//! Recovering Catmull-Clark hierarchies from flat quad meshes (encoder only).
+//!
+//! In a Catmull-Clark refinement the vertex graph is bipartite with the edge points on
+//! one side, and every quad has its old vertex and its face point on one diagonal. Per
+//! connected component there are at most 2 x 2 labelings; each is checked by rebuilding
+//! the coarse faces (the fan of quads around each face point) and requiring that the
+//! coarse mesh refines back to exactly the fine one. Among valid labelings the one with
+//! the deepest hierarchy wins; ties go to fewer base vertices, then to the labeling whose
+//! old vertices include the component's smallest input vertex number (SPEC.md 8.3).
+//! Every step is linear in the mesh size; both choices are explored at each level, and as
+//! a level has a quarter of the faces of the one above, the whole search stays linear.
+
+use std::collections::{HashMap, VecDeque};
+
+use super::{Recovered, Topo, NONE};
+
+/// One coarsening of a component: the coarse mesh in the fine mesh's local numbers.
+#[derive(Debug, Clone)]
+struct Coarsening {
+    /// Coarse topology; vertex `i` is fine vertex `to_fine[i]`.
+    coarse: Topo,
+    to_fine: Vec<u32>,
+    /// (coarse a, coarse b) with a < b -> fine edge point.
+    edge_points: Vec<((u32, u32), u32)>,
+    /// Per coarse face: its fine face point.
+    face_points: Vec<u32>,
+}
+
+/// A chain of coarsenings, finest first, with the number of base vertices it ends at.
+#[derive(Debug, Clone, Default)]
+struct Chain {
+    steps: Vec<Coarsening>,
+    base_vertices: usize,
+}
+
+/// Finds the deepest Catmull-Clark hierarchy of at most `max_levels` levels. Faces are
+/// `mesh.face(f)` over vertex numbers `< nv`. Returns `None` when there is no level.
+pub fn recover(nv: usize, topo: &Topo, max_levels: usize) -> Option<Recovered> {
+    if max_levels == 0 || topo.nf() == 0 || !topo.all_quads() {
+        return None;
+    }
+    // Split into components connected through shared vertices.
+    let comps = components(nv, topo);
+    let mut chains: Vec<(Vec<u32>, Chain)> = Vec::with_capacity(comps.len());
+    let mut depth = max_levels;
+    for (ids, local) in comps {
+        let chain = best_chain(&local, max_levels);
+        depth = depth.min(chain.steps.len());
+        if depth == 0 {
+            return None;
+        }
+        chains.push((ids, chain));
+    }
+    // Merge the components' chains, cut to the common depth, in input numbers.
+    let mut edge_points = vec![HashMap::new(); depth];
+    let mut face_points = vec![HashMap::new(); depth];
+    let mut base = Topo::new(nv);
+    for (ids, chain) in &chains {
+        // ids: local fine vertex -> input number; walk down the chain.
+        let mut map = ids.clone();
+        for (l, step) in chain.steps.iter().take(depth).enumerate() {
+            let level = depth - 1 - l; // coarse-first level index of this refinement
+            let coarse_ids: Vec<u32> = step.to_fine.iter().map(|&f| map[f as usize]).collect();
+            for &((a, b), p) in &step.edge_points {
+                let (ia, ib) = (coarse_ids[a as usize], coarse_ids[b as usize]);
+                edge_points[level].insert((ia.min(ib), ia.max(ib)), map[p as usize]);
+            }
+            for f in 0..step.coarse.nf() {
+                let face = step.coarse.face(f);
+                let p = map[step.face_points[f] as usize];
+                let k = face.len();
+                // Every directed edge names the face: the canonical order may start anywhere.
+                for i in 0..k {
+                    let key = (
+                        coarse_ids[face[i] as usize],
+                        coarse_ids[face[(i + 1) % k] as usize],
+                    );
+                    face_points[level].insert(key, p);
+                }
+            }
+            if l + 1 == depth {
+                for f in 0..step.coarse.nf() {
+                    let face: Vec<u32> = step
+                        .coarse
+                        .face(f)
+                        .iter()
+                        .map(|&v| coarse_ids[v as usize])
+                        .collect();
+                    base.push(&face);
+                }
+            }
+            map = coarse_ids;
+        }
+    }
+    Some(Recovered {
+        base,
+        edge_points,
+        face_points,
+    })
+}
+
+/// Connected components (through faces) as (local -> input numbers, local topology).
+fn components(nv: usize, topo: &Topo) -> Vec<(Vec<u32>, Topo)> {
+    let mut parent: Vec<u32> = (0..nv as u32).collect();
+    fn find(p: &mut [u32], mut x: u32) -> u32 {
+        while p[x as usize] != x {
+            p[x as usize] = p[p[x as usize] as usize];
+            x = p[x as usize];
+        }
+        x
+    }
+    for f in 0..topo.nf() {
+        let face = topo.face(f);
+        for w in face.windows(2) {
+            let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
+            if a != b {
+                parent[a.max(b) as usize] = a.min(b);
+            }
+        }
+    }
+    let mut comp_of_root: HashMap<u32, usize> = HashMap::new();
+    let mut out: Vec<(Vec<u32>, Topo)> = Vec::new();
+    let mut local = vec![NONE; nv];
+    for f in 0..topo.nf() {
+        let face = topo.face(f);
+        let r = find(&mut parent, face[0]);
+        let c = *comp_of_root.entry(r).or_insert_with(|| {
+            out.push((Vec::new(), Topo::new(0)));
+            out.len() - 1
+        });
+        let (ids, t) = &mut out[c];
+        let mut lf = [0u32; 4];
+        for (i, &v) in face.iter().enumerate() {
+            if local[v as usize] == NONE {
+                local[v as usize] = ids.len() as u32;
+                ids.push(v);
+            }
+            lf[i] = local[v as usize];
+        }
+        t.push(&lf);
+    }
+    for (ids, t) in &mut out {
+        t.nv = ids.len();
+    }
+    out
+}
+
+fn best_chain(topo: &Topo, max_levels: usize) -> Chain {
+    if max_levels == 0 || !topo.all_quads() {
+        return Chain {
+            steps: Vec::new(),
+            base_vertices: topo.nv,
+        };
+    }
+    let mut best: Option<Chain> = None;
+    for cand in candidates(topo) {
+        let rest = best_chain(&cand.coarse, max_levels - 1);
+        let mut steps = Vec::with_capacity(rest.steps.len() + 1);
+        steps.push(cand);
+        steps.extend(rest.steps);
+        let chain = Chain {
+            steps,
+            base_vertices: rest.base_vertices,
+        };
+        // Candidates come in a fixed order (see `candidates`), so keeping the first of
+        // equals implements the tie rule.
+        let better = match &best {
+            None => true,
+            Some(b) => {
+                chain.steps.len() > b.steps.len()
+                    || (chain.steps.len() == b.steps.len() && chain.base_vertices < b.base_vertices)
+            }
+        };
+        if better {
+            best = Some(chain);
+        }
+    }
+    best.unwrap_or(Chain {
+        steps: Vec::new(),
+        base_vertices: topo.nv,
+    })
+}
+
+/// BFS 2-colouring over an adjacency given as CSR; `None` if not bipartite or not
+/// connected (a component must be one piece).
+fn two_colour(n: usize, starts: &[u32], adj: &[u32], members: &[bool]) -> Option<Vec<u8>> {
+    let mut colour = vec![2u8; n];
+    let first = members.iter().position(|&m| m)?;
+    colour[first] = 0;
+    let mut queue = VecDeque::from([first as u32]);
+    let mut reached = 1usize;
+    while let Some(v) = queue.pop_front() {
+        let c = colour[v as usize];
+        for &w in &adj[starts[v as usize] as usize..starts[v as usize + 1] as usize] {
+            match colour[w as usize] {
+                2 => {
+                    colour[w as usize] = 1 - c;
+                    reached += 1;
+                    queue.push_back(w);
+                }
+                x if x == c => return None,
+                _ => {}
+            }
+        }
+    }
+    (reached == members.iter().filter(|&&m| m).count()).then_some(colour)
+}
+
+fn adjacency(n: usize, pairs: &[(u32, u32)]) -> (Vec<u32>, Vec<u32>) {
+    let mut starts = vec![0u32; n + 1];
+    for &(a, b) in pairs {
+        starts[a as usize + 1] += 1;
+        starts[b as usize + 1] += 1;
+    }
+    for i in 0..n {
+        starts[i + 1] += starts[i];
+    }
+    let mut fill = starts.clone();
+    let mut adj = vec![0u32; starts[n] as usize];
+    for &(a, b) in pairs {
+        adj[fill[a as usize] as usize] = b;
+        fill[a as usize] += 1;
+        adj[fill[b as usize] as usize] = a;
+        fill[b as usize] += 1;
+    }
+    (starts, adj)
+}
+
+/// Every valid coarsening of a connected all-quad component, in a fixed order: edge
+/// class first the colour class of vertex 0's opposite, then vertex 0's; within that, the
+/// old-vertex class containing the smallest non-edge vertex number first.
+fn candidates(t: &Topo) -> Vec<Coarsening> {
+    let n = t.nv;
+    let nf = t.nf();
+    for f in 0..nf {
+        let q = t.face(f);
+        if q[0] == q[1]
+            || q[1] == q[2]
+            || q[2] == q[3]
+            || q[3] == q[0]
+            || q[0] == q[2]
+            || q[1] == q[3]
+        {
+            return Vec::new();
+        }
+    }
+    let mut edge_pairs = Vec::with_capacity(nf * 4);
+    for f in 0..nf {
+        let q = t.face(f);
+        for i in 0..4 {
+            edge_pairs.push((q[i], q[(i + 1) % 4]));
+        }
+    }
+    let (es, eadj) = adjacency(n, &edge_pairs);
+    let all = vec![true; n];
+    let Some(colour) = two_colour(n, &es, &eadj, &all) else {
+        return Vec::new();
+    };
+    // Quads per vertex.
+    let mut vq_starts = vec![0u32; n + 1];
+    for &v in &t.idx {
+        vq_starts[v as usize + 1] += 1;
+    }
+    for i in 0..n {
+        vq_starts[i + 1] += vq_starts[i];
+    }
+    let mut fill = vq_starts.clone();
+    let mut vq = vec![0u32; t.idx.len()];
+    for f in 0..nf {
+        for &v in t.face(f) {
+            vq[fill[v as usize] as usize] = f as u32;
+            fill[v as usize] += 1;
+        }
+    }
+    let mut out = Vec::new();
+    for e_colour in [1 - colour[0], colour[0]] {
+        // The other class: one diagonal of every quad.
+        let diag: Vec<(u32, u32)> = (0..nf)
+            .map(|f| {
+                let q = t.face(f);
+                if colour[q[0] as usize] != e_colour {
+                    (q[0], q[2])
+                } else {
+                    (q[1], q[3])
+                }
+            })
+            .collect();
+        let members: Vec<bool> = colour.iter().map(|&c| c != e_colour).collect();
+        let (ds, dadj) = adjacency(n, &diag);
+        let Some(vf) = two_colour(n, &ds, &dadj, &members) else {
+            continue;
+        };
+        let smallest = members.iter().position(|&m| m).unwrap_or(0);
+        for v_colour in [vf[smallest], 1 - vf[smallest]] {
+            let is_v = |x: u32| members[x as usize] && vf[x as usize] == v_colour;
+            let is_f = |x: u32| members[x as usize] && vf[x as usize] != v_colour;
+            if let Some(c) = build(t, &vq_starts, &vq, &is_v, &is_f) {
+                out.push(c);
+            }
+        }
+    }
+    out
+}
+
+/// Builds and checks the coarse mesh for one labeling.
+fn build(
+    t: &Topo,
+    vq_starts: &[u32],
+    vq: &[u32],
+    is_v: &dyn Fn(u32) -> bool,
+    is_f: &dyn Fn(u32) -> bool,
+) -> Option<Coarsening> {
+    let n = t.nv;
+    let mut coarse_id = vec![NONE; n];
+    let mut to_fine = Vec::new();
+    let mut coarse = Topo::new(0);
+    let mut face_points = Vec::new();
+    // Per edge point: its coarse end points as first seen (a, b) in face order.
+    let mut e_ends: Vec<[u32; 2]> = vec![[NONE, NONE]; n];
+    let mut e_faces = vec![0u8; n];
+    let mut visited_quads = 0usize;
+    let mut fan: Vec<(u32, u32, u32)> = Vec::new(); // (a, v, b) per quad around f
+    let mut ring: Vec<u32> = Vec::new();
+    for fp in 0..n as u32 {
+        if !is_f(fp) {
+            continue;
+        }
+        fan.clear();
+        for &q in &vq[vq_starts[fp as usize] as usize..vq_starts[fp as usize + 1] as usize] {
+            let quad = t.face(q as usize);
+            let i = quad.iter().position(|&x| x == fp)?;
+            let (a, v, b) = (quad[(i + 1) % 4], quad[(i + 2) % 4], quad[(i + 3) % 4]);
+            if !is_v(v) || is_v(a) || is_f(a) || is_v(b) || is_f(b) {
+                return None;
+            }
+            fan.push((a, v, b));
+        }
+        let k = fan.len();
+        if k < 3 {
+            return None;
+        }
+        // Walk the fan: the quad after (a, v, b) is the one whose a is this b.
+        ring.clear();
+        let mut edges_of_face: Vec<u32> = Vec::with_capacity(k);
+        let mut cur = 0usize;
+        for _ in 0..k {
+            let (_, v, b) = fan[cur];
+            ring.push(v);
+            edges_of_face.push(b);
+            let next = fan.iter().position(|&(a2, _, _)| a2 == b)?;
+            cur = next;
+        }
+        if cur != 0 {
+            return None;
+        }
+        // Every quad of the fan visited once: the ring's edge points are distinct.
+        let mut sorted = edges_of_face.clone();
+        sorted.sort_unstable();
+        if sorted.windows(2).any(|w| w[0] == w[1]) {
+            return None;
+        }
+        visited_quads += k;
+        let mut corners = ring.clone();
+        corners.sort_unstable();
+        if corners.windows(2).any(|w| w[0] == w[1]) {
+            return None;
+        }
+        let mut face = Vec::with_capacity(k);
+        for &v in &ring {
+            if coarse_id[v as usize] == NONE {
+                coarse_id[v as usize] = to_fine.len() as u32;
+                to_fine.push(v);
+            }
+            face.push(coarse_id[v as usize]);
+        }
+        for i in 0..k {
+            // edges_of_face[i] joins ring[i] and ring[i + 1].
+            let e = edges_of_face[i] as usize;
+            let (a, b) = (face[i], face[(i + 1) % k]);
+            if a == b {
+                return None;
+            }
+            match e_ends[e] {
+                [NONE, _] => e_ends[e] = [a, b],
+                [x, y] if (x == b && y == a) => {}
+                _ => return None, // inconsistent or same orientation twice
+            }
+            e_faces[e] += 1;
+            if e_faces[e] > 2 {
+                return None;
+            }
+        }
+        coarse.push(&face);
+        face_points.push(fp);
+    }
+    if visited_quads != t.nf() {
+        return None;
+    }
+    coarse.nv = to_fine.len();
+    // Distinct edge points for distinct coarse edges; each has valence 2 + faces.
+    let mut edge_points = Vec::new();
+    let mut seen: HashMap<(u32, u32), u32> = HashMap::new();
+    for (e, ends) in e_ends.iter().enumerate() {
+        if ends[0] == NONE {
+            continue;
+        }
+        let key = (ends[0].min(ends[1]), ends[0].max(ends[1]));
+        if seen.insert(key, e as u32).is_some() {
+            return None;
+        }
+        // An edge point lies in two quads per coarse face beside it, and in no others.
+        let quads = vq_starts[e + 1] - vq_starts[e];
+        if quads != 2 * e_faces[e] as u32 {
+            return None;
+        }
+        edge_points.push((key, e as u32));
+    }
+    // Every vertex that is neither v nor f must be an edge point that was met.
+    for x in 0..n as u32 {
+        if !is_v(x) && !is_f(x) && e_ends[x as usize][0] == NONE {
+            return None;
+        }
+    }
+    Some(Coarsening {
+        coarse,
+        to_fine,
+        edge_points,
+        face_points,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{canonicalise, Level};
+    use super::*;
+
+    fn cube() -> Topo {
+        let mut t = Topo::new(8);
+        for f in [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ] {
+            t.push(&f);
+        }
+        t
+    }
+
+    fn prism_with_triangles() -> Topo {
+        let mut t = Topo::new(10);
+        t.push(&[4, 3, 2, 1, 0]);
+        t.push(&[5, 6, 7, 8, 9]);
+        t.push(&[0, 1, 6]);
+        t.push(&[0, 6, 5]);
+        for i in 1..5u32 {
+            let j = (i + 1) % 5;
+            t.push(&[i, j, j + 5, i + 5]);
+        }
+        t
+    }
+
+    fn refine(t: &Topo, n: usize) -> Topo {
+        let mut cur = t.clone();
+        for _ in 0..n {
+            cur = Level::new(&cur).unwrap().fine();
+        }
+        cur
+    }
+
+    /// Scrambles vertex numbers, face order and face starts.
+    fn shuffle(t: &Topo, seed: u64) -> Topo {
+        let mut s = seed | 1;
+        let mut rnd = move |n: usize| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s % n as u64) as usize
+        };
+        let mut perm: Vec<u32> = (0..t.nv as u32).collect();
+        for i in (1..perm.len()).rev() {
+            perm.swap(i, rnd(i + 1));
+        }
+        let mut faces: Vec<Vec<u32>> = (0..t.nf())
+            .map(|f| {
+                let face = t.face(f);
+                let r = rnd(face.len());
+                (0..face.len())
+                    .map(|i| perm[face[(i + r) % face.len()] as usize])
+                    .collect()
+            })
+            .collect();
+        for i in (1..faces.len()).rev() {
+            faces.swap(i, rnd(i + 1));
+        }
+        let mut out = Topo::new(t.nv);
+        for f in &faces {
+            out.push(f);
+        }
+        out
+    }
+
+    fn face_set(t: &Topo, order: Option<&[u32]>) -> Vec<Vec<u32>> {
+        let mut v: Vec<Vec<u32>> = (0..t.nf())
+            .map(|f| {
+                let face: Vec<u32> = t
+                    .face(f)
+                    .iter()
+                    .map(|&x| order.map_or(x, |o| o[x as usize]))
+                    .collect();
+                let k = (0..face.len()).min_by_key(|&i| face[i]).unwrap();
+                face[k..].iter().chain(&face[..k]).copied().collect()
+            })
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn recovers_full_depth_from_shuffled_meshes() {
+        for (base, levels) in [(cube(), 3), (prism_with_triangles(), 2)] {
+            let fine = refine(&base, levels);
+            for seed in 1..4 {
+                let input = shuffle(&fine, seed);
+                let rec = recover(input.nv, &input, 16).expect("a hierarchy");
+                assert_eq!(rec.levels(), levels);
+                // The base or its dual (equally deep; the tie rule picks one).
+                let used = rec
+                    .base
+                    .idx
+                    .iter()
+                    .collect::<std::collections::BTreeSet<_>>()
+                    .len();
+                assert_eq!(rec.base.nf() + used, base.nf() + base.nv);
+                let canon = canonicalise(&rec).unwrap();
+                assert_eq!(
+                    face_set(&canon.fine, Some(&canon.order)),
+                    face_set(&input, None)
+                );
+                let mut sorted = canon.order.clone();
+                sorted.sort();
+                assert_eq!(sorted, (0..input.nv as u32).collect::<Vec<_>>());
+            }
+        }
+    }
+
+    #[test]
+    fn level_cap_and_no_structure() {
+        let fine = refine(&cube(), 3);
+        assert_eq!(recover(fine.nv, &fine, 2).unwrap().levels(), 2);
+        assert!(recover(fine.nv, &fine, 0).is_none());
+        assert!(recover(cube().nv, &cube(), 5).is_none());
+        // Two quads sharing an edge: a 1x2 grid is no refinement.
+        let mut t = Topo::new(6);
+        t.push(&[0, 1, 4, 3]);
+        t.push(&[1, 2, 5, 4]);
+        assert!(recover(6, &t, 5).is_none());
+    }
+
+    #[test]
+    fn open_grids_and_components() {
+        // A 4x4 grid is two levels of one quad.
+        let mut g = Topo::new(25);
+        for y in 0..4u32 {
+            for x in 0..4u32 {
+                let i = y * 5 + x;
+                g.push(&[i, i + 1, i + 6, i + 5]);
+            }
+        }
+        let rec = recover(25, &g, 16).unwrap();
+        assert_eq!(rec.levels(), 2);
+        assert_eq!(rec.base.nf(), 1);
+        // Two components of different depths: the common depth.
+        let a = refine(&cube(), 2);
+        let b = refine(&cube(), 1);
+        let mut u = Topo::new(a.nv + b.nv);
+        for f in 0..a.nf() {
+            u.push(a.face(f));
+        }
+        for f in 0..b.nf() {
+            let face: Vec<u32> = b.face(f).iter().map(|&v| v + a.nv as u32).collect();
+            u.push(&face);
+        }
+        let rec = recover(u.nv, &u, 16).unwrap();
+        assert_eq!(rec.levels(), 1);
+        let canon = canonicalise(&rec).unwrap();
+        assert_eq!(
+            face_set(&canon.fine, Some(&canon.order)),
+            face_set(&u, None)
+        );
+    }
+}

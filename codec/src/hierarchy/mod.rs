@@ -1,0 +1,329 @@
+//! Subdivision hierarchies: polygon topology, canonical Catmull-Clark refinement (what the
+//! decoder rebuilds from the base mesh, SPEC.md 8) and recovery of a hierarchy from a
+//! flat mesh in any vertex and face order (encoder only).
+
+pub mod cc;
+
+use std::collections::HashMap;
+
+use crate::error::{Error, Result};
+
+/// "No such face / edge".
+pub const NONE: u32 = u32::MAX;
+
+/// Polygon topology: `nv` vertices and faces as index lists (CSR).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Topo {
+    /// Number of vertices (some may be used by no face).
+    pub nv: usize,
+    /// `idx[starts[f]..starts[f + 1]]` are face `f`'s corners.
+    pub starts: Vec<u32>,
+    /// All corners.
+    pub idx: Vec<u32>,
+}
+
+impl Topo {
+    /// Topology with `nv` vertices and the given faces.
+    pub fn new(nv: usize) -> Self {
+        Topo {
+            nv,
+            starts: vec![0],
+            idx: Vec::new(),
+        }
+    }
+
+    /// Number of faces.
+    pub fn nf(&self) -> usize {
+        self.starts.len() - 1
+    }
+
+    /// Face `f`'s corners.
+    #[inline]
+    pub fn face(&self, f: usize) -> &[u32] {
+        &self.idx[self.starts[f] as usize..self.starts[f + 1] as usize]
+    }
+
+    /// Appends a face.
+    pub fn push(&mut self, corners: &[u32]) {
+        self.idx.extend_from_slice(corners);
+        self.starts.push(self.idx.len() as u32);
+    }
+
+    /// Whether every face is a quad.
+    pub fn all_quads(&self) -> bool {
+        self.starts.windows(2).all(|w| w[1] - w[0] == 4)
+    }
+}
+
+/// One Catmull-Clark refinement of a coarse topology, with the adjacency the lifting
+/// steps need (SPEC.md 8.1). Fine vertex numbering: coarse vertices `0..nv`, then one
+/// edge point per coarse edge (`nv + e`), then one face point per face (`nv + ne + f`).
+#[derive(Debug, Clone)]
+pub struct Level {
+    /// Coarse vertices.
+    pub nv: usize,
+    /// Coarse edges: their end points, in order of first appearance walking the faces.
+    pub edges: Vec<[u32; 2]>,
+    /// The (one or two) faces beside each edge; `NONE` for the missing one on a boundary.
+    pub edge_faces: Vec<[u32; 2]>,
+    /// Coarse faces.
+    pub coarse: Topo,
+    /// `face_edges[coarse.starts[f] + i]` is the edge from corner i to corner i + 1.
+    pub face_edges: Vec<u32>,
+    /// Per coarse vertex: its edges (CSR with `vert_starts`).
+    pub vert_edges: Vec<u32>,
+    /// Per coarse vertex: the faces it is a corner of, once per corner (CSR).
+    pub vert_faces: Vec<u32>,
+    /// Starts of the vertex lists (`nv + 1` entries) in `vert_edges`.
+    pub ve_starts: Vec<u32>,
+    /// Starts of the vertex lists in `vert_faces`.
+    pub vf_starts: Vec<u32>,
+}
+
+impl Level {
+    /// Number of coarse edges.
+    pub fn ne(&self) -> usize {
+        self.edges.len()
+    }
+
+    /// Number of coarse faces.
+    pub fn nf(&self) -> usize {
+        self.coarse.nf()
+    }
+
+    /// Number of fine vertices.
+    pub fn fine_nv(&self) -> usize {
+        self.nv + self.ne() + self.nf()
+    }
+
+    /// Edge `e` has a face on one side only.
+    #[inline]
+    pub fn is_boundary(&self, e: usize) -> bool {
+        self.edge_faces[e][1] == NONE
+    }
+
+    /// Coarse vertex `v`'s edges.
+    #[inline]
+    pub fn v_edges(&self, v: usize) -> &[u32] {
+        &self.vert_edges[self.ve_starts[v] as usize..self.ve_starts[v + 1] as usize]
+    }
+
+    /// Coarse vertex `v`'s faces (one entry per corner).
+    #[inline]
+    pub fn v_faces(&self, v: usize) -> &[u32] {
+        &self.vert_faces[self.vf_starts[v] as usize..self.vf_starts[v + 1] as usize]
+    }
+
+    /// Face `f`'s edges, in corner order.
+    #[inline]
+    pub fn f_edges(&self, f: usize) -> &[u32] {
+        &self.face_edges[self.coarse.starts[f] as usize..self.coarse.starts[f + 1] as usize]
+    }
+
+    /// Builds the refinement of `coarse`. Fails on topology that Catmull-Clark levels
+    /// cannot refine: a face with a repeated corner or an edge with more than two faces.
+    pub fn new(coarse: &Topo) -> Result<Level> {
+        let nv = coarse.nv;
+        let mut edge_id: HashMap<(u32, u32), u32> = HashMap::with_capacity(coarse.idx.len());
+        let mut edges: Vec<[u32; 2]> = Vec::with_capacity(coarse.idx.len() / 2 + 4);
+        let mut edge_faces: Vec<[u32; 2]> = Vec::with_capacity(coarse.idx.len() / 2 + 4);
+        let mut face_edges = Vec::with_capacity(coarse.idx.len());
+        for f in 0..coarse.nf() {
+            let face = coarse.face(f);
+            let k = face.len();
+            for i in 0..k {
+                let (a, b) = (face[i], face[(i + 1) % k]);
+                if a == b || a as usize >= nv || b as usize >= nv {
+                    return Err(Error::InvalidMesh(format!(
+                        "face {} has a repeated or invalid corner; it cannot be refined",
+                        f + 1
+                    )));
+                }
+                let key = (a.min(b), a.max(b));
+                let id = *edge_id.entry(key).or_insert_with(|| {
+                    edges.push([a, b]);
+                    edge_faces.push([NONE, NONE]);
+                    (edges.len() - 1) as u32
+                });
+                let ef = &mut edge_faces[id as usize];
+                if ef[0] == NONE {
+                    ef[0] = f as u32;
+                } else if ef[1] == NONE {
+                    ef[1] = f as u32;
+                } else {
+                    return Err(Error::InvalidMesh(format!(
+                        "edge {}-{} has more than two faces; it cannot be refined",
+                        a as u64 + 1,
+                        b as u64 + 1
+                    )));
+                }
+                face_edges.push(id);
+            }
+        }
+        let (ve_starts, vert_edges) = csr(
+            nv,
+            edges
+                .iter()
+                .enumerate()
+                .flat_map(|(e, &[a, b])| [(a, e as u32), (b, e as u32)]),
+        );
+        let (vf_starts, vert_faces) = csr(
+            nv,
+            (0..coarse.nf()).flat_map(|f| coarse.face(f).iter().map(move |&v| (v, f as u32))),
+        );
+        Ok(Level {
+            nv,
+            edges,
+            edge_faces,
+            coarse: coarse.clone(),
+            face_edges,
+            vert_edges,
+            vert_faces,
+            ve_starts,
+            vf_starts,
+        })
+    }
+
+    /// The fine topology (SPEC.md 8.1): per coarse face f, per corner i, the quad
+    /// (corner i, edge point of edge i, face point, edge point of edge i - 1).
+    pub fn fine(&self) -> Topo {
+        let mut t = Topo::new(self.fine_nv());
+        t.idx.reserve(self.coarse.idx.len() * 4);
+        t.starts.reserve(self.coarse.idx.len());
+        let e0 = self.nv as u32;
+        let f0 = (self.nv + self.ne()) as u32;
+        for f in 0..self.nf() {
+            let face = self.coarse.face(f);
+            let fe = self.f_edges(f);
+            let k = face.len();
+            for i in 0..k {
+                t.push(&[face[i], e0 + fe[i], f0 + f as u32, e0 + fe[(i + k - 1) % k]]);
+            }
+        }
+        t
+    }
+}
+
+/// Compressed lists: for each key in `0..n`, its values in insertion order.
+fn csr(n: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> (Vec<u32>, Vec<u32>) {
+    let mut starts = vec![0u32; n + 1];
+    for (k, _) in pairs.clone() {
+        starts[k as usize + 1] += 1;
+    }
+    for i in 0..n {
+        starts[i + 1] += starts[i];
+    }
+    let mut fill = starts.clone();
+    let mut vals = vec![0u32; starts[n] as usize];
+    for (k, v) in pairs {
+        vals[fill[k as usize] as usize] = v;
+        fill[k as usize] += 1;
+    }
+    (starts, vals)
+}
+
+/// A recovered hierarchy, in the input's vertex numbers.
+#[derive(Debug, Clone)]
+pub struct Recovered {
+    /// The base mesh: faces over input vertex numbers (`nv` = the input's count).
+    pub base: Topo,
+    /// Per level (1 = first refinement): coarse edge (input numbers, smaller first) ->
+    /// its edge point's input number.
+    pub edge_points: Vec<HashMap<(u32, u32), u32>>,
+    /// Per level: coarse face, named by one directed edge (input numbers) -> its face
+    /// point's input number.
+    pub face_points: Vec<HashMap<(u32, u32), u32>>,
+}
+
+impl Recovered {
+    /// Number of levels.
+    pub fn levels(&self) -> usize {
+        self.edge_points.len()
+    }
+}
+
+/// The canonical numbering of a recovered hierarchy: the base mesh in canonical base
+/// order and, per level, the refinement, with the input number of every canonical vertex.
+#[derive(Debug, Clone)]
+pub struct Canonical {
+    /// The base mesh, canonical numbering (SPEC.md 6.1).
+    pub base: Topo,
+    /// One [`Level`] per refinement, coarse first.
+    pub levels: Vec<Level>,
+    /// The finest topology, canonical numbering.
+    pub fine: Topo,
+    /// `order[c]` = the input number of canonical vertex `c` (finest level).
+    pub order: Vec<u32>,
+}
+
+/// Canonicalises a recovered hierarchy (SPEC.md 8.2). `all_vertices` is the input's
+/// vertex count: vertices no face uses are kept in the base mesh.
+pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
+    // Base order: first use walking the base faces, then unused vertices (of the whole
+    // input: a vertex unused at the finest level is unused at every level).
+    let n = rec.base.nv;
+    let mut used_fine = vec![false; n];
+    let mut order: Vec<u32> = Vec::new();
+    let mut seen = vec![false; n];
+    for &v in &rec.base.idx {
+        if !seen[v as usize] {
+            seen[v as usize] = true;
+            order.push(v);
+        }
+    }
+    // Vertices that appear at some finer level are not base vertices.
+    for l in 0..rec.levels() {
+        for &v in rec.edge_points[l]
+            .values()
+            .chain(rec.face_points[l].values())
+        {
+            used_fine[v as usize] = true;
+        }
+    }
+    for v in 0..n as u32 {
+        if !seen[v as usize] && !used_fine[v as usize] {
+            order.push(v);
+        }
+    }
+    let mut inv = vec![NONE; n];
+    for (c, &v) in order.iter().enumerate() {
+        inv[v as usize] = c as u32;
+    }
+    let mut base = Topo::new(order.len());
+    for f in 0..rec.base.nf() {
+        let face: Vec<u32> = rec.base.face(f).iter().map(|&v| inv[v as usize]).collect();
+        base.push(&face);
+    }
+    let mut levels = Vec::with_capacity(rec.levels());
+    let mut cur = base.clone();
+    for l in 0..rec.levels() {
+        let lvl = Level::new(&cur)?;
+        let mut next = order.clone();
+        for &[a, b] in &lvl.edges {
+            let (ia, ib) = (order[a as usize], order[b as usize]);
+            let p = rec.edge_points[l]
+                .get(&(ia.min(ib), ia.max(ib)))
+                .copied()
+                .ok_or_else(|| Error::InvalidMesh("inconsistent hierarchy (edge point)".into()))?;
+            next.push(p);
+        }
+        for f in 0..lvl.nf() {
+            let face = lvl.coarse.face(f);
+            let key = (order[face[0] as usize], order[face[1] as usize]);
+            let p = rec.face_points[l]
+                .get(&key)
+                .copied()
+                .ok_or_else(|| Error::InvalidMesh("inconsistent hierarchy (face point)".into()))?;
+            next.push(p);
+        }
+        cur = lvl.fine();
+        levels.push(lvl);
+        order = next;
+    }
+    Ok(Canonical {
+        base,
+        levels,
+        fine: cur,
+        order,
+    })
+}

@@ -1,0 +1,481 @@
+//! Bertram's B-spline wavelets on Catmull-Clark connectivity as lifting steps
+//! (SPEC.md 9), in the integer form the codec runs (every step with b = 1, the sum of
+//! averaged terms rounded once) and in floating point for the fidelity tests.
+//!
+//! A step changes one class using only the others, so synthesis (the same steps,
+//! subtracted, in reverse order) undoes analysis exactly for any weights: boundary rules
+//! and rounding can cost compression, never losslessness.
+
+use crate::hierarchy::Level;
+
+/// The wavelet transforms on Catmull-Clark hierarchies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Wavelet {
+    /// Prediction only: edge and face points from the linear B-spline (the w-lift of
+    /// `bilinear`), no update.
+    Lazy,
+    /// Linear B-spline: w-lift(-1/2), s-lift(1/4).
+    Bilinear,
+    /// Cubic B-spline (Catmull-Clark / MLCA): s-lift(-1/4), w-lift(-1), s-lift(3/16).
+    Bicubic,
+    /// Quintic B-spline: w-lift(-1/6), s-lift(-9/16), w-lift(-4/3), s-lift(5/32).
+    Biquintic,
+}
+
+impl Wavelet {
+    /// All transforms, in header-code order.
+    pub const ALL: [Wavelet; 4] = [
+        Wavelet::Lazy,
+        Wavelet::Bilinear,
+        Wavelet::Bicubic,
+        Wavelet::Biquintic,
+    ];
+
+    /// The name used on the command line and in `info`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Wavelet::Lazy => "lazy",
+            Wavelet::Bilinear => "bilinear",
+            Wavelet::Bicubic => "bicubic",
+            Wavelet::Biquintic => "biquintic",
+        }
+    }
+
+    /// The header code (SPEC.md 5).
+    pub fn code(self) -> u8 {
+        match self {
+            Wavelet::Lazy => 1,
+            Wavelet::Bilinear => 2,
+            Wavelet::Bicubic => 3,
+            Wavelet::Biquintic => 4,
+        }
+    }
+
+    /// The transform with a header code.
+    pub fn from_code(c: u8) -> Option<Wavelet> {
+        Wavelet::ALL.into_iter().find(|w| w.code() == c)
+    }
+
+    /// The transform with a name.
+    pub fn from_name(s: &str) -> Option<Wavelet> {
+        Wavelet::ALL.into_iter().find(|w| w.name() == s)
+    }
+
+    /// Analysis steps in order of computation (Table 1 of Bertram et al., integer
+    /// variant of their section 4.3).
+    pub fn steps(self) -> &'static [Step] {
+        use Kind::{S, W};
+        match self {
+            Wavelet::Lazy => &[Step {
+                kind: W,
+                p: -1,
+                q: 2,
+            }],
+            Wavelet::Bilinear => &[
+                Step {
+                    kind: W,
+                    p: -1,
+                    q: 2,
+                },
+                Step {
+                    kind: S,
+                    p: 1,
+                    q: 4,
+                },
+            ],
+            Wavelet::Bicubic => &[
+                Step {
+                    kind: S,
+                    p: -1,
+                    q: 4,
+                },
+                Step {
+                    kind: W,
+                    p: -1,
+                    q: 1,
+                },
+                Step {
+                    kind: S,
+                    p: 3,
+                    q: 16,
+                },
+            ],
+            Wavelet::Biquintic => &[
+                Step {
+                    kind: W,
+                    p: -1,
+                    q: 6,
+                },
+                Step {
+                    kind: S,
+                    p: -9,
+                    q: 16,
+                },
+                Step {
+                    kind: W,
+                    p: -4,
+                    q: 3,
+                },
+                Step {
+                    kind: S,
+                    p: 5,
+                    q: 32,
+                },
+            ],
+        }
+    }
+}
+
+/// Which lifting operation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// s-lift: old vertices from edge and face points, then edge points from face points.
+    S,
+    /// w-lift: face points from old vertices and edge points, then edge points from old
+    /// vertices.
+    W,
+}
+
+/// One lifting step with parameter `a = p / q` (and b = 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Step {
+    /// The operation.
+    pub kind: Kind,
+    /// Numerator of a.
+    pub p: i64,
+    /// Denominator of a (> 0).
+    pub q: i64,
+}
+
+/// A sample type the steps can run on: `i64` rounds each update (SPEC.md 9.1), `f64`
+/// computes it exactly.
+pub trait Sample: Copy {
+    /// `self + d` (wrapping for integers: hostile data cannot panic, and the decoder
+    /// range-checks what comes out).
+    fn plus(self, d: Self) -> Self;
+    /// `self - d`, likewise.
+    fn minus(self, d: Self) -> Self;
+    /// Wide accumulator for sums of samples.
+    type Acc: Copy + Default + std::ops::AddAssign;
+    /// Widens a sample.
+    fn acc(self) -> Self::Acc;
+    /// `(c1 * s1 + c2 * s2) / d`, rounded half up for integers.
+    fn combine(c1: i128, s1: Self::Acc, c2: i128, s2: Self::Acc, d: i128) -> Self;
+}
+
+/// `[n / d]`: `floor((2n + d) / 2d)` for `d > 0` (SPEC.md 9.1).
+#[inline]
+pub fn round_div(n: i128, d: i128) -> i64 {
+    (2 * n + d).div_euclid(2 * d) as i64
+}
+
+impl Sample for i64 {
+    type Acc = i128;
+    #[inline]
+    fn plus(self, d: i64) -> i64 {
+        self.wrapping_add(d)
+    }
+    #[inline]
+    fn minus(self, d: i64) -> i64 {
+        self.wrapping_sub(d)
+    }
+    #[inline]
+    fn acc(self) -> i128 {
+        self as i128
+    }
+    #[inline]
+    fn combine(c1: i128, s1: i128, c2: i128, s2: i128, d: i128) -> i64 {
+        round_div(c1 * s1 + c2 * s2, d)
+    }
+}
+
+impl Sample for f64 {
+    type Acc = f64;
+    #[inline]
+    fn plus(self, d: f64) -> f64 {
+        self + d
+    }
+    #[inline]
+    fn minus(self, d: f64) -> f64 {
+        self - d
+    }
+    #[inline]
+    fn acc(self) -> f64 {
+        self
+    }
+    #[inline]
+    fn combine(c1: i128, s1: f64, c2: i128, s2: f64, d: i128) -> f64 {
+        (c1 as f64 * s1 + c2 as f64 * s2) / d as f64
+    }
+}
+
+/// Per level: which coarse vertices lie on a boundary curve, and their two boundary
+/// edges (SPEC.md 9.2).
+fn boundary_edges(level: &Level, v: usize) -> (usize, [u32; 2]) {
+    let mut n = 0;
+    let mut be = [0u32; 2];
+    for &e in level.v_edges(v) {
+        if level.is_boundary(e as usize) {
+            if n < 2 {
+                be[n] = e;
+            }
+            n += 1;
+        }
+    }
+    (n, be)
+}
+
+/// The s-lift update of old vertex `v` (SPEC.md 9.2).
+#[inline]
+fn v_update<T: Sample>(level: &Level, x: &[T], v: usize, s: Step) -> Option<T> {
+    let (e0, f0) = (level.nv, level.nv + level.ne());
+    let (p, q) = (s.p as i128, s.q as i128);
+    let edges = level.v_edges(v);
+    if edges.is_empty() {
+        return None;
+    }
+    let (nb, be) = boundary_edges(level, v);
+    if nb > 0 {
+        if nb != 2 {
+            return None;
+        }
+        // 1-D s-lift along the boundary curve: 2a * mean of the two boundary edge points.
+        let mut se = T::Acc::default();
+        se += x[e0 + be[0] as usize].acc();
+        se += x[e0 + be[1] as usize].acc();
+        return Some(T::combine(p, se, 0, T::Acc::default(), q));
+    }
+    let faces = level.v_faces(v);
+    let mut se = T::Acc::default();
+    for &e in edges {
+        se += x[e0 + e as usize].acc();
+    }
+    let mut sf = T::Acc::default();
+    for &f in faces {
+        sf += x[f0 + f as usize].acc();
+    }
+    let (ne, nf) = (edges.len() as i128, faces.len() as i128);
+    // 4a^2 fbar + 4a ebar = (4p^2 ne Sf + 4pq nf Se) / (q^2 nf ne)
+    Some(T::combine(
+        4 * p * p * ne,
+        sf,
+        4 * p * q * nf,
+        se,
+        q * q * nf * ne,
+    ))
+}
+
+/// The s-lift update of edge point `e`: 2a * mean of its two faces (interior only).
+#[inline]
+fn e_from_faces<T: Sample>(level: &Level, x: &[T], e: usize, s: Step) -> Option<T> {
+    if level.is_boundary(e) {
+        return None;
+    }
+    let f0 = level.nv + level.ne();
+    let [a, b] = level.edge_faces[e];
+    let mut sf = T::Acc::default();
+    sf += x[f0 + a as usize].acc();
+    sf += x[f0 + b as usize].acc();
+    Some(T::combine(
+        s.p as i128,
+        sf,
+        0,
+        T::Acc::default(),
+        s.q as i128,
+    ))
+}
+
+/// The w-lift update of face point `f` (SPEC.md 9.2).
+#[inline]
+fn f_update<T: Sample>(level: &Level, x: &[T], f: usize, s: Step) -> T {
+    let e0 = level.nv;
+    let (p, q) = (s.p as i128, s.q as i128);
+    let corners = level.coarse.face(f);
+    let mut sv = T::Acc::default();
+    for &v in corners {
+        sv += x[v as usize].acc();
+    }
+    let mut se = T::Acc::default();
+    for &e in level.f_edges(f) {
+        se += x[e0 + e as usize].acc();
+    }
+    let k = corners.len() as i128;
+    // 4a^2 vbar + 4a ebar = (4p^2 Sv + 4pq Se) / (q^2 k)
+    T::combine(4 * p * p, sv, 4 * p * q, se, q * q * k)
+}
+
+/// The w-lift update of edge point `e`: 2a * mean of its end points.
+#[inline]
+fn e_from_ends<T: Sample>(level: &Level, x: &[T], e: usize, s: Step) -> T {
+    let [a, b] = level.edges[e];
+    let mut sv = T::Acc::default();
+    sv += x[a as usize].acc();
+    sv += x[b as usize].acc();
+    T::combine(s.p as i128, sv, 0, T::Acc::default(), s.q as i128)
+}
+
+fn step<T: Sample>(level: &Level, x: &mut [T], s: Step, forward: bool) {
+    let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
+    let e0 = nv;
+    let f0 = nv + ne;
+    match (s.kind, forward) {
+        (Kind::S, true) => {
+            for v in 0..nv {
+                if let Some(d) = v_update(level, x, v, s) {
+                    x[v] = x[v].plus(d);
+                }
+            }
+            for e in 0..ne {
+                if let Some(d) = e_from_faces(level, x, e, s) {
+                    x[e0 + e] = x[e0 + e].plus(d);
+                }
+            }
+        }
+        (Kind::S, false) => {
+            for e in 0..ne {
+                if let Some(d) = e_from_faces(level, x, e, s) {
+                    x[e0 + e] = x[e0 + e].minus(d);
+                }
+            }
+            for v in 0..nv {
+                if let Some(d) = v_update(level, x, v, s) {
+                    x[v] = x[v].minus(d);
+                }
+            }
+        }
+        (Kind::W, true) => {
+            for f in 0..nf {
+                let d = f_update(level, x, f, s);
+                x[f0 + f] = x[f0 + f].plus(d);
+            }
+            for e in 0..ne {
+                let d = e_from_ends(level, x, e, s);
+                x[e0 + e] = x[e0 + e].plus(d);
+            }
+        }
+        (Kind::W, false) => {
+            for e in 0..ne {
+                let d = e_from_ends(level, x, e, s);
+                x[e0 + e] = x[e0 + e].minus(d);
+            }
+            for f in 0..nf {
+                let d = f_update(level, x, f, s);
+                x[f0 + f] = x[f0 + f].minus(d);
+            }
+        }
+    }
+}
+
+/// Analysis of one level, in place: `x` holds the fine values (`level.fine_nv()`); after
+/// it, `x[..nv]` are the coarse values and the rest the details.
+pub fn analyse<T: Sample>(level: &Level, w: Wavelet, x: &mut [T]) {
+    for &s in w.steps() {
+        step(level, x, s, true);
+    }
+}
+
+/// Synthesis of one level, in place: the exact inverse of [`analyse`].
+pub fn synthesise<T: Sample>(level: &Level, w: Wavelet, x: &mut [T]) {
+    for &s in w.steps().iter().rev() {
+        step(level, x, s, false);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hierarchy::Topo;
+    use proptest::prelude::*;
+
+    fn grid(n: u32) -> Topo {
+        let mut t = Topo::new(((n + 1) * (n + 1)) as usize);
+        for y in 0..n {
+            for x in 0..n {
+                let i = y * (n + 1) + x;
+                t.push(&[i, i + 1, i + n + 2, i + n + 1]);
+            }
+        }
+        t
+    }
+
+    fn mixed() -> Topo {
+        // A closed prism with a pentagon, a triangle pair and quads: valences 3, 4, 5.
+        let mut t = Topo::new(10);
+        t.push(&[4, 3, 2, 1, 0]);
+        t.push(&[5, 6, 7, 8, 9]);
+        t.push(&[0, 1, 6]);
+        t.push(&[0, 6, 5]);
+        for i in 1..5u32 {
+            let j = (i + 1) % 5;
+            t.push(&[i, j, j + 5, i + 5]);
+        }
+        t
+    }
+
+    fn open_mixed() -> Topo {
+        let mut t = Topo::new(7);
+        t.push(&[0, 1, 2]);
+        t.push(&[0, 2, 3, 4]);
+        t.push(&[0, 4, 5, 6, 1]);
+        t
+    }
+
+    proptest! {
+        #[test]
+        fn synthesis_inverts_analysis_exactly(
+            which in 0usize..3,
+            seed in any::<u64>(),
+            bits in 1u32..45,
+            w in 0usize..4,
+        ) {
+            let coarse = match which { 0 => grid(3), 1 => mixed(), _ => open_mixed() };
+            let level = Level::new(&coarse).unwrap();
+            let mut s = seed | 1;
+            let max = (1i64 << bits) - 1;
+            let orig: Vec<i64> = (0..level.fine_nv()).map(|_| {
+                s ^= s << 13; s ^= s >> 7; s ^= s << 17;
+                (s % (2 * max as u64 + 1)) as i64 - max
+            }).collect();
+            let mut x = orig.clone();
+            let wav = Wavelet::ALL[w];
+            analyse(&level, wav, &mut x);
+            synthesise(&level, wav, &mut x);
+            prop_assert_eq!(x, orig);
+        }
+    }
+
+    #[test]
+    fn constant_and_linear_data_give_zero_detail_for_predictions() {
+        // The lazy and bilinear predictions are affine-invariant: zero detail on linear
+        // data over a regular grid's interior and boundary.
+        let level = Level::new(&grid(4)).unwrap();
+        let fine = level.fine();
+        // Fine positions: coordinates of the refined grid, linear function 3x + 5y.
+        let n = 9u32;
+        let mut x = vec![0i64; level.fine_nv()];
+        let mut coords = vec![(0i64, 0i64); level.fine_nv()];
+        for v in 0..25 {
+            coords[v] = (2 * (v as i64 % 5), 2 * (v as i64 / 5));
+        }
+        for (e, &[a, b]) in level.edges.iter().enumerate() {
+            let (pa, pb) = (coords[a as usize], coords[b as usize]);
+            coords[25 + e] = ((pa.0 + pb.0) / 2, (pa.1 + pb.1) / 2);
+        }
+        for f in 0..level.nf() {
+            let c = level.coarse.face(f);
+            let sx: i64 = c.iter().map(|&v| coords[v as usize].0).sum();
+            let sy: i64 = c.iter().map(|&v| coords[v as usize].1).sum();
+            coords[25 + level.ne() + f] = (sx / 4, sy / 4);
+        }
+        for (i, c) in coords.iter().enumerate() {
+            x[i] = 3 * c.0 + 5 * c.1;
+        }
+        assert_eq!(fine.nv, (n * n) as usize);
+        let mut y = x.clone();
+        analyse(&level, Wavelet::Lazy, &mut y);
+        assert!(y[25..].iter().all(|&d| d == 0), "{:?}", &y[25..]);
+        let mut y = x.clone();
+        analyse(&level, Wavelet::Bilinear, &mut y);
+        assert!(y[25..].iter().all(|&d| d == 0));
+    }
+}
