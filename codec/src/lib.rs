@@ -193,10 +193,16 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
     topo.starts = mesh.face_starts.clone();
     let mut best: Option<(Payloads, Vec<u32>, Option<Topo>)> = None;
     if opts.max_levels > 0 {
-        if let Some(rec) =
-            hierarchy::cc::recover(mesh.vertex_count(), &topo, opts.max_levels as usize)
-        {
-            let canon = hierarchy::canonicalise(&rec)?;
+        let recs = hierarchy::cc::recover_all(mesh.vertex_count(), &topo, opts.max_levels as usize);
+        // A mesh and its dual can both be the base: compare them with one transform
+        // (bicubic for auto), then try the other transforms on the better one.
+        let first = match opts.transform {
+            TransformChoice::Auto => Wavelet::Bicubic,
+            TransformChoice::Fixed(w) => w,
+        };
+        let mut chosen: Option<(Canonical, [Vec<i64>; 3])> = None;
+        for rec in &recs {
+            let canon = hierarchy::canonicalise(rec)?;
             let pos: [Vec<i64>; 3] = std::array::from_fn(|k| {
                 canon
                     .order
@@ -204,12 +210,16 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
                     .map(|&o| mesh.positions[o as usize][k])
                     .collect()
             });
-            let choices: Vec<Wavelet> = match opts.transform {
-                TransformChoice::Auto => Wavelet::ALL.to_vec(),
-                TransformChoice::Fixed(w) => vec![w],
-            };
-            for w in choices {
-                if let Some(p) = code_hierarchy(&canon, &pos, w, &flat_h) {
+            if let Some(p) = code_hierarchy(&canon, &pos, first, &flat_h) {
+                if best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
+                    best = Some((p, canon.order.clone(), Some(canon.fine.clone())));
+                    chosen = Some((canon, pos));
+                }
+            }
+        }
+        if let (TransformChoice::Auto, Some((canon, pos))) = (opts.transform, &chosen) {
+            for w in Wavelet::ALL.into_iter().filter(|&w| w != first) {
+                if let Some(p) = code_hierarchy(canon, pos, w, &flat_h) {
                     if best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
                         best = Some((p, canon.order.clone(), Some(canon.fine.clone())));
                     }

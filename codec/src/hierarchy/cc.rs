@@ -34,32 +34,59 @@ struct Chain {
 }
 
 /// Finds the deepest Catmull-Clark hierarchy of at most `max_levels` levels. Faces are
-/// `mesh.face(f)` over vertex numbers `< nv`. Returns `None` when there is no level.
+/// `topo.face(f)` over vertex numbers `< nv`. Returns `None` when there is no level.
 pub fn recover(nv: usize, topo: &Topo, max_levels: usize) -> Option<Recovered> {
+    recover_all(nv, topo, max_levels).into_iter().next()
+}
+
+/// Like [`recover`], also returning the equally deep alternative where every component
+/// that ties takes its other labeling (a mesh and its dual refine to the same mesh; which
+/// one codes smaller depends on the geometry). At most two results, preferred first.
+pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Recovered> {
     if max_levels == 0 || topo.nf() == 0 || !topo.all_quads() {
-        return None;
+        return Vec::new();
     }
-    // Split into components connected through shared vertices.
     let comps = components(nv, topo);
-    let mut chains: Vec<(Vec<u32>, Chain)> = Vec::with_capacity(comps.len());
+    let mut per_comp: Vec<(Vec<u32>, Vec<Chain>)> = Vec::with_capacity(comps.len());
     let mut depth = max_levels;
     for (ids, local) in comps {
-        let chain = best_chain(&local, max_levels);
-        depth = depth.min(chain.steps.len());
+        let chains = chains(&local, max_levels);
+        depth = depth.min(chains.first().map_or(0, |c| c.steps.len()));
         if depth == 0 {
-            return None;
+            return Vec::new();
         }
-        chains.push((ids, chain));
+        per_comp.push((ids, chains));
     }
-    // Merge the components' chains, cut to the common depth, in input numbers.
+    let primary: Vec<(&[u32], &Chain)> =
+        per_comp.iter().map(|(ids, c)| (&ids[..], &c[0])).collect();
+    let mut out = vec![merge(nv, depth, &primary)];
+    let alt: Vec<(&[u32], &Chain)> = per_comp
+        .iter()
+        .map(|(ids, c)| match c.get(1) {
+            Some(a) if a.steps.len() >= depth && c[0].steps.len() == depth => (&ids[..], a),
+            _ => (&ids[..], &c[0]),
+        })
+        .collect();
+    if alt
+        .iter()
+        .zip(&primary)
+        .any(|(a, p)| !std::ptr::eq(a.1, p.1))
+    {
+        out.push(merge(nv, depth, &alt));
+    }
+    out
+}
+
+/// Merges the components' chains, cut to the common depth, in input numbers.
+fn merge(nv: usize, depth: usize, parts: &[(&[u32], &Chain)]) -> Recovered {
     let mut edge_points = vec![HashMap::new(); depth];
     let mut face_points = vec![HashMap::new(); depth];
     let mut base = Topo::new(nv);
-    for (ids, chain) in &chains {
+    for &(ids, chain) in parts {
         // ids: local fine vertex -> input number; walk down the chain.
-        let mut map = ids.clone();
+        let mut map = ids.to_vec();
         for (l, step) in chain.steps.iter().take(depth).enumerate() {
-            let level = depth - 1 - l; // coarse-first level index of this refinement
+            let level = depth - 1 - l; // coarse-first index of this refinement
             let coarse_ids: Vec<u32> = step.to_fine.iter().map(|&f| map[f as usize]).collect();
             for &((a, b), p) in &step.edge_points {
                 let (ia, ib) = (coarse_ids[a as usize], coarse_ids[b as usize]);
@@ -92,11 +119,11 @@ pub fn recover(nv: usize, topo: &Topo, max_levels: usize) -> Option<Recovered> {
             map = coarse_ids;
         }
     }
-    Some(Recovered {
+    Recovered {
         base,
         edge_points,
         face_points,
-    })
+    }
 }
 
 /// Connected components (through faces) as (local -> input numbers, local topology).
@@ -145,40 +172,45 @@ fn components(nv: usize, topo: &Topo) -> Vec<(Vec<u32>, Topo)> {
     out
 }
 
-fn best_chain(topo: &Topo, max_levels: usize) -> Chain {
+/// The deepest chains of coarsenings of a component, best first, at most two: ranked by
+/// depth, then fewer base vertices, then the fixed candidate order.
+fn chains(topo: &Topo, max_levels: usize) -> Vec<Chain> {
     if max_levels == 0 || !topo.all_quads() {
-        return Chain {
+        return vec![Chain {
             steps: Vec::new(),
             base_vertices: topo.nv,
-        };
+        }];
     }
-    let mut best: Option<Chain> = None;
+    let mut all: Vec<Chain> = Vec::new();
     for cand in candidates(topo) {
-        let rest = best_chain(&cand.coarse, max_levels - 1);
-        let mut steps = Vec::with_capacity(rest.steps.len() + 1);
-        steps.push(cand);
-        steps.extend(rest.steps);
-        let chain = Chain {
-            steps,
-            base_vertices: rest.base_vertices,
-        };
-        // Candidates come in a fixed order (see `candidates`), so keeping the first of
-        // equals implements the tie rule.
-        let better = match &best {
-            None => true,
-            Some(b) => {
-                chain.steps.len() > b.steps.len()
-                    || (chain.steps.len() == b.steps.len() && chain.base_vertices < b.base_vertices)
-            }
-        };
-        if better {
-            best = Some(chain);
+        let rests = chains(&cand.coarse, max_levels - 1);
+        for rest in rests {
+            let mut steps = Vec::with_capacity(rest.steps.len() + 1);
+            steps.push(cand.clone());
+            steps.extend(rest.steps);
+            all.push(Chain {
+                steps,
+                base_vertices: rest.base_vertices,
+            });
         }
     }
-    best.unwrap_or(Chain {
-        steps: Vec::new(),
-        base_vertices: topo.nv,
-    })
+    if all.is_empty() {
+        return vec![Chain {
+            steps: Vec::new(),
+            base_vertices: topo.nv,
+        }];
+    }
+    // Stable sort keeps the candidate order among equals.
+    all.sort_by(|a, b| {
+        b.steps
+            .len()
+            .cmp(&a.steps.len())
+            .then(a.base_vertices.cmp(&b.base_vertices))
+    });
+    let depth = all[0].steps.len();
+    all.retain(|c| c.steps.len() == depth);
+    all.truncate(2);
+    all
 }
 
 /// BFS 2-colouring over an adjacency given as CSR; `None` if not bipartite or not
