@@ -209,3 +209,62 @@ fn warnings_name_what_was_dropped_and_q_silences_them() {
     ]);
     assert!(o.stderr.is_empty());
 }
+
+#[test]
+fn max_level_on_a_cut_file_and_info_reports_cc() {
+    let input = corpus("cube_cc4.obj");
+    let swv = tmp("levels.swv");
+    let o = run(&[
+        "compress",
+        input.to_str().unwrap(),
+        swv.to_str().unwrap(),
+        "--transform",
+        "bilinear",
+    ]);
+    assert!(o.status.success());
+    let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
+    assert_eq!(v["family"], "cc");
+    assert_eq!(v["levels"], 4);
+    assert_eq!(v["transform"], "bilinear");
+    // Keep the preamble and the sections up to level 2 (HEAD, BASE, LEVL, LEVL).
+    let bytes = std::fs::read(&swv).unwrap();
+    let sizes: Vec<u64> = v["sections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["bytes"].as_u64().unwrap())
+        .collect();
+    let cut = 12 + sizes[..4].iter().sum::<u64>() as usize;
+    let cut_path = tmp("levels-cut.swv");
+    std::fs::write(&cut_path, &bytes[..cut + 5]).unwrap();
+    let out = tmp("level2.obj");
+    let o = run(&[
+        "decompress",
+        cut_path.to_str().unwrap(),
+        out.to_str().unwrap(),
+        "--max-level",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m = subwave::load(&std::fs::read(&out).unwrap(), None).unwrap();
+    // The library's level-2 mesh of the whole file, read back through the OBJ writer.
+    let lib = subwave::decode(
+        &bytes,
+        &subwave::DecodeOptions {
+            max_level: Some(2),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(m.mesh, lib.mesh);
+    let base_faces = v["base_faces"].as_u64().unwrap() as usize;
+    assert!(m.mesh.face_count() > base_faces && m.mesh.face_count() < 1536);
+    // The whole mesh needs the whole file.
+    let o = run(&[
+        "decompress",
+        cut_path.to_str().unwrap(),
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("truncated"));
+}

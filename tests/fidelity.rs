@@ -1,0 +1,174 @@
+#![allow(clippy::needless_range_loop)]
+//! The floating-point forms of the transforms against the papers' subdivision rules:
+//! with all details zero, bicubic synthesis is Catmull-Clark refinement (face and edge
+//! points everywhere, vertex points at valence 4), and bilinear analysis on a regular
+//! periodic grid is the separable 5/3 (linear B-spline) wavelet.
+
+use subwave_codec::hierarchy::{Level, Topo};
+use subwave_codec::transform::{analyse, synthesise, Wavelet};
+use subwave_corpus::PolyMesh;
+
+fn topo(p: &PolyMesh) -> Topo {
+    let mut t = Topo::new(p.positions.len());
+    for f in &p.faces {
+        t.push(f);
+    }
+    t
+}
+
+fn torus(n: u32, m: u32) -> PolyMesh {
+    let mut positions = Vec::new();
+    for j in 0..m {
+        for i in 0..n {
+            let (u, v) = (
+                i as f64 / n as f64 * std::f64::consts::TAU,
+                j as f64 / m as f64 * std::f64::consts::TAU,
+            );
+            let r = 2.0 + 0.7 * v.cos() + 0.1 * (3.0 * u).sin();
+            positions.push([
+                r * u.cos(),
+                r * u.sin(),
+                0.7 * v.sin() + 0.05 * (5.0 * u).cos(),
+            ]);
+        }
+    }
+    let id = |i: u32, j: u32| (i % n) + n * (j % m);
+    let faces = (0..m)
+        .flat_map(|j| {
+            (0..n).map(move |i| vec![id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)])
+        })
+        .collect();
+    PolyMesh { positions, faces }
+}
+
+/// Bicubic synthesis of coarse values P/4 (the b = 1 form keeps 1/4 per level) with zero
+/// details, per axis.
+fn bicubic_refine(coarse: &PolyMesh) -> (Level, Vec<[f64; 3]>) {
+    let level = Level::new(&topo(coarse)).unwrap();
+    let n = level.fine_nv();
+    let mut out = vec![[0.0; 3]; n];
+    for k in 0..3 {
+        let mut x = vec![0.0f64; n];
+        for (v, p) in coarse.positions.iter().enumerate() {
+            x[v] = p[k] / 4.0;
+        }
+        synthesise(&level, Wavelet::Bicubic, &mut x);
+        for i in 0..n {
+            out[i][k] = x[i];
+        }
+    }
+    (level, out)
+}
+
+fn close(a: [f64; 3], b: [f64; 3]) -> bool {
+    (0..3).all(|k| (a[k] - b[k]).abs() < 1e-9)
+}
+
+#[test]
+fn bicubic_with_zero_details_is_catmull_clark_on_a_regular_torus() {
+    let coarse = torus(8, 6);
+    let (level, ours) = bicubic_refine(&coarse);
+    // The generator numbers the refinement exactly as SPEC.md 8.1 does.
+    let cc = coarse.catmull_clark();
+    assert_eq!(cc.positions.len(), level.fine_nv());
+    for (i, (a, b)) in ours.iter().zip(&cc.positions).enumerate() {
+        assert!(close(*a, *b), "vertex {i}: {a:?} vs Catmull-Clark {b:?}");
+    }
+}
+
+#[test]
+fn bicubic_face_and_edge_points_are_catmull_clarks_at_any_valence() {
+    // The cube has valence-3 corners, the prism a pentagon, triangles and valence 5.
+    for coarse in [subwave_corpus::cube(), subwave_corpus::mixed_polygons()] {
+        let (level, ours) = bicubic_refine(&coarse);
+        let cc = coarse.catmull_clark();
+        for i in level.nv..level.fine_nv() {
+            assert!(
+                close(ours[i], cc.positions[i]),
+                "point {i}: {:?} vs {:?}",
+                ours[i],
+                cc.positions[i]
+            );
+        }
+    }
+}
+
+/// Periodic 1-D linear B-spline (5/3) analysis in floating point, in place on a line of
+/// even length: odd -= mean of even neighbours; even += quarter of the odd neighbours.
+fn lift_53(line: &mut [f64]) {
+    let n = line.len();
+    for i in (1..n).step_by(2) {
+        line[i] -= 0.5 * (line[i - 1] + line[(i + 1) % n]);
+    }
+    for i in (0..n).step_by(2) {
+        line[i] += 0.25 * (line[(i + n - 1) % n] + line[i + 1]);
+    }
+}
+
+#[test]
+fn bilinear_is_the_separable_5_3_wavelet_on_a_periodic_grid() {
+    let (n, m) = (6u32, 4u32);
+    let coarse = torus(n, m);
+    let level = Level::new(&topo(&coarse)).unwrap();
+    // Fine grid coordinates (2n x 2m, periodic) of every canonical fine vertex.
+    let mut at = vec![(0u32, 0u32); level.fine_nv()];
+    for v in 0..level.nv as u32 {
+        at[v as usize] = (2 * (v % n), 2 * (v / n));
+    }
+    for (e, &[a, b]) in level.edges.iter().enumerate() {
+        let (pa, pb) = (at[a as usize], at[b as usize]);
+        let mid = |x: u32, y: u32, w: u32| {
+            if (x + 2) % w == y {
+                (x + 1) % w
+            } else {
+                (y + 1) % w
+            }
+        };
+        at[level.nv + e] = if pa.1 == pb.1 {
+            (mid(pa.0, pb.0, 2 * n), pa.1)
+        } else {
+            (pa.0, mid(pa.1, pb.1, 2 * m))
+        };
+    }
+    for f in 0..level.nf() {
+        let c = level.coarse.face(f)[0];
+        let (x, y) = at[c as usize];
+        at[level.nv + level.ne() + f] = ((x + 1) % (2 * n), (y + 1) % (2 * m));
+    }
+    let (w, h) = (2 * n as usize, 2 * m as usize);
+    // Any data will do: a smooth field plus a ripple.
+    let value = |x: u32, y: u32| {
+        (x as f64 * 0.7).sin() * 3.0 + (y as f64 * 1.3).cos() + (x * y) as f64 * 0.01
+    };
+    let mut grid = vec![0.0f64; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            grid[y * w + x] = value(x as u32, y as u32);
+        }
+    }
+    let mut ours: Vec<f64> = at
+        .iter()
+        .map(|&(x, y)| grid[y as usize * w + x as usize])
+        .collect();
+    analyse(&level, Wavelet::Bilinear, &mut ours);
+    // Rows, then columns.
+    for y in 0..h {
+        lift_53(&mut grid[y * w..(y + 1) * w]);
+    }
+    for x in 0..w {
+        let mut col: Vec<f64> = (0..h).map(|y| grid[y * w + x]).collect();
+        lift_53(&mut col);
+        for y in 0..h {
+            grid[y * w + x] = col[y];
+        }
+    }
+    for (i, &(x, y)) in at.iter().enumerate() {
+        let want = grid[y as usize * w + x as usize];
+        assert!(
+            (ours[i] - want).abs() < 1e-12,
+            "fine vertex {i} at ({x},{y}): {} vs 5/3 {}",
+            ours[i],
+            want
+        );
+    }
+}

@@ -1,0 +1,201 @@
+//! Catmull-Clark hierarchies: recovery depth on the shared corpus, coarser levels from
+//! whole and cut-off files, and exact round trips of random hierarchies through every
+//! transform.
+
+mod common;
+
+use proptest::prelude::*;
+use subwave::{DecodeOptions, EncodeOptions, Mesh, Quantization, TransformChoice, Wavelet};
+use subwave_corpus::{PolyMesh, Rng};
+
+fn to_mesh(p: &PolyMesh, scale: f64) -> Mesh {
+    let mut m = Mesh::new();
+    m.positions = p
+        .positions
+        .iter()
+        .map(|v| v.map(|c| (c * scale).round() as i64))
+        .collect();
+    for f in &p.faces {
+        m.push_face(f);
+    }
+    m
+}
+
+#[test]
+fn recovered_depth_reaches_the_manifest_on_cc_and_grid_meshes() {
+    let Some(dir) = common::shared_corpus() else {
+        eprintln!("../shared/corpus not found; skipping");
+        return;
+    };
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("manifest.json")).unwrap()).unwrap();
+    let mut checked = 0;
+    for e in manifest["meshes"].as_array().unwrap() {
+        let topology = e["topology"].as_str().unwrap();
+        if topology != "cc" && topology != "grid" {
+            continue;
+        }
+        let want = e["levels"].as_u64().unwrap();
+        for key in ["file", "shuffled_file"] {
+            let name = e[key].as_str().unwrap();
+            let m = subwave::load(&std::fs::read(dir.join(name)).unwrap(), Some(16)).unwrap();
+            let opts = EncodeOptions {
+                transform: TransformChoice::Fixed(Wavelet::Lazy),
+                ..Default::default()
+            };
+            let enc = subwave::encode_to_vec(&m.mesh, &m.quantization, &opts).unwrap();
+            assert_eq!(enc.header.family, subwave::Family::Cc, "{name}");
+            assert!(
+                enc.header.levels as u64 >= want,
+                "{name}: recovered {} levels, manifest says {want}",
+                enc.header.levels
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked >= 34, "checked only {checked} meshes");
+}
+
+fn cube_levels(levels: u32) -> (Mesh, subwave::Encoded) {
+    let mut rng = Rng::new(3);
+    let mut p = subwave_corpus::cube().refined(levels);
+    p.displace(0.05, 0.002, &mut rng);
+    let p = p.shuffled(&mut rng);
+    let mesh = to_mesh(&p, 1e6);
+    let opts = EncodeOptions {
+        transform: TransformChoice::Fixed(Wavelet::Lazy),
+        ..Default::default()
+    };
+    let enc = subwave::encode_to_vec(&mesh, &Quantization::Decimal { decimals: 6 }, &opts).unwrap();
+    (mesh, enc)
+}
+
+#[test]
+fn coarser_levels_from_whole_and_cut_files() {
+    let (_, enc) = cube_levels(4);
+    assert_eq!(enc.header.levels, 4);
+    let full = subwave::decode_slice(&enc.bytes).unwrap();
+    let info = subwave::inspect(&enc.bytes, &subwave::Limits::default()).unwrap();
+    // Byte offsets where each section ends.
+    let mut ends = Vec::new();
+    let mut at = subwave_container::PREAMBLE_LEN;
+    for s in &info.sections {
+        at += s.bytes;
+        ends.push(at);
+    }
+    let mut expected_vertices = enc.header.base_vertices as usize;
+    let mut expected_faces = enc.header.base_faces as usize;
+    let mut corners = enc.header.base_corners as usize;
+    for k in 0..=4u8 {
+        let opts = DecodeOptions {
+            max_level: Some(k),
+            ..Default::default()
+        };
+        let whole = subwave::decode(&enc.bytes, &opts).unwrap();
+        assert_eq!(whole.level, k);
+        assert_eq!(whole.mesh.vertex_count(), expected_vertices, "level {k}");
+        assert_eq!(whole.mesh.face_count(), expected_faces, "level {k}");
+        // Lazy keeps coarse vertices as they are: level k's positions are a prefix.
+        assert_eq!(
+            whole.mesh.positions[..],
+            full.mesh.positions[..expected_vertices]
+        );
+        // Cut right after level k's section, and in the middle of the next one.
+        let cut = ends[1 + k as usize];
+        let cut_file = subwave::decode(&enc.bytes[..cut], &opts).unwrap();
+        assert_eq!(cut_file.mesh, whole.mesh);
+        if k < 4 {
+            let mid = subwave::decode(&enc.bytes[..cut + 9], &opts).unwrap();
+            assert_eq!(mid.mesh, whole.mesh);
+            // Without --max-level the cut file is an error.
+            assert!(subwave::decode_slice(&enc.bytes[..cut]).is_err());
+            // Asking for a level beyond the cut is an error too.
+            let deeper = DecodeOptions {
+                max_level: Some(k + 1),
+                ..Default::default()
+            };
+            assert!(subwave::decode(&enc.bytes[..cut], &deeper).is_err());
+        }
+        // Next level's counts: V + E + F vertices, one quad per corner.
+        // A closed mesh: every edge has two faces.
+        let edges = corners / 2;
+        expected_vertices += edges + expected_faces;
+        expected_faces = corners;
+        corners = 4 * expected_faces;
+    }
+}
+
+#[test]
+fn bicubic_coarse_levels_are_rescaled_to_the_geometry() {
+    let mut rng = Rng::new(9);
+    let mut p = subwave_corpus::cube().refined(3);
+    p.displace(0.05, 0.0, &mut rng);
+    let mesh = to_mesh(&p, 1e6);
+    let opts = EncodeOptions {
+        transform: TransformChoice::Fixed(Wavelet::Bicubic),
+        ..Default::default()
+    };
+    let enc = subwave::encode_to_vec(&mesh, &Quantization::Decimal { decimals: 6 }, &opts).unwrap();
+    let l2 = subwave::decode(
+        &enc.bytes,
+        &DecodeOptions {
+            max_level: Some(2),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let full = subwave::decode_slice(&enc.bytes).unwrap();
+    // Level-2 control points lie near the surface: within 10 % of the extent of the
+    // fine vertices they become.
+    for (i, p) in l2.mesh.positions.iter().enumerate() {
+        for k in 0..3 {
+            assert!(
+                (p[k] - full.mesh.positions[i][k]).abs() < 100_000,
+                "{p:?} vs {:?}",
+                full.mesh.positions[i]
+            );
+        }
+    }
+}
+
+fn random_hierarchy(seed: u64, base: usize, levels: u32, bits: u32) -> Mesh {
+    let mut rng = Rng::new(seed);
+    let b = match base {
+        0 => subwave_corpus::cube(),
+        1 => subwave_corpus::mixed_polygons(),
+        2 => subwave_corpus::open_grid(2, 1),
+        _ => subwave_corpus::union(&[subwave_corpus::cube(), subwave_corpus::open_grid(1, 1)]),
+    };
+    let fine = b.refined(levels).shuffled(&mut rng);
+    let mut m = to_mesh(&fine, 1.0);
+    let span = (1i64 << bits) - 1;
+    for p in &mut m.positions {
+        for c in p.iter_mut() {
+            *c = (rng.next_u64() % (2 * span as u64 + 1)) as i64 - span;
+        }
+    }
+    // An unreferenced vertex rides along.
+    m.positions.push([span, -span, 0]);
+    m
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+    #[test]
+    fn random_hierarchies_round_trip_through_every_transform(
+        seed in any::<u64>(), base in 0usize..4, levels in 1u32..4, bits in 1u32..45, keep in any::<bool>()
+    ) {
+        let mesh = random_hierarchy(seed, base, levels, bits);
+        for w in Wavelet::ALL {
+            let opts = EncodeOptions { transform: TransformChoice::Fixed(w), keep_order: keep, ..Default::default() };
+            let enc = subwave::encode_to_vec(&mesh, &Quantization::Decimal { decimals: 0 }, &opts).unwrap();
+            prop_assert_eq!(enc.header.levels as u32, levels);
+            let dec = subwave::decode_slice(&enc.bytes).unwrap();
+            if keep {
+                prop_assert_eq!(&dec.mesh, &mesh);
+            } else {
+                prop_assert_eq!(common::fingerprint(&dec.mesh), common::fingerprint(&mesh));
+            }
+        }
+    }
+}
