@@ -44,13 +44,26 @@ def main():
     ap.add_argument("--peer-names", default="draco_cl10")
     ap.add_argument("--shuffled", action="store_true", help="include .shuffled copies")
     ap.add_argument("--keep-order", action="store_true", help="also measure --keep-order")
+    ap.add_argument("--transforms", default="", help="comma list of transforms to measure separately (e.g. lazy,bilinear,bicubic,biquintic); the main column is auto")
+    ap.add_argument("--topology", default="", help="only meshes whose manifest topology is in this comma list")
     ap.add_argument("--out", default="")
     a = ap.parse_args()
     exe = subwave_bin()
     peers = load_peers(a.peers)
     names = [n for n in a.peer_names.split(",") if n]
     rows = []
+    transforms = [t for t in a.transforms.split(",") if t]
+    topo = {}
+    for p in a.paths:
+        mf = os.path.join(p, "manifest.json")
+        if os.path.isdir(p) and os.path.exists(mf):
+            for e in json.load(open(mf))["meshes"]:
+                topo[e["file"]] = e["topology"]
+                topo[e["shuffled_file"]] = e["topology"]
+    wanted = set(t for t in a.topology.split(",") if t)
     for mesh in meshes(a.paths, a.shuffled):
+        if wanted and topo.get(os.path.basename(mesh)) not in wanted:
+            continue
         stem = os.path.basename(mesh).rsplit(".", 1)[0]
         for b in a.bits.split(","):
             args = [exe, "-q", "verify", mesh, "--json"] + ([] if b == "exact" else ["--bits", b])
@@ -62,6 +75,9 @@ def main():
             row = {"mesh": stem, "bits": b, "V": v["vertices"], "bytes": v["bytes"], "bpv": v["bits_per_vertex"],
                    "enc_ms": v["encode_ms"], "dec_ms": v["decode_ms"], "exact": v["exact"],
                    "family": v["family"], "transform": v["transform"], "levels": v["levels"]}
+            for t in transforms:
+                r2 = subprocess.run(args + ["--transform", t], capture_output=True, text=True)
+                row["t_" + t] = json.loads(r2.stdout)["bits_per_vertex"] if r2.returncode == 0 else None
             if a.keep_order:
                 with tempfile.NamedTemporaryFile(suffix=".swv") as t:
                     subprocess.run([exe, "-q", "compress", mesh, t.name, "--keep-order"] + ([] if b == "exact" else ["--bits", b]), check=True)
@@ -75,11 +91,11 @@ def main():
                     row["peer_enc_ms"] = float(p["enc_ms"]) if p["enc_ms"] else None
             rows.append(row)
             print(f"{stem:34s} {b:>5s} {row['bpv']:8.2f} bpv" + (f"  {names[0]} {row[names[0]]:.2f}  ratio {row['ratio']:.3f}" if row.get("ratio") else ""), file=sys.stderr)
-    lines = ["| mesh | Q | V | family | levels | subwave bpv |" + ("keep-order bpv |" if a.keep_order else "") + "".join(f" {n} bpv |" for n in names) + " ratio | enc ms | dec ms |" + (f" {names[0]} enc ms | {names[0]} dec ms |" if names else ""),
-             "|---|---|---|---|---|---|" + ("---|" if a.keep_order else "") + "---|" * len(names) + "---|---|---|" + ("---|---|" if names else "")]
+    lines = ["| mesh | Q | V | family | levels | subwave bpv (auto) | transform |" + "".join(f" {t} |" for t in transforms) + (" keep-order bpv |" if a.keep_order else "") + "".join(f" {n} bpv |" for n in names) + " ratio | enc ms | dec ms |" + (f" {names[0]} enc ms | {names[0]} dec ms |" if names else ""),
+             "|---|---|---|---|---|---|---|" + "---|" * len(transforms) + ("---|" if a.keep_order else "") + "---|" * len(names) + "---|---|---|" + ("---|---|" if names else "")]
     fmt = lambda x, d=2: "-" if x is None else f"{x:.{d}f}"
     for r in rows:
-        lines.append(f"| {r['mesh']} | {r['bits']} | {r['V']} | {r['family']} | {r['levels']} | {r['bpv']:.2f} |" + (f" {r['keep_bpv']:.2f} |" if a.keep_order else "") + "".join(f" {fmt(r.get(n))} |" for n in names) + f" {fmt(r.get('ratio'), 3)} | {r['enc_ms']:.1f} | {r['dec_ms']:.1f} |" + (f" {fmt(r.get('peer_enc_ms'), 1)} | {fmt(r.get('peer_dec_ms'), 1)} |" if names else ""))
+        lines.append(f"| {r['mesh']} | {r['bits']} | {r['V']} | {r['family']} | {r['levels']} | {r['bpv']:.2f} | {r['transform']} |" + "".join(f" {fmt(r.get('t_' + t))} |" for t in transforms) + (f" {r['keep_bpv']:.2f} |" if a.keep_order else "") + "".join(f" {fmt(r.get(n))} |" for n in names) + f" {fmt(r.get('ratio'), 3)} | {r['enc_ms']:.1f} | {r['dec_ms']:.1f} |" + (f" {fmt(r.get('peer_enc_ms'), 1)} | {fmt(r.get('peer_dec_ms'), 1)} |" if names else ""))
     for b in a.bits.split(","):
         rs = [r["ratio"] for r in rows if r["bits"] == b and r.get("ratio")]
         if rs:

@@ -172,3 +172,26 @@ fn bilinear_is_the_separable_5_3_wavelet_on_a_periodic_grid() {
         );
     }
 }
+
+#[test]
+fn dyadic_sym_keeps_constants_exactly_in_floating_point() {
+    // Weights of every prediction sum to one and 1/j undoes the first step's gain:
+    // constant data give zero detail and unchanged coarse values, also at valence 3
+    // and 5 and on a boundary.
+    for coarse in [
+        torus(6, 5),
+        subwave_corpus::cube(),
+        subwave_corpus::mixed_polygons(),
+        subwave_corpus::open_grid(3, 2),
+    ] {
+        let level = Level::new(&topo(&coarse)).unwrap();
+        let mut x = vec![2.5f64; level.fine_nv()];
+        analyse(&level, Wavelet::DyadicSym, &mut x);
+        for (i, &v) in x.iter().enumerate() {
+            let want = if i < level.nv { 2.5 } else { 0.0 };
+            assert!((v - want).abs() < 1e-12, "value {i}: {v}");
+        }
+        synthesise(&level, Wavelet::DyadicSym, &mut x);
+        assert!(x.iter().all(|&v| (v - 2.5).abs() < 1e-12));
+    }
+}

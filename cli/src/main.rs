@@ -51,7 +51,7 @@ enum Command {
         #[arg(long)]
         keep_order: bool,
         /// Wavelet for subdivision levels: auto (smallest file), lazy, bilinear, bicubic,
-        /// biquintic.
+        /// biquintic, dyadic-sym.
         #[arg(long, default_value = "auto", value_parser = parse_transform)]
         transform: TransformChoice,
         /// Look for at most N refinement levels (0: code the mesh flat).
@@ -109,7 +109,7 @@ fn parse_transform(s: &str) -> Result<TransformChoice, String> {
     Wavelet::from_name(s)
         .map(TransformChoice::Fixed)
         .ok_or_else(|| {
-            format!("unknown transform '{s}'; use auto, lazy, bilinear, bicubic or biquintic")
+            format!("unknown transform '{s}'; use auto, lazy, bilinear, bicubic, biquintic or dyadic-sym")
         })
 }
 

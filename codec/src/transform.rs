@@ -20,15 +20,20 @@ pub enum Wavelet {
     Bicubic,
     /// Quintic B-spline: w-lift(-1/6), s-lift(-9/16), w-lift(-4/3), s-lift(5/32).
     Biquintic,
+    /// The 4-fold symmetric three-step dyadic lifting of seed 003 (eq. 45-48), sums
+    /// over neighbours written as (regular count) x (mean), the 1/j scaling expanded
+    /// exactly (SPEC.md 9.5).
+    DyadicSym,
 }
 
 impl Wavelet {
     /// All transforms, in header-code order.
-    pub const ALL: [Wavelet; 4] = [
+    pub const ALL: [Wavelet; 5] = [
         Wavelet::Lazy,
         Wavelet::Bilinear,
         Wavelet::Bicubic,
         Wavelet::Biquintic,
+        Wavelet::DyadicSym,
     ];
 
     /// The name used on the command line and in `info`.
@@ -38,6 +43,7 @@ impl Wavelet {
             Wavelet::Bilinear => "bilinear",
             Wavelet::Bicubic => "bicubic",
             Wavelet::Biquintic => "biquintic",
+            Wavelet::DyadicSym => "dyadic-sym",
         }
     }
 
@@ -48,6 +54,7 @@ impl Wavelet {
             Wavelet::Bilinear => 2,
             Wavelet::Bicubic => 3,
             Wavelet::Biquintic => 4,
+            Wavelet::DyadicSym => 5,
         }
     }
 
@@ -62,10 +69,11 @@ impl Wavelet {
     }
 
     /// Analysis steps in order of computation (Table 1 of Bertram et al., integer
-    /// variant of their section 4.3).
+    /// variant of their section 4.3); empty for `DyadicSym`, which has its own steps.
     pub fn steps(self) -> &'static [Step] {
         use Kind::{S, W};
         match self {
+            Wavelet::DyadicSym => &[],
             Wavelet::Lazy => &[Step {
                 kind: W,
                 p: -1,
@@ -161,6 +169,19 @@ pub trait Sample: Copy {
     fn acc(self) -> Self::Acc;
     /// `(c1 * s1 + c2 * s2) / d`, rounded half up for integers.
     fn combine(c1: i128, s1: Self::Acc, c2: i128, s2: Self::Acc, d: i128) -> Self;
+    /// `(c1 * s1 + c2 * s2 + c3 * s3) / d`, rounded half up for integers.
+    #[allow(clippy::too_many_arguments)]
+    fn combine3(
+        c1: i128,
+        s1: Self::Acc,
+        c2: i128,
+        s2: Self::Acc,
+        c3: i128,
+        s3: Self::Acc,
+        d: i128,
+    ) -> Self;
+    /// `self * n / d`, rounded half up for integers.
+    fn scale(self, n: i128, d: i128) -> Self;
 }
 
 /// `[n / d]`: `floor((2n + d) / 2d)` for `d > 0` (SPEC.md 9.1).
@@ -187,6 +208,14 @@ impl Sample for i64 {
     fn combine(c1: i128, s1: i128, c2: i128, s2: i128, d: i128) -> i64 {
         round_div(c1 * s1 + c2 * s2, d)
     }
+    #[inline]
+    fn combine3(c1: i128, s1: i128, c2: i128, s2: i128, c3: i128, s3: i128, d: i128) -> i64 {
+        round_div(c1 * s1 + c2 * s2 + c3 * s3, d)
+    }
+    #[inline]
+    fn scale(self, n: i128, d: i128) -> i64 {
+        round_div(self as i128 * n, d)
+    }
 }
 
 impl Sample for f64 {
@@ -206,6 +235,14 @@ impl Sample for f64 {
     #[inline]
     fn combine(c1: i128, s1: f64, c2: i128, s2: f64, d: i128) -> f64 {
         (c1 as f64 * s1 + c2 as f64 * s2) / d as f64
+    }
+    #[inline]
+    fn combine3(c1: i128, s1: f64, c2: i128, s2: f64, c3: i128, s3: f64, d: i128) -> f64 {
+        (c1 as f64 * s1 + c2 as f64 * s2 + c3 as f64 * s3) / d as f64
+    }
+    #[inline]
+    fn scale(self, n: i128, d: i128) -> f64 {
+        self * n as f64 / d as f64
     }
 }
 
@@ -369,6 +406,9 @@ fn step<T: Sample>(level: &Level, x: &mut [T], s: Step, forward: bool) {
 /// Analysis of one level, in place: `x` holds the fine values (`level.fine_nv()`); after
 /// it, `x[..nv]` are the coarse values and the rest the details.
 pub fn analyse<T: Sample>(level: &Level, w: Wavelet, x: &mut [T]) {
+    if w == Wavelet::DyadicSym {
+        return dyadic_sym(level, x, true);
+    }
     for &s in w.steps() {
         step(level, x, s, true);
     }
@@ -376,8 +416,146 @@ pub fn analyse<T: Sample>(level: &Level, w: Wavelet, x: &mut [T]) {
 
 /// Synthesis of one level, in place: the exact inverse of [`analyse`].
 pub fn synthesise<T: Sample>(level: &Level, w: Wavelet, x: &mut [T]) {
+    if w == Wavelet::DyadicSym {
+        return dyadic_sym(level, x, false);
+    }
     for &s in w.steps().iter().rev() {
         step(level, x, s, false);
+    }
+}
+
+/// Interior old vertices (edges, none on a boundary) take part in the 4-fold symmetric
+/// steps; boundary vertices follow the 1-D linear B-spline along their curve.
+fn interior(level: &Level, v: usize) -> bool {
+    let edges = level.v_edges(v);
+    !edges.is_empty() && edges.iter().all(|&e| !level.is_boundary(e as usize))
+}
+
+/// Sum of `x` over an iterator of indices, and the count.
+#[inline]
+fn sum<T: Sample>(x: &[T], it: impl Iterator<Item = usize>) -> (T::Acc, i128) {
+    let mut s = T::Acc::default();
+    let mut n = 0;
+    for i in it {
+        s += x[i].acc();
+        n += 1;
+    }
+    (s, n)
+}
+
+/// dyadic-sym step 1 (lifting part): `u = v - [4m ebar_v]`, m = 5/64 (n = 0).
+fn ds_step1<T: Sample>(level: &Level, x: &[T], v: usize) -> T {
+    let (se, ne) = sum(x, level.v_edges(v).iter().map(|&e| level.nv + e as usize));
+    T::combine(5, se, 0, T::Acc::default(), 16 * ne)
+}
+
+/// dyadic-sym step 2 for an edge point: interior `[2mu mean(ends) + 4nu mean(other
+/// corners of the faces beside it)]` with mu = 55/128, nu = 9/256; boundary: mean(ends).
+fn ds_step2_e<T: Sample>(level: &Level, x: &[T], e: usize) -> T {
+    let [a, b] = level.edges[e];
+    let (sa, _) = sum(x, [a as usize, b as usize].into_iter());
+    if level.is_boundary(e) {
+        return T::combine(1, sa, 0, T::Acc::default(), 2);
+    }
+    let others = level.edge_faces[e].iter().flat_map(|&f| {
+        level
+            .coarse
+            .face(f as usize)
+            .iter()
+            .filter(move |&&c| c != a && c != b)
+            .map(|&c| c as usize)
+    });
+    let (so, no) = sum(x, others);
+    // 110/256 * Sa + 36/256 * So / no
+    T::combine(110 * no, sa, 36, so, 256 * no)
+}
+
+/// dyadic-sym step 3 for an interior old vertex: `[4g0 ebar'' + 4o0 fbar'' + 8h0
+/// obar'']` with g0 = -65/256, o0 = -1/16, h0 = 7/128; obar'' is the mean over the edges
+/// of v's faces that do not touch v.
+fn ds_step3<T: Sample>(level: &Level, x: &[T], v: usize) -> T {
+    let (e0, f0) = (level.nv, level.nv + level.ne());
+    let (se, ne) = sum(x, level.v_edges(v).iter().map(|&e| e0 + e as usize));
+    let (sf, nf) = sum(x, level.v_faces(v).iter().map(|&f| f0 + f as usize));
+    let outer = level.v_faces(v).iter().flat_map(|&f| {
+        level.f_edges(f as usize).iter().filter_map(move |&e| {
+            let [a, b] = level.edges[e as usize];
+            (a as usize != v && b as usize != v).then_some(e0 + e as usize)
+        })
+    });
+    let (so, no) = sum(x, outer);
+    if no == 0 {
+        // -65/64 ebar - 1/4 fbar
+        return T::combine(-65 * nf, se, -16 * ne, sf, 64 * ne * nf);
+    }
+    // -65/64 ebar - 1/4 fbar + 7/16 obar
+    T::combine3(
+        -65 * nf * no,
+        se,
+        -16 * ne * no,
+        sf,
+        28 * ne * nf,
+        so,
+        64 * ne * nf * no,
+    )
+}
+
+/// The three-step 4-fold symmetric dyadic lifting and its inverse (SPEC.md 9.5).
+fn dyadic_sym<T: Sample>(level: &Level, x: &mut [T], forward: bool) {
+    let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
+    let (e0, f0) = (nv, nv + ne);
+    let inner: Vec<bool> = (0..nv).map(|v| interior(level, v)).collect();
+    let two_boundary = |v: usize| boundary_edges(level, v);
+    if forward {
+        for v in 0..nv {
+            if inner[v] {
+                let u = x[v].minus(ds_step1(level, x, v));
+                x[v] = u.scale(16, 11);
+            }
+        }
+        for e in 0..ne {
+            let d = ds_step2_e(level, x, e);
+            x[e0 + e] = x[e0 + e].minus(d);
+        }
+        for f in 0..nf {
+            let (sv, k) = sum(x, level.coarse.face(f).iter().map(|&c| c as usize));
+            let d = T::combine(1, sv, 0, T::Acc::default(), k);
+            x[f0 + f] = x[f0 + f].minus(d);
+        }
+        for v in 0..nv {
+            if inner[v] {
+                let d = ds_step3(level, x, v);
+                x[v] = x[v].minus(d);
+            } else if let (2, be) = two_boundary(v) {
+                let (s, _) = sum(x, be.iter().map(|&e| e0 + e as usize));
+                x[v] = x[v].plus(T::combine(1, s, 0, T::Acc::default(), 4));
+            }
+        }
+    } else {
+        for v in 0..nv {
+            if inner[v] {
+                let d = ds_step3(level, x, v);
+                x[v] = x[v].plus(d);
+            } else if let (2, be) = two_boundary(v) {
+                let (s, _) = sum(x, be.iter().map(|&e| e0 + e as usize));
+                x[v] = x[v].minus(T::combine(1, s, 0, T::Acc::default(), 4));
+            }
+        }
+        for f in 0..nf {
+            let (sv, k) = sum(x, level.coarse.face(f).iter().map(|&c| c as usize));
+            let d = T::combine(1, sv, 0, T::Acc::default(), k);
+            x[f0 + f] = x[f0 + f].plus(d);
+        }
+        for e in 0..ne {
+            let d = ds_step2_e(level, x, e);
+            x[e0 + e] = x[e0 + e].plus(d);
+        }
+        for v in 0..nv {
+            if inner[v] {
+                let u = x[v].scale(11, 16);
+                x[v] = u.plus(ds_step1(level, x, v));
+            }
+        }
     }
 }
 
@@ -426,7 +604,7 @@ mod tests {
             which in 0usize..3,
             seed in any::<u64>(),
             bits in 1u32..45,
-            w in 0usize..4,
+            w in 0usize..5,
         ) {
             let coarse = match which { 0 => grid(3), 1 => mixed(), _ => open_mixed() };
             let level = Level::new(&coarse).unwrap();
