@@ -155,3 +155,18 @@ pub fn compare_up_to_order(
     }
     Ok(())
 }
+
+/// Decodes into `out`, reusing its buffers (whatever they held is replaced).
+pub fn decode_into(bytes: &[u8], opts: &DecodeOptions, out: &mut Mesh) -> Result<Decoded> {
+    let d = decode(bytes, opts)?;
+    out.positions.clear();
+    out.positions.extend_from_slice(&d.mesh.positions);
+    out.faces.clear();
+    out.faces.extend_from_slice(&d.mesh.faces);
+    out.face_starts.clear();
+    out.face_starts.extend_from_slice(&d.mesh.face_starts);
+    Ok(d)
+}
+
+#[doc(hidden)]
+pub mod fuzz_harness;

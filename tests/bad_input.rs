@@ -177,3 +177,40 @@ fn bad_mesh_files() {
     // Exact values that do not fit: suggest --bits.
     assert!(mesh_err(b"v 1e30 1e-30 0\n").contains("--bits"));
 }
+
+#[test]
+fn counts_within_limits_but_beyond_the_bytes_are_refused_before_allocation() {
+    // 2^26 vertices and faces fit the default limits, but 8 bytes of BASE cannot hold
+    // them (SPEC.md 2.6): refused at once, without reserving gigabytes.
+    let b = with_header(1 << 26, 1 << 26, 1 << 28);
+    let start = std::time::Instant::now();
+    match subwave::decode_slice(&b) {
+        Err(Error::CorruptStream {
+            section: "BASE",
+            what,
+        }) => assert!(what.contains("cannot hold"), "{what}"),
+        other => panic!("expected a density error, got {other:?}"),
+    }
+    assert!(start.elapsed().as_secs() < 5);
+}
+
+#[test]
+fn streams_that_run_out_are_corrupt() {
+    // Plausible counts, a payload of random words: decoding stops at the end of the data
+    // instead of inventing symbols from nothing.
+    let mut h = subwave_container::ByteWriter::new();
+    for v in [3000u64, 3000, 12000, 3000, 3000, 12000] {
+        h.varint(v);
+    }
+    h.out.extend_from_slice(&[0, 0, 0, 0, 6, 1, 0]);
+    let mut w = ContainerWriter::new();
+    w.section(SectionKind::HEADER, &h.out);
+    let noise: Vec<u8> = (0..64u32)
+        .map(|i| (i.wrapping_mul(2654435761) >> 13) as u8)
+        .collect();
+    w.section(SectionKind::BASE, &noise);
+    assert!(matches!(
+        subwave::decode_slice(&w.finish()),
+        Err(Error::CorruptStream { .. })
+    ));
+}

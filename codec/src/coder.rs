@@ -4,9 +4,11 @@
 
 use std::num::NonZeroU32;
 
+use constriction::backends::ReadWords;
 use constriction::stream::model::{DecoderModel, EncoderModel, EntropyModel};
-use constriction::stream::queue::{DefaultRangeDecoder, DefaultRangeEncoder};
+use constriction::stream::queue::{DefaultRangeEncoder, RangeDecoder};
 use constriction::stream::{Decode, Encode};
+use constriction::Queue;
 
 use crate::error::{Error, Result};
 
@@ -323,9 +325,47 @@ impl Encoder {
     }
 }
 
+/// A decoder may read at most this many words past the end of a stream: it reads two
+/// words to start and one per renormalisation, the encoder writes one per
+/// renormalisation plus 0 to 2 sealing words (SPEC.md 4.1).
+pub const MAX_READS_PAST_END: u32 = 2;
+
+/// Reading further past the end than any encoder's output needs.
+#[derive(Debug)]
+pub struct PastEnd;
+
+/// The compressed words, counting reads past the end.
+#[derive(Debug)]
+pub struct Words {
+    words: Vec<u32>,
+    pos: usize,
+    past_end: u32,
+}
+
+impl ReadWords<u32, Queue> for Words {
+    type ReadError = PastEnd;
+
+    #[inline]
+    fn read(&mut self) -> std::result::Result<Option<u32>, PastEnd> {
+        if let Some(&w) = self.words.get(self.pos) {
+            self.pos += 1;
+            return Ok(Some(w));
+        }
+        self.past_end += 1;
+        if self.past_end > MAX_READS_PAST_END {
+            return Err(PastEnd);
+        }
+        Ok(None)
+    }
+
+    fn maybe_exhausted(&self) -> bool {
+        self.pos >= self.words.len()
+    }
+}
+
 /// Reads what [`Encoder`] wrote.
 pub struct Decoder {
-    inner: DefaultRangeDecoder,
+    inner: RangeDecoder<u32, u64, Words>,
     section: &'static str,
 }
 
@@ -342,13 +382,20 @@ impl Decoder {
             .chunks_exact(4)
             .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
             .collect();
-        let inner = DefaultRangeDecoder::from_compressed(words)
-            .map_err(|_| Error::corrupt(section, "bad stream start"))?;
+        let inner = RangeDecoder::with_backend(Words {
+            words,
+            pos: 0,
+            past_end: 0,
+        })
+        .map_err(|_| Error::corrupt(section, "bad stream start"))?;
         Ok(Decoder { inner, section })
     }
 
     fn bad(&self) -> Error {
-        Error::corrupt(self.section, "invalid range-coder data")
+        Error::corrupt(
+            self.section,
+            "invalid range-coder data, or the stream ends before its symbols do",
+        )
     }
 
     /// Decodes a symbol with `m` and adapts `m`.

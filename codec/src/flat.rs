@@ -269,14 +269,26 @@ pub fn decode(
     corners: u64,
     max_abs: i64,
 ) -> Result<Mesh> {
+    // Density bounds (SPEC.md 2.6): no conforming stream carries more per byte.
+    let room = payload.len() as u64 + 8;
+    if vertices > 2048 * room || faces > 4096 * room || corners > 16384 * room {
+        return Err(Error::corrupt(
+            SECTION,
+            format!(
+                "{} bytes cannot hold {vertices} vertices and {faces} faces",
+                payload.len()
+            ),
+        ));
+    }
     let mut d = Decoder::new(payload, SECTION)?;
     let mut m = ConnModels::new();
     let mut mru = Mru::new();
     let mut next_new = 0u64;
     let mut prev_deg = 0usize;
     let mut mesh = Mesh::new();
-    mesh.face_starts.reserve(faces as usize);
-    mesh.faces.reserve(corners as usize);
+    // Grow with what is decoded rather than trusting the counts up front.
+    mesh.face_starts.reserve(faces.min(1 << 16) as usize);
+    mesh.faces.reserve(corners.min(1 << 18) as usize);
     for _ in 0..faces {
         let sym = d.symbol(&mut m.degree[prev_deg])?;
         let mut deg = sym as u64 + 3;
@@ -340,7 +352,7 @@ fn decode_positions(d: &mut Decoder, topo: &Mesh, n: usize, max_abs: i64) -> Res
     let first = first_uses_n(topo, n);
     let tri = triangle_edges(topo);
     let mut m = PosModels::new();
-    let mut pos: Vec<[i64; 3]> = Vec::with_capacity(n);
+    let mut pos: Vec<[i64; 3]> = Vec::with_capacity(n.min(1 << 16));
     for v in 0..n {
         let (kind, p) = predict(topo, &pos, v, first[v], &tri);
         let mut q = [0i64; 3];

@@ -105,9 +105,16 @@ pub fn decode(
     x: &mut [Vec<i64>; 3],
     act: &mut Vec<u8>,
 ) -> Result<()> {
+    let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
+    // Density bound (SPEC.md 2.6), checked before the level's arrays are sized.
+    if (ne + nf) as u64 > 2048 * (payload.len() as u64 + 8) {
+        return Err(Error::corrupt(
+            "LEVL",
+            format!("{} bytes cannot hold {} details", payload.len(), ne + nf),
+        ));
+    }
     let mut dec = Decoder::new(payload, "LEVL")?;
     let mut m = Models::new();
-    let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
     act.resize(nv + ne + nf, 0);
     for xs in x.iter_mut() {
         xs.resize(nv + ne + nf, 0);
