@@ -1,5 +1,7 @@
 //! Malformed containers and mesh files each give a specific error, never a panic.
 
+mod common;
+
 use subwave::{DecodeOptions, EncodeOptions, Error, Limits};
 use subwave_container::{ContainerWriter, SectionKind, PREAMBLE_LEN};
 
@@ -213,4 +215,109 @@ fn streams_that_run_out_are_corrupt() {
         subwave::decode_slice(&w.finish()),
         Err(Error::CorruptStream { .. })
     ));
+}
+
+fn hierarchical_sample() -> Vec<u8> {
+    let mut rng = subwave_corpus::Rng::new(5);
+    let mut p = subwave_corpus::mixed_polygons().refined(2);
+    p.displace(0.03, 0.001, &mut rng);
+    let text = p.to_obj(4);
+    let m = subwave::load(text.as_bytes(), None).unwrap();
+    let enc = subwave::encode_to_vec(
+        &m.mesh,
+        &m.quantization,
+        &EncodeOptions {
+            keep_order: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(enc.header.levels, 2);
+    enc.bytes
+}
+
+#[test]
+fn every_bit_flip_of_a_hierarchy_is_rejected() {
+    let b = hierarchical_sample();
+    let mut n = 0;
+    let mut coarser = 0;
+    for bit in 0..b.len() * 8 {
+        let mut x = b.clone();
+        x[bit / 8] ^= 1 << (bit % 8);
+        assert!(
+            subwave::decode_slice(&x).is_err(),
+            "flip of bit {bit} decoded silently"
+        );
+        // A coarser level may still come out (a flipped length in a later section looks
+        // like a cut), but only ever the right one.
+        for k in 0..=2u8 {
+            let opts = DecodeOptions {
+                max_level: Some(k),
+                ..Default::default()
+            };
+            if let Ok(d) = subwave::decode(&x, &opts) {
+                let right = subwave::decode(&b, &opts).unwrap();
+                assert_eq!(
+                    common::fingerprint(&d.mesh),
+                    common::fingerprint(&right.mesh),
+                    "flip of bit {bit} gave a different level-{k} mesh"
+                );
+                coarser += 1;
+            }
+        }
+        n += 1;
+    }
+    eprintln!("{n} single-bit flips of a {}-byte container: all rejected whole; {coarser} coarser-level decodes, all the right mesh", b.len());
+}
+
+#[test]
+fn every_truncation_of_a_hierarchy_is_rejected_or_a_correct_coarser_level() {
+    let b = hierarchical_sample();
+    let whole: Vec<subwave::Mesh> = (0..=2)
+        .map(|k| {
+            subwave::decode(
+                &b,
+                &DecodeOptions {
+                    max_level: Some(k),
+                    ..Default::default()
+                },
+            )
+            .unwrap()
+            .mesh
+        })
+        .collect();
+    let mut coarser = 0;
+    for cut in 0..b.len() {
+        assert!(
+            subwave::decode_slice(&b[..cut]).is_err(),
+            "cut at {cut} decoded as whole"
+        );
+        for k in 0..=2u8 {
+            let opts = DecodeOptions {
+                max_level: Some(k),
+                ..Default::default()
+            };
+            if let Ok(d) = subwave::decode(&b[..cut], &opts) {
+                // Without the (cut) order section the vertices come in canonical order.
+                if d.input_order {
+                    assert_eq!(
+                        d.mesh, whole[k as usize],
+                        "cut at {cut}, level {k}: a different mesh"
+                    );
+                } else {
+                    assert_eq!(
+                        common::fingerprint(&d.mesh),
+                        common::fingerprint(&whole[k as usize]),
+                        "cut at {cut}, level {k}: a different mesh"
+                    );
+                }
+                coarser += 1;
+            }
+        }
+    }
+    assert!(coarser > 0);
+    eprintln!(
+        "{} truncations: all rejected whole; {coarser} decodes of a coarser level, all exact",
+        b.len()
+    );
 }

@@ -70,6 +70,8 @@ fn frozen_containers_still_decode() {
         ("terrain_grid33.v1.swv", "terrain_grid33.obj"),
         ("cube_cc4.v2.swv", "cube_cc4.obj"),
         ("unstructured.v2.swv", "unstructured.obj"),
+        ("cube_cc4.v3.swv", "cube_cc4.obj"),
+        ("terrain_grid33.v3.swv", "terrain_grid33.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

@@ -68,42 +68,186 @@ fn activity(d: [i64; 3]) -> u8 {
     d.iter().map(|&v| class_of(v)).max().unwrap_or(0) as u8
 }
 
-/// Codes the details `x[nv..]` of one level. `act` holds the coarse vertices' activity
-/// and is extended to the fine vertices.
-pub fn encode(level: &Level, x: &[Vec<i64>; 3], act: &mut Vec<u8>) -> Vec<u8> {
+/// Newell's normal of coarse face `f`, in 128-bit integers.
+fn face_normal(level: &Level, coarse: &[Vec<i64>; 3], f: usize) -> [i128; 3] {
+    let c = level.coarse.face(f);
+    let k = c.len();
+    let mut n = [0i128; 3];
+    for i in 0..k {
+        let (a, b) = (c[i] as usize, c[(i + 1) % k] as usize);
+        let p = [0, 1, 2].map(|d| coarse[d][a] as i128);
+        let q = [0, 1, 2].map(|d| coarse[d][b] as i128);
+        n[0] += (p[1] - q[1]) * (p[2] + q[2]);
+        n[1] += (p[2] - q[2]) * (p[0] + q[0]);
+        n[2] += (p[0] - q[0]) * (p[1] + q[1]);
+    }
+    n
+}
+
+/// The coding frame of a detail (SPEC.md 10.2): the axis where the coarse normal is
+/// largest (coded first) and the normal reduced to at most 24 bits, or `None` when the
+/// normal is zero.
+fn frame(level: &Level, coarse: &[Vec<i64>; 3], detail: usize) -> Option<(usize, [i64; 3])> {
+    let mut n = [0i128; 3];
+    if detail < level.ne() {
+        for &f in &level.edge_faces[detail] {
+            if f != crate::hierarchy::NONE {
+                let m = face_normal(level, coarse, f as usize);
+                for d in 0..3 {
+                    n[d] += m[d];
+                }
+            }
+        }
+    } else {
+        n = face_normal(level, coarse, detail - level.ne());
+    }
+    let big = n.iter().map(|v| v.unsigned_abs()).max().unwrap_or(0);
+    if big == 0 {
+        return None;
+    }
+    let bits = 128 - big.leading_zeros();
+    let shift = bits.saturating_sub(24);
+    let r = n.map(|v| (v >> shift) as i64);
+    // The first axis of largest magnitude (after reduction it is still non-zero).
+    let mut k = 0;
+    for d in 1..3 {
+        if r[d].abs() > r[k].abs() {
+            k = d;
+        }
+    }
+    Some((k, r))
+}
+
+/// Order of the coded components and their predictions from the first one.
+fn plan(fr: Option<(usize, [i64; 3])>) -> ([usize; 3], Option<[i64; 3]>) {
+    match fr {
+        None => ([0, 1, 2], None),
+        Some((k, n)) => {
+            let o: Vec<usize> = (0..3).filter(|&d| d != k).collect();
+            ([k, o[0], o[1]], Some(n))
+        }
+    }
+}
+
+/// Prediction of component `j` from the first component's value `dk`: `[dk n_j / n_k]`.
+fn predict(dk: i64, n: [i64; 3], k: usize, j: usize) -> i64 {
+    let (mut num, mut den) = (dk as i128 * n[j] as i128, n[k] as i128);
+    if den < 0 {
+        num = -num;
+        den = -den;
+    }
+    crate::transform::round_div(num, den)
+}
+
+fn put(
+    enc: &mut Encoder,
+    m: &mut Models,
+    class: usize,
+    nbr: usize,
+    d: [i64; 3],
+    fr: Option<(usize, [i64; 3])>,
+) {
+    let (order, n) = plan(fr);
+    let mut prev = 0;
+    for (slot, &axis) in order.iter().enumerate() {
+        let pred = match (slot, n) {
+            (1 | 2, Some(n)) => predict(d[order[0]], n, order[0], axis),
+            _ => 0,
+        };
+        let v = d[axis] - pred;
+        enc.int(m.get(class, slot, prev, nbr), v);
+        prev = class_of(v);
+    }
+}
+
+fn get(
+    dec: &mut Decoder,
+    m: &mut Models,
+    class: usize,
+    nbr: usize,
+    fr: Option<(usize, [i64; 3])>,
+) -> Result<[i64; 3]> {
+    let (order, n) = plan(fr);
+    let mut d = [0i64; 3];
+    let mut prev = 0;
+    for (slot, &axis) in order.iter().enumerate() {
+        let v = dec.int(m.get(class, slot, prev, nbr))?;
+        prev = class_of(v);
+        let pred = match (slot, n) {
+            (1 | 2, Some(n)) => predict(d[order[0]], n, order[0], axis),
+            _ => 0,
+        };
+        let x = v.checked_add(pred).filter(|x| x.abs() <= MAX_LIFTED);
+        d[axis] = x.ok_or_else(|| Error::corrupt("LEVL", "detail out of range"))?;
+    }
+    Ok(d)
+}
+
+/// Codes the details `x[k][nv..]` of one level. `coarse` holds the level's coarse values
+/// (what the decoder has when it reads this level); `act` holds the coarse vertices'
+/// activity and is extended to the fine vertices. `version` is the container's format
+/// version: from version 3 the payload starts with a mode byte, and the encoder keeps
+/// whichever of plain axes (0) and the normal frame (1) codes smaller (SPEC.md 10.2).
+pub fn encode(
+    level: &Level,
+    x: &[Vec<i64>; 3],
+    coarse: &[Vec<i64>; 3],
+    act: &mut Vec<u8>,
+    version: u16,
+) -> Vec<u8> {
+    if version < 3 {
+        return encode_mode(level, x, coarse, act, false);
+    }
+    let mut act_plain = act.clone();
+    let plain = encode_mode(level, x, coarse, &mut act_plain, false);
+    let framed = encode_mode(level, x, coarse, act, true);
+    let (mode, body) = if framed.len() < plain.len() {
+        (1u8, framed)
+    } else {
+        (0u8, plain)
+    };
+    let mut out = Vec::with_capacity(body.len() + 1);
+    out.push(mode);
+    out.extend_from_slice(&body);
+    out
+}
+
+fn encode_mode(
+    level: &Level,
+    x: &[Vec<i64>; 3],
+    coarse: &[Vec<i64>; 3],
+    act: &mut Vec<u8>,
+    framed: bool,
+) -> Vec<u8> {
     let mut enc = Encoder::new();
     let mut m = Models::new();
     let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
     act.resize(nv + ne + nf, 0);
-    for e in 0..ne {
-        let nbr = e_context(level, act, e);
-        let i = nv + e;
-        let mut prev = 0;
-        for k in 0..3 {
-            enc.int(m.get(0, k, prev, nbr), x[k][i]);
-            prev = class_of(x[k][i]);
-        }
-        act[i] = activity([x[0][i], x[1][i], x[2][i]]);
-    }
-    for f in 0..nf {
-        let nbr = f_context(level, act, f);
-        let i = nv + ne + f;
-        let mut prev = 0;
-        for k in 0..3 {
-            enc.int(m.get(1, k, prev, nbr), x[k][i]);
-            prev = class_of(x[k][i]);
-        }
-        act[i] = activity([x[0][i], x[1][i], x[2][i]]);
+    for i in 0..ne + nf {
+        let (class, nbr) = if i < ne {
+            (0, e_context(level, act, i))
+        } else {
+            (1, f_context(level, act, i - ne))
+        };
+        let d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
+        let fr = if framed {
+            frame(level, coarse, i)
+        } else {
+            None
+        };
+        put(&mut enc, &mut m, class, nbr, d, fr);
+        act[nv + i] = activity(d);
     }
     enc.finish()
 }
 
-/// Decodes what [`encode`] wrote into `x[nv..]`.
+/// Decodes what [`encode`] wrote into `x[k][nv..]`; `x[k][..nv]` are the coarse values.
 pub fn decode(
     payload: &[u8],
     level: &Level,
     x: &mut [Vec<i64>; 3],
     act: &mut Vec<u8>,
+    version: u16,
 ) -> Result<()> {
     let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
     // Density bound (SPEC.md 2.6), checked before the level's arrays are sized.
@@ -113,36 +257,34 @@ pub fn decode(
             format!("{} bytes cannot hold {} details", payload.len(), ne + nf),
         ));
     }
+    let (framed, payload) = if version >= 3 {
+        match payload.split_first() {
+            Some((0, rest)) => (false, rest),
+            Some((1, rest)) => (true, rest),
+            Some((m, _)) => return Err(Error::corrupt("LEVL", format!("unknown level mode {m}"))),
+            None => return Err(Error::corrupt("LEVL", "empty level section")),
+        }
+    } else {
+        (false, payload)
+    };
     let mut dec = Decoder::new(payload, "LEVL")?;
     let mut m = Models::new();
     act.resize(nv + ne + nf, 0);
     for xs in x.iter_mut() {
         xs.resize(nv + ne + nf, 0);
     }
-    let mut read = |dec: &mut Decoder,
-                    i: usize,
-                    class: usize,
-                    nbr: usize,
-                    x: &mut [Vec<i64>; 3]|
-     -> Result<u8> {
-        let mut prev = 0;
+    for i in 0..ne + nf {
+        let (class, nbr) = if i < ne {
+            (0, e_context(level, act, i))
+        } else {
+            (1, f_context(level, act, i - ne))
+        };
+        let fr = if framed { frame(level, x, i) } else { None };
+        let d = get(&mut dec, &mut m, class, nbr, fr)?;
         for k in 0..3 {
-            let v = dec.int(m.get(class, k, prev, nbr))?;
-            if v.abs() > MAX_LIFTED {
-                return Err(Error::corrupt("LEVL", "detail out of range"));
-            }
-            x[k][i] = v;
-            prev = class_of(v);
+            x[k][nv + i] = d[k];
         }
-        Ok(activity([x[0][i], x[1][i], x[2][i]]))
-    };
-    for e in 0..ne {
-        let nbr = e_context(level, act, e);
-        act[nv + e] = read(&mut dec, nv + e, 0, nbr, x)?;
-    }
-    for f in 0..nf {
-        let nbr = f_context(level, act, f);
-        act[nv + ne + f] = read(&mut dec, nv + ne + f, 1, nbr, x)?;
+        act[nv + i] = activity(d);
     }
     Ok(())
 }

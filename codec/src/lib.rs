@@ -125,11 +125,15 @@ fn code_hierarchy(
     header: &Header,
 ) -> Option<Payloads> {
     let mut x = pos.clone();
-    for level in canon.levels.iter().rev() {
+    // The coarse values of each level, as the decoder will have them when it reads the
+    // level's details.
+    let mut coarse: Vec<[Vec<i64>; 3]> = vec![Default::default(); canon.levels.len()];
+    for (l, level) in canon.levels.iter().enumerate().rev() {
         let n = level.fine_nv();
         for xs in x.iter_mut() {
             transform::analyse(level, w, &mut xs[..n]);
         }
+        coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
     }
     if x.iter().flatten().any(|v| v.abs() > levels::MAX_LIFTED) {
         return None;
@@ -144,7 +148,8 @@ fn code_hierarchy(
     let level_bytes = canon
         .levels
         .iter()
-        .map(|l| levels::encode(l, &x, &mut act))
+        .zip(&coarse)
+        .map(|(l, c)| levels::encode(l, &x, c, &mut act, FORMAT_VERSION))
         .collect();
     let mut header = header.clone();
     header.base_vertices = nb as u64;
@@ -481,7 +486,13 @@ fn synthesise_levels(
                 "the base mesh refines to more than the header's counts",
             ));
         }
-        levels::decode(c.sections[2 + l].payload, &level, &mut x, &mut act)?;
+        levels::decode(
+            c.sections[2 + l].payload,
+            &level,
+            &mut x,
+            &mut act,
+            c.version,
+        )?;
         for xs in x.iter_mut() {
             transform::synthesise(&level, w, xs);
         }

@@ -29,7 +29,7 @@ use std::fmt;
 pub const MAGIC: [u8; 8] = [0x89, b'S', b'W', b'V', b'\r', b'\n', 0x1a, b'\n'];
 
 /// The format version this crate writes and the newest it reads.
-pub const FORMAT_VERSION: u16 = 2;
+pub const FORMAT_VERSION: u16 = 3;
 
 /// Bytes before the first section: magic, version, reserved.
 pub const PREAMBLE_LEN: usize = 12;
@@ -262,7 +262,7 @@ impl<'a> Container<'a> {
             let payload = &rest[8..8 + len];
             let crc_stored =
                 u32::from_le_bytes([rest[8 + len], rest[9 + len], rest[10 + len], rest[11 + len]]);
-            if crc32fast::hash(&rest[..8 + len]) != crc_stored {
+            if section_crc(version, &rest[..8 + len]) != crc_stored {
                 return Err(Error::Checksum {
                     kind,
                     offset: pos as u64,
@@ -299,6 +299,18 @@ impl<'a> Container<'a> {
     }
 }
 
+/// A section's checksum (SPEC.md 2.2): CRC-32 of its kind, length and payload, preceded
+/// from format version 3 on by the version (two bytes, little-endian), so that no bit
+/// flip in the preamble's version can pass for another readable version.
+pub fn section_crc(version: u16, section: &[u8]) -> u32 {
+    let mut h = crc32fast::Hasher::new();
+    if version >= 3 {
+        h.update(&version.to_le_bytes());
+    }
+    h.update(section);
+    h.finalize()
+}
+
 /// Writes a container: preamble, then sections in the order given, then the end marker.
 #[derive(Debug, Clone)]
 pub struct ContainerWriter {
@@ -332,7 +344,7 @@ impl ContainerWriter {
         self.out.extend_from_slice(&kind.0);
         self.out.extend_from_slice(&len.to_le_bytes());
         self.out.extend_from_slice(payload);
-        let crc = crc32fast::hash(&self.out[start..]);
+        let crc = section_crc(FORMAT_VERSION, &self.out[start..]);
         self.out.extend_from_slice(&crc.to_le_bytes());
     }
 
