@@ -187,7 +187,16 @@ pub trait Sample: Copy {
 /// `[n / d]`: `floor((2n + d) / 2d)` for `d > 0` (SPEC.md 9.1).
 #[inline]
 pub fn round_div(n: i128, d: i128) -> i64 {
-    (2 * n + d).div_euclid(2 * d) as i64
+    let (t, dd) = (2 * n + d, 2 * d);
+    // The same floor division, fast: a power-of-two divisor is an arithmetic shift
+    // (floor for negatives too), and most numerators fit 64 bits.
+    if dd & (dd - 1) == 0 {
+        return (t >> dd.trailing_zeros()) as i64;
+    }
+    match (i64::try_from(t), i64::try_from(dd)) {
+        (Ok(t), Ok(dd)) => t.div_euclid(dd),
+        _ => t.div_euclid(dd) as i64,
+    }
 }
 
 impl Sample for i64 {
@@ -655,5 +664,21 @@ mod tests {
         let mut y = x.clone();
         analyse(&level, Wavelet::Bilinear, &mut y);
         assert!(y[25..].iter().all(|&d| d == 0));
+    }
+}
+
+#[cfg(test)]
+mod rounding {
+    use super::round_div;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn fast_paths_equal_the_definition(n in any::<i64>(), shift in 0u32..70, d in 1i64..1_000_000, pow in any::<bool>()) {
+            let n = (n as i128) << (shift % 40);
+            let d = if pow { 1i128 << (d % 60) } else { d as i128 };
+            let want = (2 * n + d).div_euclid(2 * d) as i64;
+            prop_assert_eq!(round_div(n, d), want);
+        }
     }
 }
