@@ -72,6 +72,8 @@ fn frozen_containers_still_decode() {
         ("unstructured.v2.swv", "unstructured.obj"),
         ("cube_cc4.v3.swv", "cube_cc4.obj"),
         ("terrain_grid33.v3.swv", "terrain_grid33.obj"),
+        ("cube_cc4.v4.swv", "cube_cc4.obj"),
+        ("two_components_cc2.v4.swv", "two_components_cc2.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

@@ -197,14 +197,31 @@ impl DecoderModel<PRECISION> for Uniform {
 /// up to 2^62, plus class 0 for zero.
 pub const INT_CLASSES: usize = 64;
 
-/// Codes signed integers as a magnitude class (adaptive), a sign (adaptive) and the bits
-/// below the leading one (the first adaptive per class, the rest uniform) (SPEC.md 4.4).
+/// Codes signed integers (SPEC.md 4.4). Format 4 on: one adaptive symbol for the
+/// magnitude class, sign and the bit below the leading one together, then the remaining
+/// bits raw. Formats 1 to 3: the class, the sign and that bit as three adaptive symbols.
 #[derive(Debug, Clone)]
-pub struct IntModel {
-    class: AdaptiveModel,
-    sign: AdaptiveModel,
-    top: Vec<AdaptiveModel>,
+pub struct IntModel(IntKind);
+
+#[derive(Debug, Clone)]
+enum IntKind {
+    Split {
+        class: AdaptiveModel,
+        sign: AdaptiveModel,
+        top: Vec<AdaptiveModel>,
+    },
+    Joint {
+        sym: AdaptiveModel,
+        big: AdaptiveModel,
+    },
 }
+
+/// Largest class the joint symbol holds; larger ones escape.
+pub const JOINT_MAX_CLASS: usize = 15;
+/// Symbols of the joint integer model: 0; +1, -1; four per class 2..=15 (sign, then the
+/// bit below the leading one); escape.
+pub const JOINT_SYMBOLS: usize = 3 + (JOINT_MAX_CLASS - 1) * 4 + 1;
+const ESCAPE_SYMBOL: usize = JOINT_SYMBOLS - 1;
 
 impl Default for IntModel {
     fn default() -> Self {
@@ -213,13 +230,62 @@ impl Default for IntModel {
 }
 
 impl IntModel {
-    /// A fresh model.
+    /// A fresh model of the current format.
     pub fn new() -> Self {
-        IntModel {
-            class: AdaptiveModel::new(INT_CLASSES),
-            sign: AdaptiveModel::new(2),
-            top: (0..INT_CLASSES).map(|_| AdaptiveModel::new(2)).collect(),
+        IntModel(IntKind::Joint {
+            sym: AdaptiveModel::new(JOINT_SYMBOLS),
+            big: AdaptiveModel::new(INT_CLASSES),
+        })
+    }
+
+    /// A fresh model as format `version` defines it.
+    pub fn for_version(version: u16) -> Self {
+        if version >= 4 {
+            Self::new()
+        } else {
+            IntModel(IntKind::Split {
+                class: AdaptiveModel::new(INT_CLASSES),
+                sign: AdaptiveModel::new(2),
+                top: (0..INT_CLASSES).map(|_| AdaptiveModel::new(2)).collect(),
+            })
         }
+    }
+}
+
+/// `2^k` equally likely values, `1 <= k <= 16`, by shifts.
+#[derive(Debug, Clone, Copy)]
+struct RawBits(u32);
+
+impl EntropyModel<PRECISION> for RawBits {
+    type Symbol = u32;
+    type Probability = u32;
+}
+
+impl EncoderModel<PRECISION> for RawBits {
+    #[inline]
+    fn left_cumulative_and_probability(
+        &self,
+        symbol: impl std::borrow::Borrow<u32>,
+    ) -> Option<(u32, NonZeroU32)> {
+        let s = *symbol.borrow();
+        let w = PRECISION as u32 - self.0;
+        if s >> self.0 != 0 {
+            return None;
+        }
+        Some((s << w, NonZeroU32::new(1 << w)?))
+    }
+}
+
+impl DecoderModel<PRECISION> for RawBits {
+    #[inline]
+    fn quantile_function(&self, q: u32) -> (u32, u32, NonZeroU32) {
+        let w = PRECISION as u32 - self.0;
+        let s = (q >> w) & ((1 << self.0) - 1);
+        (
+            s,
+            s << w,
+            NonZeroU32::new(1 << w).unwrap_or(NonZeroU32::MIN),
+        )
     }
 }
 
@@ -279,37 +345,54 @@ impl Encoder {
         self.bits(s & ((1 << shift) - 1), shift);
     }
 
-    /// Codes the low `k` bits of `v` (k <= 64) as raw bits.
+    /// Codes the low `k` bits of `v` (k <= 64) as raw bits, most significant first, in
+    /// chunks of at most 16.
     pub fn bits(&mut self, v: u64, k: u32) {
         let mut k = k;
         while k > 0 {
             let c = k.min(16);
             k -= c;
             let chunk = ((v >> k) & ((1u64 << c) - 1)) as u32;
-            if c == 1 {
-                self.inner
-                    .encode_symbol(chunk, Uniform::new(2))
-                    .expect("bit");
-            } else {
-                self.inner
-                    .encode_symbol(chunk, Uniform::new(1 << c))
-                    .expect("chunk");
-            }
+            self.inner.encode_symbol(chunk, RawBits(c)).expect("chunk");
         }
     }
 
     /// Codes a signed integer (|v| < 2^62) with `m`.
     pub fn int(&mut self, m: &mut IntModel, v: i64) {
         let c = class_of(v);
-        self.symbol(&mut m.class, c);
-        if c == 0 {
-            return;
+        let neg = (v < 0) as usize;
+        let a = v.unsigned_abs();
+        match &mut m.0 {
+            IntKind::Joint { sym, big } => {
+                let s = match c {
+                    0 => 0,
+                    1 => 1 + neg,
+                    c if c <= JOINT_MAX_CLASS => {
+                        3 + (c - 2) * 4 + neg * 2 + ((a >> (c - 2)) & 1) as usize
+                    }
+                    _ => ESCAPE_SYMBOL,
+                };
+                self.symbol(sym, s);
+                if s == ESCAPE_SYMBOL {
+                    // Class, sign, then every bit below the leading one raw.
+                    self.symbol(big, c);
+                    self.bits(neg as u64, 1);
+                    self.bits(a, c as u32 - 1);
+                    return;
+                }
+            }
+            IntKind::Split { class, sign, top } => {
+                self.symbol(class, c);
+                if c == 0 {
+                    return;
+                }
+                self.symbol(sign, neg);
+                if c >= 2 {
+                    self.symbol(&mut top[c], ((a >> (c - 2)) & 1) as usize);
+                }
+            }
         }
-        self.symbol(&mut m.sign, (v < 0) as usize);
-        if c >= 2 {
-            let a = v.unsigned_abs();
-            let top = ((a >> (c - 2)) & 1) as usize;
-            self.symbol(&mut m.top[c], top);
+        if c >= 3 {
             self.bits(a, c as u32 - 2);
         }
     }
@@ -444,7 +527,7 @@ impl Decoder {
             k -= c;
             let chunk = self
                 .inner
-                .decode_symbol(Uniform::new(if c == 1 { 2 } else { 1 << c }))
+                .decode_symbol(RawBits(c))
                 .map_err(|_| self.bad())?;
             v = (v << c) | chunk as u64;
         }
@@ -453,20 +536,43 @@ impl Decoder {
 
     /// Decodes what [`Encoder::int`] wrote.
     pub fn int(&mut self, m: &mut IntModel) -> Result<i64> {
-        let c = self.symbol(&mut m.class)?;
-        if c == 0 {
-            return Ok(0);
-        }
-        if c > 62 {
-            return Err(Error::corrupt(self.section, "integer too large"));
-        }
-        let neg = self.symbol(&mut m.sign)? == 1;
-        let mut a: u64 = 1;
-        if c >= 2 {
-            let top = self.symbol(&mut m.top[c])? as u64;
-            a = (a << 1) | top;
-            a = (a << (c - 2)) | self.bits(c as u32 - 2)?;
-        }
+        let (c, neg, top) = match &mut m.0 {
+            IntKind::Joint { sym, big } => {
+                let s = self.symbol(sym)?;
+                match s {
+                    0 => return Ok(0),
+                    1 | 2 => return Ok(if s == 2 { -1 } else { 1 }),
+                    ESCAPE_SYMBOL => {
+                        let c = self.symbol(big)?;
+                        if c <= JOINT_MAX_CLASS || c > 62 {
+                            return Err(Error::corrupt(self.section, "bad escaped integer class"));
+                        }
+                        let neg = self.bits(1)? == 1;
+                        let v = ((1u64 << (c - 1)) | self.bits(c as u32 - 1)?) as i64;
+                        return Ok(if neg { -v } else { v });
+                    }
+                    _ => {
+                        let t = s - 3;
+                        (t / 4 + 2, t & 2 != 0, (t & 1) as u64)
+                    }
+                }
+            }
+            IntKind::Split { class, sign, top } => {
+                let c = self.symbol(class)?;
+                if c == 0 {
+                    return Ok(0);
+                }
+                if c > 62 {
+                    return Err(Error::corrupt(self.section, "integer too large"));
+                }
+                let neg = self.symbol(sign)? == 1;
+                if c == 1 {
+                    return Ok(if neg { -1 } else { 1 });
+                }
+                (c, neg, self.symbol(&mut top[c])? as u64)
+            }
+        };
+        let a = ((2 | top) << (c - 2)) | self.bits(c as u32 - 2)?;
         let v = a as i64;
         Ok(if neg { -v } else { v })
     }
@@ -510,6 +616,8 @@ mod tests {
             let mut e = Encoder::new();
             let mut m = AdaptiveModel::new(37);
             let mut im = IntModel::new();
+            let mut legacy = IntModel::for_version(3);
+            for &v in &small { e.int(&mut legacy, v); }
             for &s in &syms { e.symbol(&mut m, s); }
             for &v in ints.iter().chain(&small) { e.int(&mut im, v); }
             for &(n, r) in &unis { e.uniform(r % n, n); }
@@ -517,6 +625,8 @@ mod tests {
             let mut d = Decoder::new(&bytes, "test").unwrap();
             let mut m = AdaptiveModel::new(37);
             let mut im = IntModel::new();
+            let mut legacy = IntModel::for_version(3);
+            for &v in &small { prop_assert_eq!(d.int(&mut legacy).unwrap(), v); }
             for &s in &syms { prop_assert_eq!(d.symbol(&mut m).unwrap(), s); }
             for &v in ints.iter().chain(&small) { prop_assert_eq!(d.int(&mut im).unwrap(), v); }
             for &(n, r) in &unis { prop_assert_eq!(d.uniform(n).unwrap(), r % n); }

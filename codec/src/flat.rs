@@ -86,17 +86,17 @@ struct ConnModels {
 }
 
 impl ConnModels {
-    fn new() -> Self {
+    fn new(version: u16) -> Self {
         ConnModels {
             degree: (0..DEGREE_SYMBOLS)
                 .map(|_| AdaptiveModel::new(DEGREE_SYMBOLS))
                 .collect(),
-            big_degree: IntModel::new(),
+            big_degree: IntModel::for_version(version),
             corner: [
                 AdaptiveModel::new(CORNER_SYMBOLS),
                 AdaptiveModel::new(CORNER_SYMBOLS),
             ],
-            distance: IntModel::new(),
+            distance: IntModel::for_version(version),
         }
     }
 }
@@ -109,9 +109,11 @@ struct PosModels {
 }
 
 impl PosModels {
-    fn new() -> Self {
+    fn new(version: u16) -> Self {
         PosModels {
-            res: (0..KINDS * 3 * 3).map(|_| IntModel::new()).collect(),
+            res: (0..KINDS * 3 * 3)
+                .map(|_| IntModel::for_version(version))
+                .collect(),
         }
     }
 
@@ -210,10 +212,11 @@ fn predict(
     (3, fallback)
 }
 
-/// Codes a mesh already in canonical order (see [`canonical_order`]).
-pub fn encode(mesh: &Mesh) -> Vec<u8> {
+/// Codes a mesh already in canonical order (see [`canonical_order`]) as format
+/// `version` defines it.
+pub fn encode(mesh: &Mesh, version: u16) -> Vec<u8> {
     let mut e = Encoder::new();
-    let mut m = ConnModels::new();
+    let mut m = ConnModels::new(version);
     let mut mru = Mru::new();
     let mut next_new = 0u32;
     let mut prev_deg = 0usize;
@@ -240,14 +243,14 @@ pub fn encode(mesh: &Mesh) -> Vec<u8> {
             mru.touch(v, at);
         }
     }
-    encode_positions(&mut e, mesh);
+    encode_positions(&mut e, mesh, version);
     e.finish()
 }
 
-fn encode_positions(e: &mut Encoder, mesh: &Mesh) {
+fn encode_positions(e: &mut Encoder, mesh: &Mesh, version: u16) {
     let first = first_uses(mesh);
     let tri = triangle_edges(mesh);
-    let mut m = PosModels::new();
+    let mut m = PosModels::new(version);
     for v in 0..mesh.vertex_count() {
         let (kind, p) = predict(mesh, &mesh.positions, v, first[v], &tri);
         let mut prev_class = 0;
@@ -268,6 +271,7 @@ pub fn decode(
     faces: u64,
     corners: u64,
     max_abs: i64,
+    version: u16,
 ) -> Result<Mesh> {
     // Density bounds (SPEC.md 2.6): no conforming stream carries more per byte.
     let room = payload.len() as u64 + 8;
@@ -281,7 +285,7 @@ pub fn decode(
         ));
     }
     let mut d = Decoder::new(payload, SECTION)?;
-    let mut m = ConnModels::new();
+    let mut m = ConnModels::new(version);
     let mut mru = Mru::new();
     let mut next_new = 0u64;
     let mut prev_deg = 0usize;
@@ -344,14 +348,20 @@ pub fn decode(
             "faces have fewer corners than the header says",
         ));
     }
-    mesh.positions = decode_positions(&mut d, &mesh, vertices as usize, max_abs)?;
+    mesh.positions = decode_positions(&mut d, &mesh, vertices as usize, max_abs, version)?;
     Ok(mesh)
 }
 
-fn decode_positions(d: &mut Decoder, topo: &Mesh, n: usize, max_abs: i64) -> Result<Vec<[i64; 3]>> {
+fn decode_positions(
+    d: &mut Decoder,
+    topo: &Mesh,
+    n: usize,
+    max_abs: i64,
+    version: u16,
+) -> Result<Vec<[i64; 3]>> {
     let first = first_uses_n(topo, n);
     let tri = triangle_edges(topo);
-    let mut m = PosModels::new();
+    let mut m = PosModels::new(version);
     let mut pos: Vec<[i64; 3]> = Vec::with_capacity(n.min(1 << 16));
     for v in 0..n {
         let (kind, p) = predict(topo, &pos, v, first[v], &tri);

@@ -38,8 +38,12 @@ fn prev_bin(c: usize) -> usize {
 struct Models(Vec<IntModel>);
 
 impl Models {
-    fn new() -> Self {
-        Models((0..2 * 3 * 3 * NBR_BINS).map(|_| IntModel::new()).collect())
+    fn new(version: u16) -> Self {
+        Models(
+            (0..2 * 3 * 3 * NBR_BINS)
+                .map(|_| IntModel::for_version(version))
+                .collect(),
+        )
     }
 
     fn get(&mut self, class: usize, axis: usize, prev: usize, nbr: usize) -> &mut IntModel {
@@ -196,11 +200,11 @@ pub fn encode(
     version: u16,
 ) -> Vec<u8> {
     if version < 3 {
-        return encode_mode(level, x, coarse, act, false);
+        return encode_mode(level, x, coarse, act, false, version);
     }
     let mut act_plain = act.clone();
-    let plain = encode_mode(level, x, coarse, &mut act_plain, false);
-    let framed = encode_mode(level, x, coarse, act, true);
+    let plain = encode_mode(level, x, coarse, &mut act_plain, false, version);
+    let framed = encode_mode(level, x, coarse, act, true, version);
     let (mode, body) = if framed.len() < plain.len() {
         (1u8, framed)
     } else {
@@ -218,9 +222,10 @@ fn encode_mode(
     coarse: &[Vec<i64>; 3],
     act: &mut Vec<u8>,
     framed: bool,
+    version: u16,
 ) -> Vec<u8> {
     let mut enc = Encoder::new();
-    let mut m = Models::new();
+    let mut m = Models::new(version);
     let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
     act.resize(nv + ne + nf, 0);
     for i in 0..ne + nf {
@@ -268,7 +273,7 @@ pub fn decode(
         (false, payload)
     };
     let mut dec = Decoder::new(payload, "LEVL")?;
-    let mut m = Models::new();
+    let mut m = Models::new(version);
     act.resize(nv + ne + nf, 0);
     for xs in x.iter_mut() {
         xs.resize(nv + ne + nf, 0);

@@ -143,7 +143,7 @@ fn code_hierarchy(
     base.positions = (0..nb).map(|i| [x[0][i], x[1][i], x[2][i]]).collect();
     base.faces = canon.base.idx.clone();
     base.face_starts = canon.base.starts.clone();
-    let base_bytes = flat::encode(&base);
+    let base_bytes = flat::encode(&base, FORMAT_VERSION);
     let mut act = vec![levels::UNKNOWN; nb];
     let level_bytes = canon
         .levels
@@ -239,7 +239,7 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
             let canon = flat::permute(mesh, &order);
             let p = Payloads {
                 header: flat_h,
-                base: flat::encode(&canon),
+                base: flat::encode(&canon, FORMAT_VERSION),
                 levels: Vec::new(),
             };
             (p, order, None)
@@ -280,7 +280,11 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
             faces,
             rotations,
         };
-        put(&mut w, SectionKind::ORDER, &order::encode(&o))?;
+        put(
+            &mut w,
+            SectionKind::ORDER,
+            &order::encode(&o, FORMAT_VERSION),
+        )?;
     }
     let bytes = w.finish();
     sections.push(SectionInfo {
@@ -431,6 +435,7 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
         h.base_faces,
         h.base_corners,
         bound,
+        c.version,
     )?;
     let mut mesh = if h.levels == 0 {
         base
@@ -448,7 +453,7 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
                 mesh = unpermute(&mesh, &vorder);
             } else {
                 let degrees: Vec<u32> = mesh.face_starts.windows(2).map(|w| w[1] - w[0]).collect();
-                let o = order::decode(s.payload, mesh.vertex_count(), &degrees)?;
+                let o = order::decode(s.payload, mesh.vertex_count(), &degrees, c.version)?;
                 mesh = restore_order(&mesh, &o);
             }
             input_order = true;

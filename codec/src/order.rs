@@ -126,11 +126,11 @@ pub struct InputOrder {
 }
 
 /// Codes the ORDR section of format 2 (SPEC.md 7).
-pub fn encode(o: &InputOrder) -> Vec<u8> {
+pub fn encode(o: &InputOrder, version: u16) -> Vec<u8> {
     let mut e = Encoder::new();
     put_perm(&mut e, &o.vertices);
     put_perm(&mut e, &o.faces);
-    let mut m = IntModel::new();
+    let mut m = IntModel::for_version(version);
     for &r in &o.rotations {
         e.int(&mut m, r as i64);
     }
@@ -138,11 +138,11 @@ pub fn encode(o: &InputOrder) -> Vec<u8> {
 }
 
 /// Decodes a format-2 ORDR section; `degrees[c]` is canonical face c's degree.
-pub fn decode(payload: &[u8], nv: usize, degrees: &[u32]) -> Result<InputOrder> {
+pub fn decode(payload: &[u8], nv: usize, degrees: &[u32], version: u16) -> Result<InputOrder> {
     let mut d = Decoder::new(payload, SECTION)?;
     let vertices = get_perm(&mut d, nv)?;
     let faces = get_perm(&mut d, degrees.len())?;
-    let mut m = IntModel::new();
+    let mut m = IntModel::for_version(version);
     let mut rotations = Vec::with_capacity(degrees.len());
     for &k in degrees {
         let r = d.int(&mut m)?;
@@ -182,8 +182,8 @@ mod tests {
                 if n > 0 { p.swap(a, b); }
             }
             let o = InputOrder { vertices: p.clone(), faces: p.iter().rev().copied().collect(), rotations: p.iter().map(|&x| x % 4).collect() };
-            let bytes = encode(&o);
-            prop_assert_eq!(decode(&bytes, n, &vec![4; n]).unwrap(), o);
+            let bytes = encode(&o, 4);
+            prop_assert_eq!(decode(&bytes, n, &vec![4; n], 4).unwrap(), o);
         }
     }
 
@@ -195,6 +195,6 @@ mod tests {
             faces: p,
             rotations: vec![0; 100_000],
         };
-        assert!(encode(&o).len() < 160, "{}", encode(&o).len());
+        assert!(encode(&o, 4).len() < 160, "{}", encode(&o, 4).len());
     }
 }
