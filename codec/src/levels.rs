@@ -79,31 +79,46 @@ fn face_normal(level: &Level, coarse: &[Vec<i64>; 3], f: usize) -> [i128; 3] {
     let mut n = [0i128; 3];
     for i in 0..k {
         let (a, b) = (c[i] as usize, c[(i + 1) % k] as usize);
-        let p = [0, 1, 2].map(|d| coarse[d][a] as i128);
-        let q = [0, 1, 2].map(|d| coarse[d][b] as i128);
-        n[0] += (p[1] - q[1]) * (p[2] + q[2]);
-        n[1] += (p[2] - q[2]) * (p[0] + q[0]);
-        n[2] += (p[0] - q[0]) * (p[1] + q[1]);
+        let (px, py, pz) = (
+            coarse[0][a] as i128,
+            coarse[1][a] as i128,
+            coarse[2][a] as i128,
+        );
+        let (qx, qy, qz) = (
+            coarse[0][b] as i128,
+            coarse[1][b] as i128,
+            coarse[2][b] as i128,
+        );
+        n[0] += (py - qy) * (pz + qz);
+        n[1] += (pz - qz) * (px + qx);
+        n[2] += (px - qx) * (py + qy);
     }
     n
+}
+
+/// Every coarse face's normal, once per level.
+fn face_normals(level: &Level, coarse: &[Vec<i64>; 3]) -> Vec<[i128; 3]> {
+    (0..level.nf())
+        .map(|f| face_normal(level, coarse, f))
+        .collect()
 }
 
 /// The coding frame of a detail (SPEC.md 10.2): the axis where the coarse normal is
 /// largest (coded first) and the normal reduced to at most 24 bits, or `None` when the
 /// normal is zero.
-fn frame(level: &Level, coarse: &[Vec<i64>; 3], detail: usize) -> Option<(usize, [i64; 3])> {
+fn frame(level: &Level, normals: &[[i128; 3]], detail: usize) -> Option<(usize, [i64; 3])> {
     let mut n = [0i128; 3];
     if detail < level.ne() {
         for &f in &level.edge_faces[detail] {
             if f != crate::hierarchy::NONE {
-                let m = face_normal(level, coarse, f as usize);
+                let m = normals[f as usize];
                 for d in 0..3 {
                     n[d] += m[d];
                 }
             }
         }
     } else {
-        n = face_normal(level, coarse, detail - level.ne());
+        n = normals[detail - level.ne()];
     }
     let big = n.iter().map(|v| v.unsigned_abs()).max().unwrap_or(0);
     if big == 0 {
@@ -228,6 +243,11 @@ fn encode_mode(
     let mut m = Models::new(version);
     let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
     act.resize(nv + ne + nf, 0);
+    let normals = if framed {
+        face_normals(level, coarse)
+    } else {
+        Vec::new()
+    };
     for i in 0..ne + nf {
         let (class, nbr) = if i < ne {
             (0, e_context(level, act, i))
@@ -236,7 +256,7 @@ fn encode_mode(
         };
         let d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
         let fr = if framed {
-            frame(level, coarse, i)
+            frame(level, &normals, i)
         } else {
             None
         };
@@ -275,6 +295,11 @@ pub fn decode(
     let mut dec = Decoder::new(payload, "LEVL")?;
     let mut m = Models::new(version);
     act.resize(nv + ne + nf, 0);
+    let normals = if framed {
+        face_normals(level, x)
+    } else {
+        Vec::new()
+    };
     for xs in x.iter_mut() {
         xs.resize(nv + ne + nf, 0);
     }
@@ -284,7 +309,11 @@ pub fn decode(
         } else {
             (1, f_context(level, act, i - ne))
         };
-        let fr = if framed { frame(level, x, i) } else { None };
+        let fr = if framed {
+            frame(level, &normals, i)
+        } else {
+            None
+        };
         let d = get(&mut dec, &mut m, class, nbr, fr)?;
         for k in 0..3 {
             x[k][nv + i] = d[k];

@@ -10,9 +10,9 @@
 //! Every step is linear in the mesh size; both choices are explored at each level, and as
 //! a level has a quarter of the faces of the one above, the whole search stays linear.
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::VecDeque;
 
-use super::{Recovered, Topo, NONE};
+use super::{PairMap, Recovered, Topo, NONE};
 
 /// One coarsening of a component: the coarse mesh in the fine mesh's local numbers.
 #[derive(Debug, Clone)]
@@ -79,8 +79,8 @@ pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Recovered> 
 
 /// Merges the components' chains, cut to the common depth, in input numbers.
 fn merge(nv: usize, depth: usize, parts: &[(&[u32], &Chain)]) -> Recovered {
-    let mut edge_points = vec![HashMap::new(); depth];
-    let mut face_points = vec![HashMap::new(); depth];
+    let mut edge_points: Vec<PairMap> = (0..depth).map(|_| PairMap::with_capacity(64)).collect();
+    let mut face_points: Vec<PairMap> = (0..depth).map(|_| PairMap::with_capacity(64)).collect();
     let mut base = Topo::new(nv);
     for &(ids, chain) in parts {
         // ids: local fine vertex -> input number; walk down the chain.
@@ -90,7 +90,7 @@ fn merge(nv: usize, depth: usize, parts: &[(&[u32], &Chain)]) -> Recovered {
             let coarse_ids: Vec<u32> = step.to_fine.iter().map(|&f| map[f as usize]).collect();
             for &((a, b), p) in &step.edge_points {
                 let (ia, ib) = (coarse_ids[a as usize], coarse_ids[b as usize]);
-                edge_points[level].insert((ia.min(ib), ia.max(ib)), map[p as usize]);
+                edge_points[level].insert(ia.min(ib), ia.max(ib), map[p as usize]);
             }
             for f in 0..step.coarse.nf() {
                 let face = step.coarse.face(f);
@@ -98,11 +98,11 @@ fn merge(nv: usize, depth: usize, parts: &[(&[u32], &Chain)]) -> Recovered {
                 let k = face.len();
                 // Every directed edge names the face: the canonical order may start anywhere.
                 for i in 0..k {
-                    let key = (
+                    face_points[level].insert(
                         coarse_ids[face[i] as usize],
                         coarse_ids[face[(i + 1) % k] as usize],
+                        p,
                     );
-                    face_points[level].insert(key, p);
                 }
             }
             if l + 1 == depth {
@@ -145,16 +145,17 @@ fn components(nv: usize, topo: &Topo) -> Vec<(Vec<u32>, Topo)> {
             }
         }
     }
-    let mut comp_of_root: HashMap<u32, usize> = HashMap::new();
+    let mut comp_of_root = vec![usize::MAX; nv];
     let mut out: Vec<(Vec<u32>, Topo)> = Vec::new();
     let mut local = vec![NONE; nv];
     for f in 0..topo.nf() {
         let face = topo.face(f);
         let r = find(&mut parent, face[0]);
-        let c = *comp_of_root.entry(r).or_insert_with(|| {
+        if comp_of_root[r as usize] == usize::MAX {
+            comp_of_root[r as usize] = out.len();
             out.push((Vec::new(), Topo::new(0)));
-            out.len() - 1
-        });
+        }
+        let c = comp_of_root[r as usize];
         let (ids, t) = &mut out[c];
         let mut lf = [0u32; 4];
         for (i, &v) in face.iter().enumerate() {
@@ -431,13 +432,13 @@ fn build(
     coarse.nv = to_fine.len();
     // Distinct edge points for distinct coarse edges; each has valence 2 + faces.
     let mut edge_points = Vec::new();
-    let mut seen: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut seen = PairMap::with_capacity(n / 2);
     for (e, ends) in e_ends.iter().enumerate() {
         if ends[0] == NONE {
             continue;
         }
         let key = (ends[0].min(ends[1]), ends[0].max(ends[1]));
-        if seen.insert(key, e as u32).is_some() {
+        if !seen.get_or_insert(key.0, key.1, || e as u32).1 {
             return None;
         }
         // An edge point lies in two quads per coarse face beside it, and in no others.

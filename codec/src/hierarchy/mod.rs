@@ -4,12 +4,118 @@
 
 pub mod cc;
 
-use std::collections::HashMap;
-
 use crate::error::{Error, Result};
 
 /// "No such face / edge".
 pub const NONE: u32 = u32::MAX;
+
+/// A map from vertex pairs to numbers: open addressing with linear probing and a
+/// multiplicative hash, several times faster than `HashMap` with SipHash for the edge
+/// tables built at every level (its order never shows: only lookups are used).
+#[derive(Debug, Clone)]
+pub struct PairMap {
+    keys: Vec<u64>,
+    vals: Vec<u32>,
+    len: usize,
+}
+
+const EMPTY_KEY: u64 = u64::MAX;
+
+impl PairMap {
+    /// A map sized for about `n` entries.
+    pub fn with_capacity(n: usize) -> Self {
+        let cap = (n.max(4) * 2).next_power_of_two();
+        PairMap {
+            keys: vec![EMPTY_KEY; cap],
+            vals: vec![0; cap],
+            len: 0,
+        }
+    }
+
+    #[inline]
+    fn slot(&self, key: u64) -> usize {
+        let mask = self.keys.len() - 1;
+        let mut i = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & mask;
+        while self.keys[i] != EMPTY_KEY && self.keys[i] != key {
+            i = (i + 1) & mask;
+        }
+        i
+    }
+
+    /// The value for `(a, b)`, if any.
+    #[inline]
+    pub fn get(&self, a: u32, b: u32) -> Option<u32> {
+        let key = (a as u64) << 32 | b as u64;
+        let i = self.slot(key);
+        (self.keys[i] == key).then(|| self.vals[i])
+    }
+
+    /// The value for `(a, b)`, inserting `make()` first if there is none; and whether it
+    /// was inserted.
+    #[inline]
+    pub fn get_or_insert(&mut self, a: u32, b: u32, make: impl FnOnce() -> u32) -> (u32, bool) {
+        if 2 * (self.len + 1) > self.keys.len() {
+            self.grow();
+        }
+        let key = (a as u64) << 32 | b as u64;
+        let i = self.slot(key);
+        if self.keys[i] == key {
+            return (self.vals[i], false);
+        }
+        let v = make();
+        self.keys[i] = key;
+        self.vals[i] = v;
+        self.len += 1;
+        (v, true)
+    }
+
+    /// Sets the value for `(a, b)`.
+    pub fn insert(&mut self, a: u32, b: u32, v: u32) {
+        if 2 * (self.len + 1) > self.keys.len() {
+            self.grow();
+        }
+        let key = (a as u64) << 32 | b as u64;
+        let i = self.slot(key);
+        if self.keys[i] != key {
+            self.len += 1;
+        }
+        self.keys[i] = key;
+        self.vals[i] = v;
+    }
+
+    /// Number of entries.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the map is empty.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The values, in no particular order.
+    pub fn values(&self) -> impl Iterator<Item = u32> + '_ {
+        self.keys
+            .iter()
+            .zip(&self.vals)
+            .filter(|(k, _)| **k != EMPTY_KEY)
+            .map(|(_, v)| *v)
+    }
+
+    fn grow(&mut self) {
+        let old_keys = std::mem::take(&mut self.keys);
+        let old_vals = std::mem::take(&mut self.vals);
+        self.keys = vec![EMPTY_KEY; old_keys.len() * 2];
+        self.vals = vec![0; old_keys.len() * 2];
+        for (k, v) in old_keys.into_iter().zip(old_vals) {
+            if k != EMPTY_KEY {
+                let i = self.slot(k);
+                self.keys[i] = k;
+                self.vals[i] = v;
+            }
+        }
+    }
+}
 
 /// Polygon topology: `nv` vertices and faces as index lists (CSR).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -124,7 +230,7 @@ impl Level {
     /// cannot refine: a face with a repeated corner or an edge with more than two faces.
     pub fn new(coarse: &Topo) -> Result<Level> {
         let nv = coarse.nv;
-        let mut edge_id: HashMap<(u32, u32), u32> = HashMap::with_capacity(coarse.idx.len());
+        let mut edge_id = PairMap::with_capacity(coarse.idx.len() / 2 + 4);
         let mut edges: Vec<[u32; 2]> = Vec::with_capacity(coarse.idx.len() / 2 + 4);
         let mut edge_faces: Vec<[u32; 2]> = Vec::with_capacity(coarse.idx.len() / 2 + 4);
         let mut face_edges = Vec::with_capacity(coarse.idx.len());
@@ -139,8 +245,7 @@ impl Level {
                         f + 1
                     )));
                 }
-                let key = (a.min(b), a.max(b));
-                let id = *edge_id.entry(key).or_insert_with(|| {
+                let (id, _) = edge_id.get_or_insert(a.min(b), a.max(b), || {
                     edges.push([a, b]);
                     edge_faces.push([NONE, NONE]);
                     (edges.len() - 1) as u32
@@ -229,10 +334,10 @@ pub struct Recovered {
     pub base: Topo,
     /// Per level (1 = first refinement): coarse edge (input numbers, smaller first) ->
     /// its edge point's input number.
-    pub edge_points: Vec<HashMap<(u32, u32), u32>>,
+    pub edge_points: Vec<PairMap>,
     /// Per level: coarse face, named by one directed edge (input numbers) -> its face
     /// point's input number.
-    pub face_points: Vec<HashMap<(u32, u32), u32>>,
+    pub face_points: Vec<PairMap>,
 }
 
 impl Recovered {
@@ -273,7 +378,7 @@ pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
     }
     // Vertices that appear at some finer level are not base vertices.
     for l in 0..rec.levels() {
-        for &v in rec.edge_points[l]
+        for v in rec.edge_points[l]
             .values()
             .chain(rec.face_points[l].values())
         {
@@ -302,17 +407,14 @@ pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
         for &[a, b] in &lvl.edges {
             let (ia, ib) = (order[a as usize], order[b as usize]);
             let p = rec.edge_points[l]
-                .get(&(ia.min(ib), ia.max(ib)))
-                .copied()
+                .get(ia.min(ib), ia.max(ib))
                 .ok_or_else(|| Error::InvalidMesh("inconsistent hierarchy (edge point)".into()))?;
             next.push(p);
         }
         for f in 0..lvl.nf() {
             let face = lvl.coarse.face(f);
-            let key = (order[face[0] as usize], order[face[1] as usize]);
             let p = rec.face_points[l]
-                .get(&key)
-                .copied()
+                .get(order[face[0] as usize], order[face[1] as usize])
                 .ok_or_else(|| Error::InvalidMesh("inconsistent hierarchy (face point)".into()))?;
             next.push(p);
         }
