@@ -180,7 +180,7 @@ fn random_hierarchy(seed: u64, base: usize, levels: u32, bits: u32) -> Mesh {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(48))]
+    #![proptest_config(ProptestConfig::with_cases(1000))]
     #[test]
     fn random_hierarchies_round_trip_through_every_transform(
         seed in any::<u64>(), base in 0usize..4, levels in 1u32..4, bits in 1u32..45, keep in any::<bool>()
@@ -197,5 +197,17 @@ proptest! {
                 prop_assert_eq!(common::fingerprint(&dec.mesh), common::fingerprint(&mesh));
             }
         }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(3000))]
+    /// Random polygon base meshes (degrees 3 to 6, boundaries, several components,
+    /// repeated corners), refined 0 to 2 times, shuffled, with coordinates up to the
+    /// supported range and a random transform: the fuzz target's property, here on every
+    /// CI run.
+    #[test]
+    fn random_base_meshes_round_trip(data in proptest::collection::vec(any::<u8>(), 16..600)) {
+        subwave::fuzz_harness::roundtrip_mesh(&data);
     }
 }

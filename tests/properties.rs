@@ -28,7 +28,7 @@ fn arb_mesh() -> impl Strategy<Value = Mesh> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(512))]
+    #![proptest_config(ProptestConfig::with_cases(10_000))]
     #[test]
     fn random_meshes_round_trip(mesh in arb_mesh(), keep in any::<bool>()) {
         let q = Quantization::Decimal { decimals: 3 };
