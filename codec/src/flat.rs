@@ -45,6 +45,84 @@ pub fn permute(mesh: &Mesh, order: &[u32]) -> Mesh {
     }
 }
 
+/// Format 5 on, encoder only: faces in breadth-first order over shared edges (each
+/// component from its first face in input order; neighbours in order of edge, then face
+/// number), so that a face's neighbours are coded near it whatever the input's order.
+/// Returns `order[new] = old`.
+pub fn face_order(mesh: &Mesh) -> Vec<u32> {
+    let nf = mesh.face_count();
+    let mut entries: Vec<(u64, u32)> = Vec::with_capacity(mesh.corner_count());
+    for f in 0..nf {
+        let face = mesh.face(f);
+        let k = face.len();
+        for i in 0..k {
+            let (a, b) = (face[i], face[(i + 1) % k]);
+            entries.push(((a.min(b) as u64) << 32 | a.max(b) as u64, f as u32));
+        }
+    }
+    entries.sort_unstable();
+    let mut pairs: Vec<(u32, u32)> = Vec::new();
+    let mut i = 0;
+    while i < entries.len() {
+        let mut j = i + 1;
+        while j < entries.len() && entries[j].0 == entries[i].0 {
+            j += 1;
+        }
+        for x in i..j {
+            for y in i..j {
+                if entries[x].1 != entries[y].1 {
+                    pairs.push((entries[x].1, entries[y].1));
+                }
+            }
+        }
+        i = j;
+    }
+    let mut starts = vec![0u32; nf + 1];
+    for &(a, _) in &pairs {
+        starts[a as usize + 1] += 1;
+    }
+    for f in 0..nf {
+        starts[f + 1] += starts[f];
+    }
+    let mut fill = starts.clone();
+    let mut adj = vec![0u32; pairs.len()];
+    for &(a, b) in &pairs {
+        adj[fill[a as usize] as usize] = b;
+        fill[a as usize] += 1;
+    }
+    let mut seen = vec![false; nf];
+    let mut order = Vec::with_capacity(nf);
+    let mut queue = std::collections::VecDeque::new();
+    for root in 0..nf {
+        if seen[root] {
+            continue;
+        }
+        seen[root] = true;
+        queue.push_back(root as u32);
+        while let Some(f) = queue.pop_front() {
+            order.push(f);
+            for &g in &adj[starts[f as usize] as usize..starts[f as usize + 1] as usize] {
+                if !seen[g as usize] {
+                    seen[g as usize] = true;
+                    queue.push_back(g);
+                }
+            }
+        }
+    }
+    order
+}
+
+/// Reorders faces: `order[new] = old` (corners and their order unchanged).
+pub fn permute_faces(mesh: &Mesh, order: &[u32]) -> Mesh {
+    let mut out = Mesh::new();
+    out.positions = mesh.positions.clone();
+    out.faces.reserve(mesh.corner_count());
+    for &f in order {
+        out.push_face(mesh.face(f as usize));
+    }
+    out
+}
+
 struct Mru {
     items: [u32; MRU],
     len: usize,
@@ -102,7 +180,7 @@ impl ConnModels {
 }
 
 /// Prediction kinds, each with its own residual models (SPEC.md 6.3).
-const KINDS: usize = 4;
+const KINDS: usize = 5;
 
 struct PosModels {
     res: Vec<IntModel>,
@@ -155,6 +233,55 @@ fn triangle_edges(mesh: &Mesh) -> HashMap<(u32, u32), [u32; 2]> {
     map
 }
 
+/// For every edge: the (up to two) first faces that list it, any degree (format 5).
+fn all_edges(mesh: &Mesh) -> HashMap<(u32, u32), [u32; 2]> {
+    let mut map: HashMap<(u32, u32), [u32; 2]> = HashMap::new();
+    for f in 0..mesh.face_count() {
+        let face = mesh.face(f);
+        let k = face.len();
+        for i in 0..k {
+            let (a, b) = (face[i], face[(i + 1) % k]);
+            let e = map.entry((a.min(b), a.max(b))).or_insert([u32::MAX; 2]);
+            if e[0] == u32::MAX {
+                e[0] = f as u32;
+            } else if e[1] == u32::MAX {
+                e[1] = f as u32;
+            }
+        }
+    }
+    map
+}
+
+/// Format 5 "strip" prediction for quad corner `v` whose known neighbour `s` and the
+/// known corner `o` opposite `v` form an edge shared with an earlier face g: continue g
+/// across `s`, `P = 2 s - p` with p the neighbour of s in g that is not o.
+fn strip(
+    mesh: &Mesh,
+    pos: &[[i64; 3]],
+    v: usize,
+    f: u32,
+    s: u32,
+    o: u32,
+    all: &HashMap<(u32, u32), [u32; 2]>,
+) -> Option<[i64; 3]> {
+    let faces = all.get(&(s.min(o), s.max(o)))?;
+    for &g in faces {
+        if g == u32::MAX || g == f {
+            continue;
+        }
+        let gf = mesh.face(g as usize);
+        let k = gf.len();
+        let i = gf.iter().position(|&x| x == s)?;
+        let (prev, next) = (gf[(i + k - 1) % k], gf[(i + 1) % k]);
+        let p = if prev == o { next } else { prev };
+        if p != o && (p as usize) < v {
+            let (ps, pp) = (pos[s as usize], pos[p as usize]);
+            return Some([0, 1, 2].map(|d| 2 * ps[d] - pp[d]));
+        }
+    }
+    None
+}
+
 /// Predicts vertex `v` from vertices `< v` only (SPEC.md 6.3). Returns (kind, prediction).
 fn predict(
     mesh: &Mesh,
@@ -162,6 +289,7 @@ fn predict(
     v: usize,
     first: (u32, u32),
     tri: &HashMap<(u32, u32), [u32; 2]>,
+    all: Option<&HashMap<(u32, u32), [u32; 2]>>,
 ) -> (usize, [i64; 3]) {
     let fallback = if v > 0 { pos[v - 1] } else { [0; 3] };
     if first.0 == u32::MAX {
@@ -179,6 +307,18 @@ fn predict(
             pos[at(2) as usize],
         );
         return (0, [0, 1, 2].map(|k| a[k] + b[k] - o[k]));
+    }
+    if let (4, Some(all)) = (n, all) {
+        let p = if known(at(1)) && known(at(2)) && !known(at(3)) {
+            strip(mesh, pos, v, first.0, at(1), at(2), all)
+        } else if known(at(3)) && known(at(2)) && !known(at(1)) {
+            strip(mesh, pos, v, first.0, at(3), at(2), all)
+        } else {
+            None
+        };
+        if let Some(p) = p {
+            return (4, p);
+        }
     }
     if n == 3 && known(at(1)) && known(at(2)) {
         let (a, b) = (at(1), at(2));
@@ -250,9 +390,10 @@ pub fn encode(mesh: &Mesh, version: u16) -> Vec<u8> {
 fn encode_positions(e: &mut Encoder, mesh: &Mesh, version: u16) {
     let first = first_uses(mesh);
     let tri = triangle_edges(mesh);
+    let all = (version >= 5).then(|| all_edges(mesh));
     let mut m = PosModels::new(version);
     for v in 0..mesh.vertex_count() {
-        let (kind, p) = predict(mesh, &mesh.positions, v, first[v], &tri);
+        let (kind, p) = predict(mesh, &mesh.positions, v, first[v], &tri, all.as_ref());
         let mut prev_class = 0;
         for k in 0..3 {
             let r = mesh.positions[v][k] - p[k];
@@ -361,10 +502,11 @@ fn decode_positions(
 ) -> Result<Vec<[i64; 3]>> {
     let first = first_uses_n(topo, n);
     let tri = triangle_edges(topo);
+    let all = (version >= 5).then(|| all_edges(topo));
     let mut m = PosModels::new(version);
     let mut pos: Vec<[i64; 3]> = Vec::with_capacity(n.min(1 << 16));
     for v in 0..n {
-        let (kind, p) = predict(topo, &pos, v, first[v], &tri);
+        let (kind, p) = predict(topo, &pos, v, first[v], &tri, all.as_ref());
         let mut q = [0i64; 3];
         let mut prev_class = 0;
         for k in 0..3 {

@@ -86,6 +86,14 @@ pub struct Encoded {
     pub sections: Vec<SectionInfo>,
 }
 
+/// How the coded faces relate to the input's.
+enum FaceOrder {
+    /// The finest level of a hierarchy, canonical numbering.
+    Hierarchy(Topo),
+    /// The flat path's face order (`order[coded] = input`), corners unrotated.
+    Flat(Vec<u32>),
+}
+
 /// Section payloads before they are wrapped in a container.
 struct Payloads {
     header: Header,
@@ -196,7 +204,7 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
     let mut topo = Topo::new(mesh.vertex_count());
     topo.idx = mesh.faces.clone();
     topo.starts = mesh.face_starts.clone();
-    let mut best: Option<(Payloads, Vec<u32>, Option<Topo>)> = None;
+    let mut best: Option<(Payloads, Vec<u32>, FaceOrder)> = None;
     if opts.max_levels > 0 {
         let recs = hierarchy::cc::recover_all(mesh.vertex_count(), &topo, opts.max_levels as usize);
         // A mesh and its dual can both be the base: compare them with one transform
@@ -217,7 +225,11 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
             });
             if let Some(p) = code_hierarchy(&canon, &pos, first, &flat_h) {
                 if best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
-                    best = Some((p, canon.order.clone(), Some(canon.fine.clone())));
+                    best = Some((
+                        p,
+                        canon.order.clone(),
+                        FaceOrder::Hierarchy(canon.fine.clone()),
+                    ));
                     chosen = Some((canon, pos));
                 }
             }
@@ -226,7 +238,11 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
             for w in Wavelet::ALL.into_iter().filter(|&w| w != first) {
                 if let Some(p) = code_hierarchy(canon, pos, w, &flat_h) {
                     if best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
-                        best = Some((p, canon.order.clone(), Some(canon.fine.clone())));
+                        best = Some((
+                            p,
+                            canon.order.clone(),
+                            FaceOrder::Hierarchy(canon.fine.clone()),
+                        ));
                     }
                 }
             }
@@ -235,14 +251,27 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
     let (payloads, order, fine) = match best {
         Some(b) => b,
         None => {
-            let order = flat::canonical_order(mesh);
-            let canon = flat::permute(mesh, &order);
+            // Faces in the input's order or breadth-first, whichever codes smaller;
+            // vertices in order of first use (SPEC.md 6.1).
+            let mut best_flat: Option<(Vec<u8>, Vec<u32>, Vec<u32>)> = None;
+            for forder in [
+                (0..mesh.face_count() as u32).collect(),
+                flat::face_order(mesh),
+            ] {
+                let by_faces = flat::permute_faces(mesh, &forder);
+                let order = flat::canonical_order(&by_faces);
+                let bytes = flat::encode(&flat::permute(&by_faces, &order), FORMAT_VERSION);
+                if best_flat.as_ref().is_none_or(|b| bytes.len() < b.0.len()) {
+                    best_flat = Some((bytes, order, forder));
+                }
+            }
+            let (base, order, forder) = best_flat.expect("two candidates");
             let p = Payloads {
                 header: flat_h,
-                base: flat::encode(&canon, FORMAT_VERSION),
+                base,
                 levels: Vec::new(),
             };
-            (p, order, None)
+            (p, order, FaceOrder::Flat(forder))
         }
     };
     let header = payloads.header.clone();
@@ -269,11 +298,8 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
     }
     if opts.keep_order {
         let (faces, rotations) = match &fine {
-            Some(fine) => face_order(mesh, fine, &order)?,
-            None => (
-                (0..mesh.face_count() as u32).collect(),
-                vec![0; mesh.face_count()],
-            ),
+            FaceOrder::Hierarchy(fine) => face_order(mesh, fine, &order)?,
+            FaceOrder::Flat(forder) => (forder.clone(), vec![0; mesh.face_count()]),
         };
         let o = order::InputOrder {
             vertices: order.clone(),
