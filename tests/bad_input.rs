@@ -182,11 +182,25 @@ fn bad_mesh_files() {
 
 #[test]
 fn counts_within_limits_but_beyond_the_bytes_are_refused_before_allocation() {
-    // 2^26 vertices and faces fit the default limits, but 8 bytes of BASE cannot hold
-    // them (SPEC.md 2.6): refused at once, without reserving gigabytes.
+    // 2^26 vertices and faces fit the default count limits, but a container of a few
+    // dozen bytes may not ask for gigabytes (SPEC.md 2.5, the expansion guard) ...
     let b = with_header(1 << 26, 1 << 26, 1 << 28);
     let start = std::time::Instant::now();
     match subwave::decode_slice(&b) {
+        Err(Error::Container(subwave_container::Error::Limit { what, .. })) => {
+            assert!(what.contains("max_expansion"), "{what}")
+        }
+        other => panic!("expected the expansion limit, got {other:?}"),
+    }
+    // ... and with that guard lifted, 8 bytes of BASE still cannot hold them (SPEC.md
+    // 2.6): refused at once, without reserving gigabytes.
+    let mut limits = Limits::default();
+    limits.max_expansion = u64::MAX;
+    let opts = DecodeOptions {
+        limits,
+        max_level: None,
+    };
+    match subwave::decode(&b, &opts) {
         Err(Error::CorruptStream {
             section: "BASE",
             what,

@@ -438,6 +438,18 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
         Container::parse(bytes, limits)?
     };
     let h = layout(&c, limits, opts.max_level.is_none())?;
+    // Decompression-bomb guard (SPEC.md 2.5): what the header asks for, per byte given.
+    let allowance = (bytes.len() as u64)
+        .max(64)
+        .saturating_mul(limits.max_expansion);
+    if h.memory_estimate() > allowance {
+        return Err(subwave_container::Error::Limit {
+            what: "decoder memory for a container this size (bytes; see Limits::max_expansion)",
+            requested: h.memory_estimate(),
+            limit: allowance,
+        }
+        .into());
+    }
     let level = opts.max_level.map_or(h.levels, |k| k.min(h.levels));
     // Sections needed: header, base, `level` levels.
     let needed = 2 + level as usize;

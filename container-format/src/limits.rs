@@ -23,6 +23,11 @@ pub struct Limits {
     /// Most bytes the decoder may allocate for the decoded mesh and its working state,
     /// estimated from the declared counts before decoding starts. Default 16 GiB.
     pub max_alloc_bytes: u64,
+    /// Most bytes of that estimate per byte of container (a decompression-bomb guard):
+    /// default 65,536, so a 1 KiB container cannot ask for more than 64 MiB. Real meshes
+    /// expand 20 to 700 times (12 down to 0.5 bits per vertex); raise it for synthetic
+    /// ones, such as a perfectly flat plane, that compress further.
+    pub max_expansion: u64,
 }
 
 impl Default for Limits {
@@ -36,6 +41,7 @@ impl Default for Limits {
             max_sections: 64,
             max_section_bytes: u32::MAX as u64,
             max_alloc_bytes: 16 << 30,
+            max_expansion: 1 << 16,
         }
     }
 }
@@ -53,6 +59,7 @@ impl Limits {
             max_sections: 32,
             max_section_bytes: 1 << 26,
             max_alloc_bytes: 256 << 20,
+            max_expansion: 1 << 16,
         }
     }
 }
