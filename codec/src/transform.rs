@@ -586,17 +586,7 @@ mod tests {
     }
 
     fn mixed() -> Topo {
-        // A closed prism with a pentagon, a triangle pair and quads: valences 3, 4, 5.
-        let mut t = Topo::new(10);
-        t.push(&[4, 3, 2, 1, 0]);
-        t.push(&[5, 6, 7, 8, 9]);
-        t.push(&[0, 1, 6]);
-        t.push(&[0, 6, 5]);
-        for i in 1..5u32 {
-            let j = (i + 1) % 5;
-            t.push(&[i, j, j + 5, i + 5]);
-        }
-        t
+        crate::hierarchy::fixtures::prism_with_triangles()
     }
 
     fn open_mixed() -> Topo {

@@ -464,6 +464,7 @@ fn build(
 
 #[cfg(test)]
 mod tests {
+    use super::super::fixtures::prism_with_triangles;
     use super::super::{canonicalise, Level};
     use super::*;
 
@@ -478,19 +479,6 @@ mod tests {
             [1, 3, 7, 5],
         ] {
             t.push(&f);
-        }
-        t
-    }
-
-    fn prism_with_triangles() -> Topo {
-        let mut t = Topo::new(10);
-        t.push(&[4, 3, 2, 1, 0]);
-        t.push(&[5, 6, 7, 8, 9]);
-        t.push(&[0, 1, 6]);
-        t.push(&[0, 6, 5]);
-        for i in 1..5u32 {
-            let j = (i + 1) % 5;
-            t.push(&[i, j, j + 5, i + 5]);
         }
         t
     }

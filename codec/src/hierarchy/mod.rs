@@ -429,3 +429,24 @@ pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
         order,
     })
 }
+
+/// Test fixtures shared by the hierarchy and transform tests.
+#[cfg(test)]
+pub(crate) mod fixtures {
+    use super::Topo;
+
+    /// A closed pentagonal prism with one side split into two triangles: a pentagon,
+    /// triangles and quads, vertices of valence 3, 4 and 5.
+    pub(crate) fn prism_with_triangles() -> Topo {
+        let mut t = Topo::new(10);
+        t.push(&[4, 3, 2, 1, 0]);
+        t.push(&[5, 6, 7, 8, 9]);
+        t.push(&[0, 1, 6]);
+        t.push(&[0, 6, 5]);
+        for i in 1..5u32 {
+            let j = (i + 1) % 5;
+            t.push(&[i, j, j + 5, i + 5]);
+        }
+        t
+    }
+}

@@ -161,6 +161,31 @@ pub(crate) fn coords_line(prefix: &str, p: &[i64; 3], q: &Quantization, line: &m
     line.push('\n');
 }
 
+/// Writes the vertex lines (`x y z`) and face lines (`k i0 i1 ...`, 0-based) that OFF
+/// and ASCII PLY bodies share.
+pub(crate) fn write_counted_text<W: Write>(
+    out: &mut W,
+    mesh: &Mesh,
+    q: &Quantization,
+) -> Result<()> {
+    let mut line = String::with_capacity(128);
+    for p in &mesh.positions {
+        coords_line("", p, q, &mut line);
+        out.write_all(line.as_bytes())?;
+    }
+    for face in mesh.iter_faces() {
+        use std::fmt::Write as _;
+        line.clear();
+        let _ = write!(line, "{}", face.len());
+        for &i in face {
+            let _ = write!(line, " {i}");
+        }
+        line.push('\n');
+        out.write_all(line.as_bytes())?;
+    }
+    Ok(())
+}
+
 /// A file-level syntax error with its 1-based line number.
 pub(crate) fn syntax(format: &str, line: usize, what: impl std::fmt::Display) -> Error {
     Error::MeshFile(format!("{format} line {line}: {what}"))

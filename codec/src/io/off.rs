@@ -3,7 +3,7 @@
 use std::collections::BTreeSet;
 use std::io::Write;
 
-use super::{coords_line, syntax, Format, RawMesh};
+use super::{syntax, write_counted_text, Format, RawMesh};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::quant::{Quantization, TextCoords};
@@ -146,20 +146,5 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
 pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Result<()> {
     writeln!(out, "OFF")?;
     writeln!(out, "{} {} 0", mesh.vertex_count(), mesh.face_count())?;
-    let mut line = String::with_capacity(128);
-    for p in &mesh.positions {
-        coords_line("", p, q, &mut line);
-        out.write_all(line.as_bytes())?;
-    }
-    for face in mesh.iter_faces() {
-        use std::fmt::Write as _;
-        line.clear();
-        let _ = write!(line, "{}", face.len());
-        for &i in face {
-            let _ = write!(line, " {i}");
-        }
-        line.push('\n');
-        out.write_all(line.as_bytes())?;
-    }
-    Ok(())
+    write_counted_text(out, mesh, q)
 }

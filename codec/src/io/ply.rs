@@ -4,7 +4,7 @@
 use std::collections::BTreeSet;
 use std::io::Write;
 
-use super::{coords_line, Format, RawMesh};
+use super::{write_counted_text, Format, RawMesh};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::quant::{Decimal, Quantization, RawCoords, TextCoords};
@@ -506,21 +506,7 @@ pub(crate) fn write<W: Write>(
         }
         out.write_all(&buf)?;
     } else {
-        let mut line = String::with_capacity(128);
-        for p in &mesh.positions {
-            coords_line("", p, q, &mut line);
-            out.write_all(line.as_bytes())?;
-        }
-        for face in mesh.iter_faces() {
-            use std::fmt::Write as _;
-            line.clear();
-            let _ = write!(line, "{}", face.len());
-            for &i in face {
-                let _ = write!(line, " {i}");
-            }
-            line.push('\n');
-            out.write_all(line.as_bytes())?;
-        }
+        write_counted_text(out, mesh, q)?;
     }
     Ok(())
 }
