@@ -180,7 +180,7 @@ fn random_hierarchy(seed: u64, base: usize, levels: u32, bits: u32) -> Mesh {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(1000))]
+    #![proptest_config(ProptestConfig::with_cases(2000))]
     #[test]
     fn random_hierarchies_round_trip_through_every_transform(
         seed in any::<u64>(), base in 0usize..4, levels in 1u32..4, bits in 1u32..45, keep in any::<bool>()
