@@ -204,7 +204,9 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
     let mut topo = Topo::new(mesh.vertex_count());
     topo.idx = mesh.faces.clone();
     topo.starts = mesh.face_starts.clone();
-    let mut best: Option<(Payloads, Vec<u32>, FaceOrder)> = None;
+    // The best hierarchy coding, and the canonical hierarchy it was made from.
+    let mut best: Option<Payloads> = None;
+    let mut chosen: Option<(Canonical, [Vec<i64>; 3])> = None;
     if opts.max_levels > 0 {
         let recs = hierarchy::cc::recover_all(mesh.vertex_count(), &topo, opts.max_levels as usize);
         // A mesh and its dual can both be the base: compare them with one transform
@@ -213,7 +215,6 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
             TransformChoice::Auto => Wavelet::Bicubic,
             TransformChoice::Fixed(w) => w,
         };
-        let mut chosen: Option<(Canonical, [Vec<i64>; 3])> = None;
         for rec in &recs {
             let canon = hierarchy::canonicalise(rec)?;
             let pos: [Vec<i64>; 3] = std::array::from_fn(|k| {
@@ -224,12 +225,8 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
                     .collect()
             });
             if let Some(p) = code_hierarchy(&canon, &pos, first, &flat_h) {
-                if best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
-                    best = Some((
-                        p,
-                        canon.order.clone(),
-                        FaceOrder::Hierarchy(canon.fine.clone()),
-                    ));
+                if best.as_ref().is_none_or(|b| p.size() < b.size()) {
+                    best = Some(p);
                     chosen = Some((canon, pos));
                 }
             }
@@ -237,20 +234,16 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
         if let (TransformChoice::Auto, Some((canon, pos))) = (opts.transform, &chosen) {
             for w in Wavelet::ALL.into_iter().filter(|&w| w != first) {
                 if let Some(p) = code_hierarchy(canon, pos, w, &flat_h) {
-                    if best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
-                        best = Some((
-                            p,
-                            canon.order.clone(),
-                            FaceOrder::Hierarchy(canon.fine.clone()),
-                        ));
+                    if best.as_ref().is_none_or(|b| p.size() < b.size()) {
+                        best = Some(p);
                     }
                 }
             }
         }
     }
-    let (payloads, order, fine) = match best {
-        Some(b) => b,
-        None => {
+    let (payloads, order, fine) = match (best, chosen) {
+        (Some(p), Some((canon, _))) => (p, canon.order, FaceOrder::Hierarchy(canon.fine)),
+        _ => {
             // Faces in the input's order or breadth-first, whichever codes smaller;
             // vertices in order of first use (SPEC.md 6.1).
             let mut best_flat: Option<(Vec<u8>, Vec<u32>, Vec<u32>)> = None;
