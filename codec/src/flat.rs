@@ -211,34 +211,17 @@ fn first_uses(mesh: &Mesh) -> Vec<(u32, u32)> {
     first_uses_n(mesh, mesh.vertex_count())
 }
 
-/// For triangle edges: the (up to two) triangles on each edge.
-fn triangle_edges(mesh: &Mesh) -> HashMap<(u32, u32), [u32; 2]> {
-    let mut map: HashMap<(u32, u32), [u32; 2]> = HashMap::new();
-    for f in 0..mesh.face_count() {
-        let face = mesh.face(f);
-        if face.len() != 3 {
-            continue;
-        }
-        for i in 0..3 {
-            let (a, b) = (face[i], face[(i + 1) % 3]);
-            let key = (a.min(b), a.max(b));
-            let e = map.entry(key).or_insert([u32::MAX; 2]);
-            if e[0] == u32::MAX {
-                e[0] = f as u32;
-            } else if e[1] == u32::MAX {
-                e[1] = f as u32;
-            }
-        }
-    }
-    map
-}
-
-/// For every edge: the (up to two) first faces that list it, any degree (format 5).
-fn all_edges(mesh: &Mesh) -> HashMap<(u32, u32), [u32; 2]> {
+/// For every edge: the (up to two) first faces, in face order, that list it; with
+/// `triangles_only` only triangles are listed (the triangle edge table of SPEC.md 6.3),
+/// else faces of any degree (the edge table of format 5).
+fn edge_table(mesh: &Mesh, triangles_only: bool) -> HashMap<(u32, u32), [u32; 2]> {
     let mut map: HashMap<(u32, u32), [u32; 2]> = HashMap::new();
     for f in 0..mesh.face_count() {
         let face = mesh.face(f);
         let k = face.len();
+        if triangles_only && k != 3 {
+            continue;
+        }
         for i in 0..k {
             let (a, b) = (face[i], face[(i + 1) % k]);
             let e = map.entry((a.min(b), a.max(b))).or_insert([u32::MAX; 2]);
@@ -389,8 +372,8 @@ pub fn encode(mesh: &Mesh, version: u16) -> Vec<u8> {
 
 fn encode_positions(e: &mut Encoder, mesh: &Mesh, version: u16) {
     let first = first_uses(mesh);
-    let tri = triangle_edges(mesh);
-    let all = (version >= 5).then(|| all_edges(mesh));
+    let tri = edge_table(mesh, true);
+    let all = (version >= 5).then(|| edge_table(mesh, false));
     let mut m = PosModels::new(version);
     for v in 0..mesh.vertex_count() {
         let (kind, p) = predict(mesh, &mesh.positions, v, first[v], &tri, all.as_ref());
@@ -501,8 +484,8 @@ fn decode_positions(
     version: u16,
 ) -> Result<Vec<[i64; 3]>> {
     let first = first_uses_n(topo, n);
-    let tri = triangle_edges(topo);
-    let all = (version >= 5).then(|| all_edges(topo));
+    let tri = edge_table(topo, true);
+    let all = (version >= 5).then(|| edge_table(topo, false));
     let mut m = PosModels::new(version);
     let mut pos: Vec<[i64; 3]> = Vec::with_capacity(n.min(1 << 16));
     for v in 0..n {

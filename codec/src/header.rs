@@ -182,7 +182,6 @@ impl Header {
     pub fn read(payload: &[u8], offset: u64, limits: &Limits, version: u16) -> Result<Header> {
         let mut r = ByteReader::new(payload, offset);
         let mut count = |what: &'static str, limit: u64| -> Result<u64> {
-            let at = r.offset();
             let v = r.varint(what)?;
             if v > limit {
                 return Err(subwave_container::Error::Limit {
@@ -192,7 +191,6 @@ impl Header {
                 }
                 .into());
             }
-            let _ = at;
             Ok(v)
         };
         let vertices = count("vertices", limits.max_vertices)?;
