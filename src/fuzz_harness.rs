@@ -138,13 +138,14 @@ pub fn roundtrip_mesh(data: &[u8]) {
     for f in &faces {
         mesh.push_face(f);
     }
-    let w = b.below(Wavelet::ALL.len() + 1);
+    let all: Vec<Wavelet> = Wavelet::ALL.into_iter().chain(Wavelet::SQRT2).collect();
+    let w = b.below(all.len() + 1);
     let opts = EncodeOptions {
         keep_order: b.u8() & 1 == 1,
         transform: if w == 0 {
             TransformChoice::Auto
         } else {
-            TransformChoice::Fixed(Wavelet::ALL[w - 1])
+            TransformChoice::Fixed(all[w - 1])
         },
         max_levels: b.below(17) as u8,
         ..Default::default()
@@ -172,6 +173,15 @@ pub fn lifting_roundtrip(data: &[u8]) {
         analyse(&level, w, &mut x);
         synthesise(&level, w, &mut x);
         assert_eq!(x, orig, "{} does not invert", w.name());
+    }
+    // The sqrt(2) transforms on the same coarse mesh (face points only).
+    let n = subwave_codec::sqrt2::fine_nv(&level);
+    for w in Wavelet::SQRT2 {
+        let plan = subwave_codec::sqrt2::Plan::new(&level, w);
+        let mut x = orig[..n].to_vec();
+        plan.analyse(&mut x);
+        plan.synthesise(&mut x);
+        assert_eq!(x, orig[..n], "{} does not invert", w.name());
     }
 }
 

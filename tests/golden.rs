@@ -76,6 +76,7 @@ fn frozen_containers_still_decode() {
         ("two_components_cc2.v4.swv", "two_components_cc2.obj"),
         ("unstructured.v5.swv", "unstructured.obj"),
         ("cube_cc4.flat.v5.swv", "cube_cc4.obj"),
+        ("prism_sqrt2_5.v6.swv", "prism_sqrt2_5.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

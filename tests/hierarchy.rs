@@ -1,4 +1,4 @@
-//! Catmull-Clark hierarchies: recovery depth on the shared corpus, coarser levels from
+//! Catmull-Clark and sqrt(2) hierarchies: recovery depth on the shared corpus, coarser levels from
 //! whole and cut-off files, and exact round trips of random hierarchies through every
 //! transform.
 
@@ -209,5 +209,153 @@ proptest! {
     #[test]
     fn random_base_meshes_round_trip(data in proptest::collection::vec(any::<u8>(), 16..600)) {
         subwave::fuzz_harness::roundtrip_mesh(&data);
+    }
+}
+
+#[test]
+fn sqrt2_meshes_recover_their_full_depth_in_any_order() {
+    let Some(dir) = common::shared_corpus() else {
+        eprintln!("../shared/corpus not found; skipping");
+        return;
+    };
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("manifest.json")).unwrap()).unwrap();
+    let mut checked = 0;
+    for e in manifest["meshes"].as_array().unwrap() {
+        if e["topology"].as_str() != Some("sqrt2") {
+            continue;
+        }
+        let want = e["levels"].as_u64().unwrap();
+        for key in ["file", "shuffled_file"] {
+            let name = e[key].as_str().unwrap();
+            let m = subwave::load(&std::fs::read(dir.join(name)).unwrap(), Some(16)).unwrap();
+            let opts = EncodeOptions {
+                transform: TransformChoice::Fixed(Wavelet::Sqrt2Lazy),
+                ..Default::default()
+            };
+            let enc = subwave::encode_to_vec(&m.mesh, &m.quantization, &opts).unwrap();
+            assert_eq!(enc.header.family, subwave::Family::Sqrt2, "{name}");
+            assert_eq!(enc.header.levels as u64, want, "{name}: sqrt(2) steps");
+            // The manifest's base or, with an even step count, its dual (the same
+            // refinement; the tie goes to fewer base vertices).
+            let (bv, bf) = (
+                e["base_vertex_count"].as_u64().unwrap(),
+                e["base_face_count"].as_u64().unwrap(),
+            );
+            let got = (enc.header.base_vertices, enc.header.base_faces);
+            assert!(
+                got == (bv, bf) || got == (bf, bv) && bf < bv,
+                "{name}: base {got:?}"
+            );
+            let dec = subwave::decode_slice(&enc.bytes).unwrap();
+            assert_eq!(
+                common::fingerprint(&dec.mesh),
+                common::fingerprint(&m.mesh),
+                "{name}"
+            );
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 8, "four sqrt2 meshes, ordered and shuffled");
+}
+
+#[test]
+fn a_catmull_clark_mesh_is_also_a_sqrt2_mesh_of_twice_the_steps() {
+    let mut rng = Rng::new(5);
+    let mut p = subwave_corpus::mixed_polygons().refined(3);
+    p.displace(0.02, 0.001, &mut rng);
+    let mesh = to_mesh(&p.shuffled(&mut rng), 1e5);
+    let q = Quantization::Decimal { decimals: 5 };
+    for (w, family, levels) in [
+        (Wavelet::Bicubic, subwave::Family::Cc, 3),
+        (Wavelet::Ir2w, subwave::Family::Sqrt2, 6),
+    ] {
+        let opts = EncodeOptions {
+            transform: TransformChoice::Fixed(w),
+            ..Default::default()
+        };
+        let enc = subwave::encode_to_vec(&mesh, &q, &opts).unwrap();
+        assert_eq!(enc.header.family, family);
+        assert_eq!(enc.header.levels, levels);
+        let dec = subwave::decode_slice(&enc.bytes).unwrap();
+        assert_eq!(common::fingerprint(&dec.mesh), common::fingerprint(&mesh));
+    }
+}
+
+#[test]
+fn sqrt2_coarser_levels_are_the_interpolated_vertices() {
+    // sqrt2-lazy is interpolatory: level k's vertices are input vertices.
+    let mut rng = Rng::new(9);
+    let mut p = subwave_corpus::mixed_polygons().sqrt2_refined(5);
+    p.displace(0.02, 0.001, &mut rng);
+    let mesh = to_mesh(&p, 1e6);
+    let opts = EncodeOptions {
+        transform: TransformChoice::Fixed(Wavelet::Sqrt2Lazy),
+        ..Default::default()
+    };
+    let enc = subwave::encode_to_vec(&mesh, &Quantization::Decimal { decimals: 6 }, &opts).unwrap();
+    assert_eq!(enc.header.levels, 5);
+    let all: std::collections::HashSet<[i64; 3]> = mesh.positions.iter().copied().collect();
+    let mut last = 0;
+    for k in 0..=5u8 {
+        let d = subwave::decode(
+            &enc.bytes,
+            &DecodeOptions {
+                max_level: Some(k),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert!(d.mesh.vertex_count() > last);
+        last = d.mesh.vertex_count();
+        assert!(
+            d.mesh.positions.iter().all(|p| all.contains(p)),
+            "level {k}"
+        );
+    }
+    assert_eq!(last, mesh.vertex_count());
+}
+
+fn random_sqrt2_hierarchy(seed: u64, base: usize, steps: u32, bits: u32) -> Mesh {
+    let mut rng = Rng::new(seed);
+    let b = match base {
+        0 => subwave_corpus::cube(),
+        1 => subwave_corpus::mixed_polygons(),
+        _ => subwave_corpus::union(&[
+            subwave_corpus::mixed_polygons(),
+            subwave_corpus::mixed_polygons().sqrt2_refined(2),
+        ]),
+    };
+    let fine = b.sqrt2_refined(steps).shuffled(&mut rng);
+    let mut m = to_mesh(&fine, 1.0);
+    let span = (1i64 << bits) - 1;
+    for p in &mut m.positions {
+        for c in p.iter_mut() {
+            *c = (rng.next_u64() % (2 * span as u64 + 1)) as i64 - span;
+        }
+    }
+    m.positions.push([span, -span, 0]);
+    m
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(500))]
+    #[test]
+    fn random_sqrt2_hierarchies_round_trip_through_every_sqrt2_transform(
+        seed in any::<u64>(), base in 0usize..3, steps in 1u32..6, bits in 1u32..45, keep in any::<bool>()
+    ) {
+        let mesh = random_sqrt2_hierarchy(seed, base, steps, bits);
+        for w in Wavelet::SQRT2 {
+            let opts = EncodeOptions { transform: TransformChoice::Fixed(w), keep_order: keep, ..Default::default() };
+            let enc = subwave::encode_to_vec(&mesh, &Quantization::Decimal { decimals: 0 }, &opts).unwrap();
+            prop_assert_eq!(enc.header.family, subwave::Family::Sqrt2);
+            prop_assert!(enc.header.levels as u32 >= steps);
+            let dec = subwave::decode_slice(&enc.bytes).unwrap();
+            if keep {
+                prop_assert_eq!(&dec.mesh, &mesh);
+            } else {
+                prop_assert_eq!(common::fingerprint(&dec.mesh), common::fingerprint(&mesh));
+            }
+        }
     }
 }

@@ -109,7 +109,7 @@ fn parse_transform(s: &str) -> Result<TransformChoice, String> {
     Wavelet::from_name(s)
         .map(TransformChoice::Fixed)
         .ok_or_else(|| {
-            format!("unknown transform '{s}'; use auto, lazy, bilinear, bicubic, biquintic or dyadic-sym")
+            format!("unknown transform '{s}'; use auto, lazy, bilinear, bicubic, biquintic, dyadic-sym (Catmull-Clark), sqrt2-lazy, ir2w or sqrt2-sym (sqrt(2))")
         })
 }
 

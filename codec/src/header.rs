@@ -230,7 +230,8 @@ impl Header {
         let transform = match r.u8("transform")? {
             0 => Transform::None,
             t => match Wavelet::from_code(t) {
-                Some(w) if version >= 2 => Transform::Wavelet(w),
+                // sqrt(2) transforms from format 6.
+                Some(w) if version >= 2 && (version >= 6 || !w.is_sqrt2()) => Transform::Wavelet(w),
                 _ => {
                     return Err(Error::Unsupported(format!(
                         "transform code {t} (byte {at})"
@@ -336,14 +337,26 @@ impl Header {
             return Err(malformed(offset, "a family or transform without levels"));
         }
         if self.levels > 0 {
-            if self.family != Family::Cc {
-                return Err(Error::Unsupported(format!(
-                    "{} hierarchies",
-                    self.family.name()
-                )));
-            }
-            if self.transform == Transform::None {
-                return Err(malformed(offset, "levels without a transform"));
+            let sqrt2 = match self.family {
+                Family::Cc => false,
+                Family::Sqrt2 => true,
+                f => return Err(Error::Unsupported(format!("{} hierarchies", f.name()))),
+            };
+            match self.transform {
+                Transform::None => {
+                    return Err(malformed(offset, "levels without a transform"));
+                }
+                Transform::Wavelet(w) if w.is_sqrt2() != sqrt2 => {
+                    return Err(malformed(
+                        offset,
+                        format!(
+                            "transform {} does not run on {} levels",
+                            w.name(),
+                            self.family.name()
+                        ),
+                    ));
+                }
+                Transform::Wavelet(_) => {}
             }
             if self.base_vertices > self.vertices
                 || self.base_faces > self.faces

@@ -68,6 +68,43 @@ fn f_context(level: &Level, act: &[u8], f: usize) -> usize {
     nbr_bin(s, n, false)
 }
 
+/// sqrt(2) face point: the mean activity of the coarse face's corners.
+fn corner_context(level: &Level, act: &[u8], f: usize) -> usize {
+    let mut s = 0u32;
+    let mut n = 0u32;
+    let mut unknown = false;
+    for &v in level.coarse.face(f) {
+        let a = act[v as usize];
+        unknown |= a == UNKNOWN;
+        s += a as u32;
+        n += 1;
+    }
+    nbr_bin(s, n, unknown)
+}
+
+/// The details of a level, in coding order: `(count, first fine index)`; Catmull-Clark
+/// levels code their edge points, then their face points, sqrt(2) levels their face
+/// points (SPEC.md 10.1).
+fn details(level: &Level, sqrt2: bool) -> usize {
+    if sqrt2 {
+        level.nf()
+    } else {
+        level.ne() + level.nf()
+    }
+}
+
+/// Detail `i`'s class, neighbour context and detail number for [`frame`].
+fn slot(level: &Level, act: &[u8], sqrt2: bool, i: usize) -> (usize, usize, usize) {
+    let ne = level.ne();
+    if sqrt2 {
+        (1, corner_context(level, act, i), ne + i)
+    } else if i < ne {
+        (0, e_context(level, act, i), i)
+    } else {
+        (1, f_context(level, act, i - ne), i)
+    }
+}
+
 fn activity(d: [i64; 3]) -> u8 {
     d.iter().map(|&v| class_of(v)).max().unwrap_or(0) as u8
 }
@@ -202,24 +239,26 @@ fn get(
     Ok(d)
 }
 
-/// Codes the details `x[k][nv..]` of one level. `coarse` holds the level's coarse values
-/// (what the decoder has when it reads this level); `act` holds the coarse vertices'
-/// activity and is extended to the fine vertices. `version` is the container's format
-/// version: from version 3 the payload starts with a mode byte, and the encoder keeps
-/// whichever of plain axes (0) and the normal frame (1) codes smaller (SPEC.md 10.2).
+/// Codes the details `x[k][nv..]` of one level (a sqrt(2) step when `sqrt2`). `coarse`
+/// holds the level's coarse values (what the decoder has when it reads this level);
+/// `act` holds the coarse vertices' activity and is extended to the fine vertices.
+/// `version` is the container's format version: from version 3 the payload starts with
+/// a mode byte, and the encoder keeps whichever of plain axes (0) and the normal frame
+/// (1) codes smaller (SPEC.md 10.2).
 pub fn encode(
     level: &Level,
+    sqrt2: bool,
     x: &[Vec<i64>; 3],
     coarse: &[Vec<i64>; 3],
     act: &mut Vec<u8>,
     version: u16,
 ) -> Vec<u8> {
     if version < 3 {
-        return encode_mode(level, x, coarse, act, false, version);
+        return encode_mode(level, sqrt2, x, coarse, act, false, version);
     }
     let mut act_plain = act.clone();
-    let plain = encode_mode(level, x, coarse, &mut act_plain, false, version);
-    let framed = encode_mode(level, x, coarse, act, true, version);
+    let plain = encode_mode(level, sqrt2, x, coarse, &mut act_plain, false, version);
+    let framed = encode_mode(level, sqrt2, x, coarse, act, true, version);
     let (mode, body) = if framed.len() < plain.len() {
         (1u8, framed)
     } else {
@@ -233,6 +272,7 @@ pub fn encode(
 
 fn encode_mode(
     level: &Level,
+    sqrt2: bool,
     x: &[Vec<i64>; 3],
     coarse: &[Vec<i64>; 3],
     act: &mut Vec<u8>,
@@ -241,22 +281,18 @@ fn encode_mode(
 ) -> Vec<u8> {
     let mut enc = Encoder::new();
     let mut m = Models::new(version);
-    let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
-    act.resize(nv + ne + nf, 0);
+    let (nv, nd) = (level.nv, details(level, sqrt2));
+    act.resize(nv + nd, 0);
     let normals = if framed {
         face_normals(level, coarse)
     } else {
         Vec::new()
     };
-    for i in 0..ne + nf {
-        let (class, nbr) = if i < ne {
-            (0, e_context(level, act, i))
-        } else {
-            (1, f_context(level, act, i - ne))
-        };
+    for i in 0..nd {
+        let (class, nbr, fd) = slot(level, act, sqrt2, i);
         let d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
         let fr = if framed {
-            frame(level, &normals, i)
+            frame(level, &normals, fd)
         } else {
             None
         };
@@ -270,16 +306,17 @@ fn encode_mode(
 pub fn decode(
     payload: &[u8],
     level: &Level,
+    sqrt2: bool,
     x: &mut [Vec<i64>; 3],
     act: &mut Vec<u8>,
     version: u16,
 ) -> Result<()> {
-    let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
+    let (nv, nd) = (level.nv, details(level, sqrt2));
     // Density bound (SPEC.md 2.6), checked before the level's arrays are sized.
-    if (ne + nf) as u64 > 2048 * (payload.len() as u64 + 8) {
+    if nd as u64 > 2048 * (payload.len() as u64 + 8) {
         return Err(Error::corrupt(
             "LEVL",
-            format!("{} bytes cannot hold {} details", payload.len(), ne + nf),
+            format!("{} bytes cannot hold {} details", payload.len(), nd),
         ));
     }
     let (framed, payload) = if version >= 3 {
@@ -294,23 +331,19 @@ pub fn decode(
     };
     let mut dec = Decoder::new(payload, "LEVL")?;
     let mut m = Models::new(version);
-    act.resize(nv + ne + nf, 0);
+    act.resize(nv + nd, 0);
     let normals = if framed {
         face_normals(level, x)
     } else {
         Vec::new()
     };
     for xs in x.iter_mut() {
-        xs.resize(nv + ne + nf, 0);
+        xs.resize(nv + nd, 0);
     }
-    for i in 0..ne + nf {
-        let (class, nbr) = if i < ne {
-            (0, e_context(level, act, i))
-        } else {
-            (1, f_context(level, act, i - ne))
-        };
+    for i in 0..nd {
+        let (class, nbr, fd) = slot(level, act, sqrt2, i);
         let fr = if framed {
-            frame(level, &normals, i)
+            frame(level, &normals, fd)
         } else {
             None
         };

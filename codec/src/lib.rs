@@ -15,6 +15,7 @@ pub mod levels;
 pub mod mesh;
 pub mod order;
 pub mod quant;
+pub mod sqrt2;
 pub mod transform;
 
 pub use error::{Error, Result};
@@ -137,9 +138,17 @@ fn code_hierarchy(
     // level's details.
     let mut coarse: Vec<[Vec<i64>; 3]> = vec![Default::default(); canon.levels.len()];
     for (l, level) in canon.levels.iter().enumerate().rev() {
-        let n = level.fine_nv();
-        for xs in x.iter_mut() {
-            transform::analyse(level, w, &mut xs[..n]);
+        if canon.sqrt2 {
+            let n = sqrt2::fine_nv(level);
+            let plan = sqrt2::Plan::new(level, w);
+            for xs in x.iter_mut() {
+                plan.analyse(&mut xs[..n]);
+            }
+        } else {
+            let n = level.fine_nv();
+            for xs in x.iter_mut() {
+                transform::analyse(level, w, &mut xs[..n]);
+            }
         }
         coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
     }
@@ -157,14 +166,18 @@ fn code_hierarchy(
         .levels
         .iter()
         .zip(&coarse)
-        .map(|(l, c)| levels::encode(l, &x, c, &mut act, FORMAT_VERSION))
+        .map(|(l, c)| levels::encode(l, canon.sqrt2, &x, c, &mut act, FORMAT_VERSION))
         .collect();
     let mut header = header.clone();
     header.base_vertices = nb as u64;
     header.base_faces = canon.base.nf() as u64;
     header.base_corners = canon.base.idx.len() as u64;
     header.levels = canon.levels.len() as u8;
-    header.family = Family::Cc;
+    header.family = if canon.sqrt2 {
+        Family::Sqrt2
+    } else {
+        Family::Cc
+    };
     header.transform = Transform::Wavelet(w);
     Some(Payloads {
         header,
@@ -208,36 +221,64 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
     let mut best: Option<Payloads> = None;
     let mut chosen: Option<(Canonical, [Vec<i64>; 3])> = None;
     if opts.max_levels > 0 {
-        let recs = hierarchy::cc::recover_all(mesh.vertex_count(), &topo, opts.max_levels as usize);
-        // A mesh and its dual can both be the base: compare them with one transform
-        // (bicubic for auto), then try the other transforms on the better one.
-        let first = match opts.transform {
-            TransformChoice::Auto => Wavelet::Bicubic,
-            TransformChoice::Fixed(w) => w,
+        let (want_cc, want_sqrt2) = match opts.transform {
+            TransformChoice::Auto => (true, true),
+            TransformChoice::Fixed(w) => (!w.is_sqrt2(), w.is_sqrt2()),
         };
-        for rec in &recs {
-            let canon = hierarchy::canonicalise(rec)?;
-            let pos: [Vec<i64>; 3] = std::array::from_fn(|k| {
-                canon
-                    .order
-                    .iter()
-                    .map(|&o| mesh.positions[o as usize][k])
-                    .collect()
-            });
-            if let Some(p) = code_hierarchy(&canon, &pos, first, &flat_h) {
-                if best.as_ref().is_none_or(|b| p.size() < b.size()) {
-                    best = Some(p);
-                    chosen = Some((canon, pos));
-                }
+        let max = opts.max_levels as usize;
+        // Per family: its candidate hierarchies, the transform that compares them, and
+        // the family's other transforms (tried on the better candidate with `auto`).
+        let mut families: Vec<(Vec<Canonical>, Wavelet, &[Wavelet])> = Vec::new();
+        if want_cc {
+            let mut canons = Vec::new();
+            for rec in hierarchy::cc::recover_all(mesh.vertex_count(), &topo, max) {
+                canons.push(hierarchy::canonicalise(&rec)?);
             }
+            // A mesh and its dual can both be the base: compare them with one transform.
+            families.push((canons, Wavelet::Bicubic, &Wavelet::ALL));
         }
-        if let (TransformChoice::Auto, Some((canon, pos))) = (opts.transform, &chosen) {
-            for w in Wavelet::ALL.into_iter().filter(|&w| w != first) {
-                if let Some(p) = code_hierarchy(canon, pos, w, &flat_h) {
-                    if best.as_ref().is_none_or(|b| p.size() < b.size()) {
-                        best = Some(p);
+        if want_sqrt2 {
+            let canons: Vec<Canonical> = sqrt2::recover::recover(&topo, max)
+                .and_then(|rec| sqrt2::recover::canonicalise(&rec, &topo).ok())
+                .into_iter()
+                .collect();
+            families.push((canons, Wavelet::Sqrt2Lazy, &Wavelet::SQRT2));
+        }
+        for (canons, auto_first, others) in families {
+            let first = match opts.transform {
+                TransformChoice::Auto => auto_first,
+                TransformChoice::Fixed(w) => w,
+            };
+            let mut fam_best: Option<(Payloads, Canonical, [Vec<i64>; 3])> = None;
+            for canon in canons {
+                let pos: [Vec<i64>; 3] = std::array::from_fn(|k| {
+                    canon
+                        .order
+                        .iter()
+                        .map(|&o| mesh.positions[o as usize][k])
+                        .collect()
+                });
+                if let Some(p) = code_hierarchy(&canon, &pos, first, &flat_h) {
+                    if fam_best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
+                        fam_best = Some((p, canon, pos));
                     }
                 }
+            }
+            let Some((mut p, canon, pos)) = fam_best else {
+                continue;
+            };
+            if opts.transform == TransformChoice::Auto {
+                for &w in others.iter().filter(|&&w| w != first) {
+                    if let Some(q) = code_hierarchy(&canon, &pos, w, &flat_h) {
+                        if q.size() < p.size() {
+                            p = q;
+                        }
+                    }
+                }
+            }
+            if best.as_ref().is_none_or(|b| p.size() < b.size()) {
+                best = Some(p);
+                chosen = Some((canon, pos));
             }
         }
     }
@@ -513,29 +554,50 @@ fn synthesise_levels(
     let mut x: [Vec<i64>; 3] =
         std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect());
     let mut act = vec![levels::UNKNOWN; topo.nv];
+    let is_sqrt2 = h.family == Family::Sqrt2;
     for l in 0..upto as usize {
         let level = Level::new(&topo)?;
         // Refuse a refinement larger than the header's finest mesh before building it.
-        if level.fine_nv() as u64 > h.vertices || level.coarse.idx.len() as u64 > h.faces {
+        let (fine_nv, fine_faces) = if is_sqrt2 {
+            (sqrt2::fine_nv(&level), level.ne())
+        } else {
+            (level.fine_nv(), level.coarse.idx.len())
+        };
+        if fine_nv as u64 > h.vertices || fine_faces as u64 > h.faces {
             return Err(Error::corrupt(
                 "HEAD",
                 "the base mesh refines to more than the header's counts",
             ));
         }
+        if is_sqrt2 && !sqrt2::closed(&level) {
+            return Err(Error::corrupt("BASE", "a sqrt(2) level with a boundary"));
+        }
         levels::decode(
             c.sections[2 + l].payload,
             &level,
+            is_sqrt2,
             &mut x,
             &mut act,
             c.version,
         )?;
-        for xs in x.iter_mut() {
-            transform::synthesise(&level, w, xs);
+        if is_sqrt2 {
+            let plan = sqrt2::Plan::new(&level, w);
+            for xs in x.iter_mut() {
+                plan.synthesise(xs);
+            }
+        } else {
+            for xs in x.iter_mut() {
+                transform::synthesise(&level, w, xs);
+            }
         }
         if x.iter().flatten().any(|v| v.abs() > levels::MAX_LIFTED) {
             return Err(Error::corrupt("LEVL", "reconstructed value out of range"));
         }
-        topo = level.fine();
+        topo = if is_sqrt2 {
+            sqrt2::fine(&level)
+        } else {
+            level.fine()
+        };
     }
     if upto == h.levels
         && (topo.nv as u64 != h.vertices

@@ -24,10 +24,19 @@ pub enum Wavelet {
     /// over neighbours written as (regular count) x (mean), the 1/j scaling expanded
     /// exactly (SPEC.md 9.5).
     DyadicSym,
+    /// sqrt(2) levels: the interpolatory prediction of Wang & Ma 2009 (eq. 1) alone
+    /// (SPEC.md 9.7).
+    Sqrt2Lazy,
+    /// sqrt(2) levels: the interpolatory prediction and the twelve-neighbour update of
+    /// Wang & Ma 2009 (eq. 9, 10) with frozen fixed-point weights (SPEC.md 9.7).
+    Ir2w,
+    /// sqrt(2) levels: the three-step 4-fold symmetric lifting of seed 003 (eq. 83, 84,
+    /// 91), the 1/j scaling an exact injective rounding (SPEC.md 9.8).
+    Sqrt2Sym,
 }
 
 impl Wavelet {
-    /// All transforms, in header-code order.
+    /// The Catmull-Clark transforms, in header-code order.
     pub const ALL: [Wavelet; 5] = [
         Wavelet::Lazy,
         Wavelet::Bilinear,
@@ -35,6 +44,14 @@ impl Wavelet {
         Wavelet::Biquintic,
         Wavelet::DyadicSym,
     ];
+
+    /// The sqrt(2) transforms, in header-code order.
+    pub const SQRT2: [Wavelet; 3] = [Wavelet::Sqrt2Lazy, Wavelet::Ir2w, Wavelet::Sqrt2Sym];
+
+    /// Whether the transform runs on sqrt(2) levels (else on Catmull-Clark levels).
+    pub fn is_sqrt2(self) -> bool {
+        Wavelet::SQRT2.contains(&self)
+    }
 
     /// The name used on the command line and in `info`.
     pub fn name(self) -> &'static str {
@@ -44,6 +61,9 @@ impl Wavelet {
             Wavelet::Bicubic => "bicubic",
             Wavelet::Biquintic => "biquintic",
             Wavelet::DyadicSym => "dyadic-sym",
+            Wavelet::Sqrt2Lazy => "sqrt2-lazy",
+            Wavelet::Ir2w => "ir2w",
+            Wavelet::Sqrt2Sym => "sqrt2-sym",
         }
     }
 
@@ -55,25 +75,35 @@ impl Wavelet {
             Wavelet::Bicubic => 3,
             Wavelet::Biquintic => 4,
             Wavelet::DyadicSym => 5,
+            Wavelet::Sqrt2Lazy => 6,
+            Wavelet::Ir2w => 7,
+            Wavelet::Sqrt2Sym => 8,
         }
     }
 
     /// The transform with a header code.
     pub fn from_code(c: u8) -> Option<Wavelet> {
-        Wavelet::ALL.into_iter().find(|w| w.code() == c)
+        Wavelet::ALL
+            .into_iter()
+            .chain(Wavelet::SQRT2)
+            .find(|w| w.code() == c)
     }
 
     /// The transform with a name.
     pub fn from_name(s: &str) -> Option<Wavelet> {
-        Wavelet::ALL.into_iter().find(|w| w.name() == s)
+        Wavelet::ALL
+            .into_iter()
+            .chain(Wavelet::SQRT2)
+            .find(|w| w.name() == s)
     }
 
     /// Analysis steps in order of computation (Table 1 of Bertram et al., integer
-    /// variant of their section 4.3); empty for `DyadicSym`, which has its own steps.
+    /// variant of their section 4.3); empty for `DyadicSym`, which has its own steps,
+    /// and for the sqrt(2) transforms ([`crate::sqrt2`]).
     pub fn steps(self) -> &'static [Step] {
         use Kind::{S, W};
         match self {
-            Wavelet::DyadicSym => &[],
+            Wavelet::DyadicSym | Wavelet::Sqrt2Lazy | Wavelet::Ir2w | Wavelet::Sqrt2Sym => &[],
             Wavelet::Lazy => &[Step {
                 kind: W,
                 p: -1,
@@ -182,6 +212,14 @@ pub trait Sample: Copy {
     ) -> Self;
     /// `self * n / d`, rounded half up for integers.
     fn scale(self, n: i128, d: i128) -> Self;
+    /// `self * w`, widened.
+    fn weighted(self, w: i128) -> Self::Acc;
+    /// `s / d`, rounded half up for integers.
+    fn round(s: Self::Acc, d: i128) -> Self;
+    /// sqrt2-sym's scaling step (SPEC.md 9.8): `[(16 n v - 3 s) / (13 n)]`.
+    fn sym_scale(self, s: Self::Acc, n: i128) -> Self;
+    /// Its inverse: the `v` that [`Sample::sym_scale`] maps to `self`.
+    fn sym_unscale(self, s: Self::Acc, n: i128) -> Self;
 }
 
 /// `[n / d]`: `floor((2n + d) / 2d)` for `d > 0` (SPEC.md 9.1).
@@ -225,6 +263,26 @@ impl Sample for i64 {
     fn scale(self, n: i128, d: i128) -> i64 {
         round_div(self as i128 * n, d)
     }
+    #[inline]
+    fn weighted(self, w: i128) -> i128 {
+        self as i128 * w
+    }
+    #[inline]
+    fn round(s: i128, d: i128) -> i64 {
+        round_div(s, d)
+    }
+    #[inline]
+    fn sym_scale(self, s: i128, n: i128) -> i64 {
+        round_div(16 * n * self as i128 - 3 * s, 13 * n)
+    }
+    #[inline]
+    fn sym_unscale(self, s: i128, n: i128) -> i64 {
+        // y = [(A v - B s) / D] <=> D y - D/2 <= A v - B s < D y + D/2, so
+        // v = ceil((2 D y - D + 2 B s) / (2 A)), A = 16 n, B = 3, D = 13 n.
+        let num = 26 * n * self as i128 - 13 * n + 6 * s;
+        let den = 32 * n;
+        (-((-num).div_euclid(den))) as i64
+    }
 }
 
 impl Sample for f64 {
@@ -252,6 +310,22 @@ impl Sample for f64 {
     #[inline]
     fn scale(self, n: i128, d: i128) -> f64 {
         self * n as f64 / d as f64
+    }
+    #[inline]
+    fn weighted(self, w: i128) -> f64 {
+        self * w as f64
+    }
+    #[inline]
+    fn round(s: f64, d: i128) -> f64 {
+        s / d as f64
+    }
+    #[inline]
+    fn sym_scale(self, s: f64, n: i128) -> f64 {
+        (16.0 * n as f64 * self - 3.0 * s) / (13.0 * n as f64)
+    }
+    #[inline]
+    fn sym_unscale(self, s: f64, n: i128) -> f64 {
+        (13.0 * n as f64 * self + 3.0 * s) / (16.0 * n as f64)
     }
 }
 

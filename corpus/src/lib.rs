@@ -154,6 +154,42 @@ impl PolyMesh {
         }
     }
 
+    /// One sqrt(2) step of a closed mesh: every vertex kept, a face point at each face's
+    /// centroid, and per edge a-b the quad (a, f2, b, f1), f1 the face with the directed
+    /// edge a -> b. New vertices follow the old ones, in face order.
+    pub fn sqrt2_step(&self) -> PolyMesh {
+        let nv = self.positions.len() as u32;
+        let mut positions = self.positions.clone();
+        let mut by_edge: HashMap<(u32, u32), u32> = HashMap::new();
+        for (fi, f) in self.faces.iter().enumerate() {
+            positions.push(mean(f.iter().map(|&v| self.positions[v as usize])));
+            for i in 0..f.len() {
+                by_edge.insert((f[i], f[(i + 1) % f.len()]), nv + fi as u32);
+            }
+        }
+        let mut faces = Vec::new();
+        for f in &self.faces {
+            for i in 0..f.len() {
+                let (a, b) = (f[i], f[(i + 1) % f.len()]);
+                if a < b {
+                    let f1 = by_edge[&(a, b)];
+                    let f2 = *by_edge.get(&(b, a)).expect("a closed mesh");
+                    faces.push(vec![a, f2, b, f1]);
+                }
+            }
+        }
+        PolyMesh { positions, faces }
+    }
+
+    /// `steps` sqrt(2) steps.
+    pub fn sqrt2_refined(&self, steps: u32) -> PolyMesh {
+        let mut m = self.clone();
+        for _ in 0..steps {
+            m = m.sqrt2_step();
+        }
+        m
+    }
+
     /// `levels` Catmull-Clark steps.
     pub fn refined(&self, levels: u32) -> PolyMesh {
         let mut m = self.clone();
@@ -386,6 +422,8 @@ pub fn small_corpus() -> Vec<(&'static str, String)> {
         translate(mixed_polygons().refined(1), [3.0, 0.0, 0.0]),
     ]);
     let shuffled = cube4.shuffled(&mut rng);
+    let mut prism = mixed_polygons().sqrt2_refined(5);
+    prism.displace(0.03, 0.002, &mut rng);
     vec![
         ("cube_cc4.obj", cube4.to_obj(6)),
         ("cube_cc4.shuffled.obj", shuffled.to_obj(6)),
@@ -394,6 +432,7 @@ pub fn small_corpus() -> Vec<(&'static str, String)> {
         ("two_components_cc2.obj", two.to_obj(4)),
         ("terrain_grid33.obj", terrain(5, 3).to_obj(3)),
         ("unstructured.obj", unstructured(12, 5).to_obj(6)),
+        ("prism_sqrt2_5.obj", prism.to_obj(6)),
     ]
 }
 

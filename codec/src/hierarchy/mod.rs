@@ -359,34 +359,29 @@ pub struct Canonical {
     pub fine: Topo,
     /// `order[c]` = the input number of canonical vertex `c` (finest level).
     pub order: Vec<u32>,
+    /// The levels are sqrt(2) steps ([`crate::sqrt2`]), not Catmull-Clark ones.
+    pub sqrt2: bool,
 }
 
-/// Canonicalises a recovered hierarchy (SPEC.md 8.2). `all_vertices` is the input's
-/// vertex count: vertices no face uses are kept in the base mesh.
-pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
-    // Base order: first use walking the base faces, then unused vertices (of the whole
-    // input: a vertex unused at the finest level is unused at every level).
-    let n = rec.base.nv;
-    let mut used_fine = vec![false; n];
+/// The canonical base numbering (SPEC.md 8.2): base vertices in order of first use
+/// walking the base faces, then the input's vertices that no face at any level uses
+/// (`finer` lists the vertices that appear at finer levels). Returns `order[c]` = input
+/// number of canonical vertex `c`, and the base faces renumbered.
+pub(crate) fn base_numbering(base_in: &Topo, finer: impl Iterator<Item = u32>) -> (Vec<u32>, Topo) {
+    let n = base_in.nv;
     let mut order: Vec<u32> = Vec::new();
     let mut seen = vec![false; n];
-    for &v in &rec.base.idx {
+    for &v in &base_in.idx {
         if !seen[v as usize] {
             seen[v as usize] = true;
             order.push(v);
         }
     }
-    // Vertices that appear at some finer level are not base vertices.
-    for l in 0..rec.levels() {
-        for v in rec.edge_points[l]
-            .values()
-            .chain(rec.face_points[l].values())
-        {
-            used_fine[v as usize] = true;
-        }
+    for v in finer {
+        seen[v as usize] = true;
     }
     for v in 0..n as u32 {
-        if !seen[v as usize] && !used_fine[v as usize] {
+        if !seen[v as usize] {
             order.push(v);
         }
     }
@@ -395,10 +390,22 @@ pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
         inv[v as usize] = c as u32;
     }
     let mut base = Topo::new(order.len());
-    for f in 0..rec.base.nf() {
-        let face: Vec<u32> = rec.base.face(f).iter().map(|&v| inv[v as usize]).collect();
+    for f in 0..base_in.nf() {
+        let face: Vec<u32> = base_in.face(f).iter().map(|&v| inv[v as usize]).collect();
         base.push(&face);
     }
+    (order, base)
+}
+
+/// Canonicalises a recovered hierarchy (SPEC.md 8.2). `all_vertices` is the input's
+/// vertex count: vertices no face uses are kept in the base mesh.
+pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
+    let finer = (0..rec.levels()).flat_map(|l| {
+        rec.edge_points[l]
+            .values()
+            .chain(rec.face_points[l].values())
+    });
+    let (mut order, base) = base_numbering(&rec.base, finer);
     let mut levels = Vec::with_capacity(rec.levels());
     let mut cur = base.clone();
     for l in 0..rec.levels() {
@@ -427,6 +434,7 @@ pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
         levels,
         fine: cur,
         order,
+        sqrt2: false,
     })
 }
 

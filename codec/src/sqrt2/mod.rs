@@ -1,0 +1,448 @@
+//! sqrt(2) hierarchies (SPEC.md 8.4-8.5, 9.6-9.8): the refinement, its recovery from a
+//! flat mesh, and the three transforms on it (`sqrt2-lazy`, `ir2w`, `sqrt2-sym`).
+//!
+//! One sqrt(2) step keeps every coarse vertex and inserts one face point per coarse face;
+//! the fine faces are the quads (a, f2, b, f1), one per coarse edge a-b, f1 being the face
+//! with the directed edge a -> b. The coarse adjacency is a [`Level`]; fine vertex
+//! `nv + f` is face `f`'s point. Only closed meshes are sqrt(2) hierarchies here (SPEC.md
+//! 8.4: with a boundary the refinement needs triangles and a second boundary rule).
+//!
+//! Like the Catmull-Clark transforms, every step but one changes one class from the
+//! other: synthesis undoes analysis exactly for any weights. The exception is
+//! `sqrt2-sym`'s 16/13 scaling, an injective rounding inverted exactly (SPEC.md 9.8).
+
+pub mod recover;
+pub mod solve;
+pub mod tables;
+
+use crate::hierarchy::{Level, Topo, NONE};
+use crate::transform::{Sample, Wavelet};
+use solve::Rings;
+
+/// Largest valence with its own weights in the frozen tables.
+pub const TABLE_MAX: usize = 16;
+
+/// Fixed-point scale of the table weights.
+const ONE: i128 = 1 << 16;
+
+/// Whether every coarse edge has two faces (sqrt(2) levels need a closed mesh).
+pub fn closed(level: &Level) -> bool {
+    level.edge_faces.iter().all(|f| f[1] != NONE)
+}
+
+/// The fine topology of one sqrt(2) step (SPEC.md 8.4): per coarse edge, in edge order,
+/// the quad (a, f2, b, f1). The level must be [`closed`].
+pub fn fine(level: &Level) -> Topo {
+    let mut t = Topo::new(level.nv + level.nf());
+    t.idx.reserve(4 * level.ne());
+    t.starts.reserve(level.ne());
+    let f0 = level.nv as u32;
+    for (e, &[a, b]) in level.edges.iter().enumerate() {
+        let [f1, f2] = level.edge_faces[e];
+        t.push(&[a, f0 + f2, b, f0 + f1]);
+    }
+    t
+}
+
+/// Number of fine vertices of a sqrt(2) step.
+pub fn fine_nv(level: &Level) -> usize {
+    level.nv + level.nf()
+}
+
+/// Weighted sums, precomputed once per level and transform: `targets[i]` gets
+/// `sum(w * x[src]) / den[i]` (CSR rows).
+#[derive(Debug, Default, Clone)]
+struct Rows {
+    starts: Vec<u32>,
+    src: Vec<u32>,
+    w: Vec<i32>,
+    den: Vec<i64>,
+}
+
+impl Rows {
+    fn new() -> Rows {
+        Rows {
+            starts: vec![0],
+            ..Default::default()
+        }
+    }
+
+    fn push(&mut self, den: i64) {
+        self.starts.push(self.src.len() as u32);
+        self.den.push(den);
+    }
+
+    fn term(&mut self, src: u32, w: i32) {
+        self.src.push(src);
+        self.w.push(w);
+    }
+
+    #[inline]
+    fn eval<T: Sample>(&self, i: usize, x: &[T]) -> T {
+        let mut s = T::Acc::default();
+        for k in self.starts[i] as usize..self.starts[i + 1] as usize {
+            s += x[self.src[k] as usize].weighted(self.w[k] as i128);
+        }
+        T::round(s, self.den[i] as i128)
+    }
+}
+
+/// The precomputed steps of one transform on one level.
+pub struct Plan {
+    nv: usize,
+    nf: usize,
+    wavelet: Wavelet,
+    /// Prediction of each face point from the coarse vertices (lazy, ir2w).
+    predict: Rows,
+    /// ir2w: per coarse vertex, its update from the face points' details.
+    update: Rows,
+    /// sqrt2-sym: per vertex, its faces (step 1, step 3) and ring-2 faces (step 3).
+    sym_own: Rows,
+    sym_ring: Rows,
+}
+
+/// Valences (ring lengths) and the neighbour of corner `c` at ring offset `j`.
+struct Neighbours<'a> {
+    rings: &'a Rings,
+    topo: &'a Topo,
+}
+
+impl Neighbours<'_> {
+    fn valence(&self, v: u32) -> usize {
+        self.rings.of(v as usize).len()
+    }
+
+    /// `p_{i,j}` of corner `c` (SPEC.md 8.4): ring of the corner's vertex from its next
+    /// corner, through the face.
+    fn at(&self, c: usize, j: usize) -> u32 {
+        let v = self.topo.idx[c] as usize;
+        let r = self.rings.of(v);
+        r[(self.rings.pos[c] as usize + j) % r.len()]
+    }
+}
+
+fn table_valence(n: usize) -> bool {
+    (3..=TABLE_MAX).contains(&n)
+}
+
+impl Plan {
+    /// Precomputes the steps of sqrt(2) wavelet `w` on `level`.
+    pub fn new(level: &Level, w: Wavelet) -> Plan {
+        let (nv, nf) = (level.nv, level.nf());
+        let topo = &level.coarse;
+        let mut plan = Plan {
+            nv,
+            nf,
+            wavelet: w,
+            predict: Rows::new(),
+            update: Rows::new(),
+            sym_own: Rows::new(),
+            sym_ring: Rows::new(),
+        };
+        match w {
+            Wavelet::Sqrt2Lazy | Wavelet::Ir2w => {
+                let rings = Rings::new(topo);
+                let nb = Neighbours {
+                    rings: &rings,
+                    topo,
+                };
+                for f in 0..nf {
+                    let s = topo.starts[f] as usize;
+                    let k = topo.face(f).len();
+                    for c in s..s + k {
+                        let v = topo.idx[c];
+                        let n = nb.valence(v);
+                        if table_valence(n) {
+                            plan.predict.term(v, (ONE / 2) as i32);
+                            for (j, &a) in tables::ALPHA[n - 3].iter().enumerate() {
+                                plan.predict.term(nb.at(c, j), a);
+                            }
+                        } else {
+                            plan.predict.term(v, ONE as i32);
+                        }
+                    }
+                    plan.predict.push(k as i64 * ONE as i64);
+                }
+                if w == Wavelet::Ir2w {
+                    plan.update = ir2w_update(level, &nb);
+                }
+            }
+            Wavelet::Sqrt2Sym => {
+                for v in 0..nv {
+                    let faces = level.v_faces(v);
+                    for &f in faces {
+                        plan.sym_own.term(f, 1);
+                    }
+                    plan.sym_own.push(faces.len().max(1) as i64);
+                    // Ring-2 faces: across every edge of v's faces that v is not on.
+                    for &f in faces {
+                        let face = topo.face(f as usize);
+                        let fe = level.f_edges(f as usize);
+                        for (i, &e) in fe.iter().enumerate() {
+                            let (a, b) = (face[i], face[(i + 1) % face.len()]);
+                            if a as usize == v || b as usize == v {
+                                continue;
+                            }
+                            let [g0, g1] = level.edge_faces[e as usize];
+                            let g = if g0 == f { g1 } else { g0 };
+                            if g != NONE {
+                                plan.sym_ring.term(g, 1);
+                            }
+                        }
+                    }
+                    plan.sym_ring.push(1);
+                }
+            }
+            _ => {}
+        }
+        plan
+    }
+
+    /// Analysis: fine values `x[..nv + nf]` to coarse values and face-point details.
+    pub fn analyse<T: Sample>(&self, x: &mut [T]) {
+        let (nv, nf) = (self.nv, self.nf);
+        match self.wavelet {
+            Wavelet::Sqrt2Lazy | Wavelet::Ir2w => {
+                for f in 0..nf {
+                    let p = self.predict.eval(f, x);
+                    x[nv + f] = x[nv + f].minus(p);
+                }
+                if self.wavelet == Wavelet::Ir2w {
+                    let d = &x[nv..nv + nf];
+                    let u: Vec<T> = (0..nv).map(|v| self.update.eval(v, d)).collect();
+                    for (v, u) in u.into_iter().enumerate() {
+                        x[v] = x[v].minus(u);
+                    }
+                }
+            }
+            Wavelet::Sqrt2Sym => {
+                // Step 1: v'' = [(16 n v - 3 S) / (13 n)], S = sum of v's face points.
+                let y: Vec<T> = (0..nv)
+                    .map(|v| {
+                        let (n, s) = self.own_sum(v, x);
+                        if n == 0 {
+                            x[v]
+                        } else {
+                            T::sym_scale(x[v], s, n as i128)
+                        }
+                    })
+                    .collect();
+                x[..nv].copy_from_slice(&y);
+                self.sym_faces(x, true);
+                self.sym_vertices(x, true);
+            }
+            _ => {}
+        }
+    }
+
+    /// Synthesis: the exact inverse of [`Plan::analyse`].
+    pub fn synthesise<T: Sample>(&self, x: &mut [T]) {
+        let (nv, nf) = (self.nv, self.nf);
+        match self.wavelet {
+            Wavelet::Sqrt2Lazy | Wavelet::Ir2w => {
+                if self.wavelet == Wavelet::Ir2w {
+                    let d = &x[nv..nv + nf];
+                    let u: Vec<T> = (0..nv).map(|v| self.update.eval(v, d)).collect();
+                    for (v, u) in u.into_iter().enumerate() {
+                        x[v] = x[v].plus(u);
+                    }
+                }
+                for f in 0..nf {
+                    let p = self.predict.eval(f, x);
+                    x[nv + f] = x[nv + f].plus(p);
+                }
+            }
+            Wavelet::Sqrt2Sym => {
+                self.sym_vertices(x, false);
+                self.sym_faces(x, false);
+                let v: Vec<T> = (0..nv)
+                    .map(|v| {
+                        let (n, s) = self.own_sum(v, x);
+                        if n == 0 {
+                            x[v]
+                        } else {
+                            T::sym_unscale(x[v], s, n as i128)
+                        }
+                    })
+                    .collect();
+                x[..nv].copy_from_slice(&v);
+            }
+            _ => {}
+        }
+    }
+
+    /// Vertex `v`'s face count and the sum of its faces' values.
+    fn own_sum<T: Sample>(&self, v: usize, x: &[T]) -> (usize, T::Acc) {
+        let r = self.sym_own.starts[v] as usize..self.sym_own.starts[v + 1] as usize;
+        let mut s = T::Acc::default();
+        for k in r.clone() {
+            s += x[self.nv + self.sym_own.src[k] as usize].acc();
+        }
+        (r.len(), s)
+    }
+
+    /// sqrt2-sym step 2: `f'' = f - [sum of corners / k]` (analysis) or its inverse.
+    fn sym_faces<T: Sample>(&self, x: &mut [T], forward: bool) {
+        // Face f's corners: every vertex lists its faces, so walk the vertex rows.
+        let mut sum = vec![T::Acc::default(); self.nf];
+        let mut cnt = vec![0i128; self.nf];
+        for v in 0..self.nv {
+            for k in self.sym_own.starts[v] as usize..self.sym_own.starts[v + 1] as usize {
+                let f = self.sym_own.src[k] as usize;
+                sum[f] += x[v].acc();
+                cnt[f] += 1;
+            }
+        }
+        for f in 0..self.nf {
+            if cnt[f] == 0 {
+                continue;
+            }
+            let p = T::combine(1, sum[f], 0, T::Acc::default(), cnt[f]);
+            let i = self.nv + f;
+            x[i] = if forward { x[i].minus(p) } else { x[i].plus(p) };
+        }
+    }
+
+    /// sqrt2-sym step 3: `v~ = v'' - [n1 (4/n) S1 + m1 (8/r) S2]` (analysis) or its inverse.
+    fn sym_vertices<T: Sample>(&self, x: &mut [T], forward: bool) {
+        for v in 0..self.nv {
+            let (n, s1) = self.own_sum(v, x);
+            if n == 0 {
+                continue;
+            }
+            let r = self.sym_ring.starts[v] as usize..self.sym_ring.starts[v + 1] as usize;
+            let mut s2 = T::Acc::default();
+            for k in r.clone() {
+                s2 += x[self.nv + self.sym_ring.src[k] as usize].acc();
+            }
+            let (n, r) = (n as i128, r.len() as i128);
+            // n1 = -15/64, m1 = 11/256: -(240 r S1 - 88 n S2) / (256 n r).
+            let p = if r == 0 {
+                T::combine(-240, s1, 0, s2, 256 * n)
+            } else {
+                T::combine(-240 * r, s1, 88 * n, s2, 256 * n * r)
+            };
+            x[v] = if forward { x[v].minus(p) } else { x[v].plus(p) };
+        }
+    }
+}
+
+/// The ir2w update rows (SPEC.md 9.7): every quad face whose corners have table valences,
+/// at most one of them other than 4, lifts its twelve scaling functions with the frozen
+/// weights of that corner's valence (the regular row when none); other faces lift none.
+fn ir2w_update(level: &Level, nb: &Neighbours<'_>) -> Rows {
+    let topo = &level.coarse;
+    // Gather form: per vertex, (face, weight) pairs.
+    let mut pairs: Vec<(u32, u32, i32)> = Vec::new();
+    for f in 0..level.nf() {
+        let face = topo.face(f);
+        if face.len() != 4 {
+            continue;
+        }
+        let n: Vec<usize> = face.iter().map(|&v| nb.valence(v)).collect();
+        if !n.iter().all(|&n| table_valence(n)) {
+            continue;
+        }
+        let odd: Vec<usize> = (0..4).filter(|&i| n[i] != 4).collect();
+        if odd.len() > 1 {
+            continue;
+        }
+        let e = odd.first().copied().unwrap_or(0);
+        let row = tables::OMEGA[n[e] - 3];
+        let s = topo.starts[f] as usize;
+        let corner = |i: usize| s + (e + i) % 4;
+        // Weight of each scaling function phi_0..phi_11 (SPEC.md 9.7).
+        let w = [
+            row[0], row[1], row[2], row[1], row[3], row[4], row[5], row[6], row[6], row[5], row[4],
+            row[3],
+        ];
+        let mut phi = [0u32; 12];
+        for i in 0..4 {
+            let c = corner(i);
+            let ni = nb.valence(topo.idx[c]);
+            phi[i] = topo.idx[c];
+            phi[4 + 2 * i] = nb.at(c, ni - 1);
+            phi[4 + 2 * ((i + 3) % 4) + 1] = nb.at(c, 2);
+        }
+        for k in 0..12 {
+            if k == 11 && n[e] == 3 {
+                continue;
+            }
+            pairs.push((phi[k], f as u32, w[k]));
+        }
+    }
+    pairs.sort_by_key(|p| (p.0, p.1));
+    let mut rows = Rows::new();
+    let mut it = pairs.into_iter().peekable();
+    for v in 0..level.nv as u32 {
+        while let Some(&(pv, f, w)) = it.peek() {
+            if pv != v {
+                break;
+            }
+            rows.term(f, w);
+            it.next();
+        }
+        rows.push(ONE as i64);
+    }
+    rows
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hierarchy::fixtures::prism_with_triangles;
+
+    fn pseudo(seed: u64, n: usize, bits: u32) -> Vec<i64> {
+        let mut s = seed;
+        (0..n)
+            .map(|_| {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((s >> 20) % (1 << bits)) as i64 - (1 << (bits - 1))
+            })
+            .collect()
+    }
+
+    #[test]
+    fn every_transform_inverts_exactly() {
+        let mut t = prism_with_triangles();
+        for depth in 0..5 {
+            let level = Level::new(&t).unwrap();
+            assert!(closed(&level));
+            for w in Wavelet::SQRT2 {
+                let plan = Plan::new(&level, w);
+                let orig = pseudo(depth as u64 * 7 + w.code() as u64, fine_nv(&level), 30);
+                let mut x = orig.clone();
+                plan.analyse(&mut x);
+                assert_ne!(x, orig, "{w:?} changed nothing");
+                plan.synthesise(&mut x);
+                assert_eq!(x, orig, "{w:?} at depth {depth}");
+            }
+            t = fine(&level);
+            assert!(t.all_quads());
+        }
+    }
+
+    #[test]
+    fn constants_give_zero_details() {
+        // Constant data on a refined prism: sqrt2-lazy and ir2w details are exactly zero
+        // (every corner's stencil sums to one after quantisation).
+        let mut t = prism_with_triangles();
+        for _ in 0..3 {
+            t = fine(&Level::new(&t).unwrap());
+        }
+        let level = Level::new(&t).unwrap();
+        for w in [Wavelet::Sqrt2Lazy, Wavelet::Ir2w] {
+            let plan = Plan::new(&level, w);
+            let x0 = vec![5000i64; fine_nv(&level)];
+            let mut x = x0.clone();
+            plan.analyse(&mut x);
+            assert!(
+                x[level.nv..].iter().all(|&d| d == 0),
+                "{w:?}: {:?}",
+                &x[level.nv..]
+            );
+        }
+    }
+}

@@ -1,0 +1,367 @@
+//! Recovering sqrt(2) hierarchies from a flat mesh (SPEC.md 8.5).
+//!
+//! A sqrt(2) step's fine mesh is a closed quad mesh whose vertex graph is bipartite: old
+//! vertices on one side, face points on the other. Undoing a step picks one side as the
+//! face points; each face point's quads name the coarse edges around it, which must
+//! chain into one polygon, and every coarse edge must come from one quad only. Both
+//! sides are tried, recursively, and the deeper hierarchy is kept (ties: fewer base
+//! vertices, then the first side). Components are recovered separately and share the
+//! smallest depth.
+
+use crate::error::{Error, Result};
+use crate::hierarchy::{base_numbering, Canonical, Level, PairMap, Topo, NONE};
+
+/// A recovered sqrt(2) hierarchy, in the input's vertex numbers.
+#[derive(Debug, Clone)]
+pub struct Recovered {
+    /// The base mesh (`nv` = the input's vertex count).
+    pub base: Topo,
+    /// Per level (1 = first refinement): every directed edge of every coarse face ->
+    /// that face's point.
+    pub face_points: Vec<PairMap>,
+}
+
+impl Recovered {
+    /// Number of sqrt(2) steps.
+    pub fn levels(&self) -> usize {
+        self.face_points.len()
+    }
+}
+
+/// One coarsening: the coarse faces and, per coarse face, its point.
+struct Coarse {
+    topo: Topo,
+    points: Vec<u32>,
+}
+
+/// Two-colours the vertex graph of `t`; `None` if it is not bipartite.
+fn colour(t: &Topo) -> Option<Vec<u8>> {
+    let mut adj_count = vec![0u32; t.nv + 1];
+    for f in 0..t.nf() {
+        for &v in t.face(f) {
+            adj_count[v as usize + 1] += 2;
+        }
+    }
+    for i in 0..t.nv {
+        adj_count[i + 1] += adj_count[i];
+    }
+    let mut fill = adj_count.clone();
+    let mut adj = vec![0u32; adj_count[t.nv] as usize];
+    for f in 0..t.nf() {
+        let face = t.face(f);
+        let k = face.len();
+        for i in 0..k {
+            let (a, b) = (face[i], face[(i + 1) % k]);
+            adj[fill[a as usize] as usize] = b;
+            fill[a as usize] += 1;
+            adj[fill[b as usize] as usize] = a;
+            fill[b as usize] += 1;
+        }
+    }
+    let mut c = vec![2u8; t.nv];
+    let mut stack = Vec::new();
+    for s in 0..t.nv {
+        if c[s] != 2 {
+            continue;
+        }
+        c[s] = 0;
+        stack.push(s as u32);
+        while let Some(v) = stack.pop() {
+            let cv = c[v as usize];
+            for &w in &adj[adj_count[v as usize] as usize..adj_count[v as usize + 1] as usize] {
+                if c[w as usize] == 2 {
+                    c[w as usize] = 1 - cv;
+                    stack.push(w);
+                } else if c[w as usize] == cv {
+                    return None;
+                }
+            }
+        }
+    }
+    Some(c)
+}
+
+/// Undoes one step with the vertices of colour `side` as face points.
+fn coarsen(t: &Topo, colours: &[u8], side: u8) -> Option<Coarse> {
+    // Per face point: its coarse edges start -> end.
+    let mut succ = PairMap::with_capacity(t.idx.len() / 2 + 4);
+    let mut directed = PairMap::with_capacity(t.idx.len() / 2 + 4);
+    let mut count = vec![0u32; t.nv];
+    for f in 0..t.nf() {
+        let q = t.face(f);
+        for i in 0..4 {
+            if colours[q[i] as usize] != side {
+                continue;
+            }
+            let (g, a, b) = (q[i], q[(i + 1) % 4], q[(i + 3) % 4]);
+            if a == b || succ.get(g, a).is_some() {
+                return None;
+            }
+            succ.insert(g, a, b);
+            let (_, fresh) = directed.get_or_insert(a, b, || 0);
+            if !fresh {
+                return None;
+            }
+            count[g as usize] += 1;
+        }
+    }
+    let mut topo = Topo::new(t.nv);
+    let mut points = Vec::new();
+    let mut stamp = vec![NONE; t.nv];
+    let mut done = vec![false; t.nv];
+    let mut poly = Vec::new();
+    for f in 0..t.nf() {
+        let q = t.face(f);
+        for i in 0..4 {
+            let g = q[i];
+            if colours[g as usize] != side || done[g as usize] {
+                continue;
+            }
+            done[g as usize] = true;
+            let k = count[g as usize];
+            if k < 3 {
+                return None;
+            }
+            // Start the polygon where this quad's edge starts, so the walk is canonical.
+            let start = q[(i + 1) % 4];
+            poly.clear();
+            let mut cur = start;
+            for _ in 0..k {
+                if stamp[cur as usize] == g {
+                    return None;
+                }
+                stamp[cur as usize] = g;
+                poly.push(cur);
+                cur = succ.get(g, cur)?;
+            }
+            if cur != start {
+                return None;
+            }
+            topo.push(&poly);
+            points.push(g);
+        }
+    }
+    Some(Coarse { topo, points })
+}
+
+/// Vertices some face uses.
+fn used(t: &Topo) -> usize {
+    let mut seen = vec![false; t.nv];
+    t.idx
+        .iter()
+        .filter(|&&v| !std::mem::replace(&mut seen[v as usize], true))
+        .count()
+}
+
+/// The deepest chain of coarsenings of `t` (finest first), at most `max` long.
+fn search(t: &Topo, max: usize) -> Vec<Coarse> {
+    if max == 0 || t.nf() == 0 || !t.all_quads() {
+        return Vec::new();
+    }
+    let Some(colours) = colour(t) else {
+        return Vec::new();
+    };
+    let mut best: Vec<Coarse> = Vec::new();
+    let mut best_base = usize::MAX;
+    for side in 0..2 {
+        let Some(c) = coarsen(t, &colours, side) else {
+            continue;
+        };
+        let rest = search(&c.topo, max - 1);
+        let base = used(rest.last().map_or(&c.topo, |r| &r.topo));
+        let depth = rest.len() + 1;
+        if depth > best.len() || (depth == best.len() && base < best_base) {
+            best_base = base;
+            best = std::iter::once(c).chain(rest).collect();
+        }
+    }
+    best
+}
+
+/// Finds the deepest sqrt(2) hierarchy of `topo` (at most `max_levels` steps); `None`
+/// when there is none (no step can be undone).
+pub fn recover(topo: &Topo, max_levels: usize) -> Option<Recovered> {
+    let n = topo.nv;
+    // Components by union-find over the faces' corners.
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn find(p: &mut [u32], mut v: u32) -> u32 {
+        while p[v as usize] != v {
+            p[v as usize] = p[p[v as usize] as usize];
+            v = p[v as usize];
+        }
+        v
+    }
+    for f in 0..topo.nf() {
+        let face = topo.face(f);
+        let a = find(&mut parent, face[0]);
+        for &v in &face[1..] {
+            let b = find(&mut parent, v);
+            if a != b {
+                parent[b as usize] = a;
+            }
+        }
+    }
+    // Faces per component, with local vertex numbers.
+    let mut comp_of = vec![NONE; n];
+    let mut comps: Vec<(Topo, Vec<u32>)> = Vec::new();
+    let mut local = vec![NONE; n];
+    for f in 0..topo.nf() {
+        let face = topo.face(f);
+        let r = find(&mut parent, face[0]) as usize;
+        if comp_of[r] == NONE {
+            comp_of[r] = comps.len() as u32;
+            comps.push((Topo::new(0), Vec::new()));
+        }
+        let (t, verts) = &mut comps[comp_of[r] as usize];
+        let corners: Vec<u32> = face
+            .iter()
+            .map(|&v| {
+                if local[v as usize] == NONE {
+                    local[v as usize] = verts.len() as u32;
+                    verts.push(v);
+                }
+                local[v as usize]
+            })
+            .collect();
+        t.push(&corners);
+    }
+    if comps.is_empty() {
+        return None;
+    }
+    let mut chains = Vec::with_capacity(comps.len());
+    let mut depth = max_levels;
+    for (t, verts) in &mut comps {
+        t.nv = verts.len();
+        let chain = search(t, depth);
+        depth = depth.min(chain.len());
+        if depth == 0 {
+            return None;
+        }
+        chains.push(chain);
+    }
+    let mut base = Topo::new(n);
+    let mut face_points: Vec<PairMap> = (0..depth).map(|_| PairMap::with_capacity(16)).collect();
+    for ((_, verts), chain) in comps.iter().zip(&chains) {
+        let b = &chain[depth - 1].topo;
+        for f in 0..b.nf() {
+            let face: Vec<u32> = b.face(f).iter().map(|&v| verts[v as usize]).collect();
+            base.push(&face);
+        }
+        for l in 1..=depth {
+            let c = &chain[depth - l];
+            let map = &mut face_points[l - 1];
+            for f in 0..c.topo.nf() {
+                let face = c.topo.face(f);
+                let k = face.len();
+                let p = verts[c.points[f] as usize];
+                for i in 0..k {
+                    map.insert(
+                        verts[face[i] as usize],
+                        verts[face[(i + 1) % k] as usize],
+                        p,
+                    );
+                }
+            }
+        }
+    }
+    Some(Recovered { base, face_points })
+}
+
+/// Canonicalises a recovered sqrt(2) hierarchy (SPEC.md 8.5) and checks that its finest
+/// level is `input`'s faces (each once, up to corner rotation).
+pub fn canonicalise(rec: &Recovered, input: &Topo) -> Result<Canonical> {
+    let finer = rec.face_points.iter().flat_map(|m| m.values());
+    let (mut order, base) = base_numbering(&rec.base, finer);
+    let mut levels = Vec::with_capacity(rec.levels());
+    let mut cur = base.clone();
+    for l in 0..rec.levels() {
+        let lvl = Level::new(&cur)?;
+        if !super::closed(&lvl) {
+            return Err(Error::InvalidMesh("sqrt(2) level with a boundary".into()));
+        }
+        let mut next = order.clone();
+        for f in 0..lvl.nf() {
+            let face = lvl.coarse.face(f);
+            let p = rec.face_points[l]
+                .get(order[face[0] as usize], order[face[1] as usize])
+                .ok_or_else(|| Error::InvalidMesh("inconsistent hierarchy (face point)".into()))?;
+            next.push(p);
+        }
+        cur = super::fine(&lvl);
+        levels.push(lvl);
+        order = next;
+    }
+    // The finest level must be the input, face for face.
+    let mut by_edge = PairMap::with_capacity(input.idx.len() + 4);
+    for f in 0..input.nf() {
+        let face = input.face(f);
+        let k = face.len();
+        for i in 0..k {
+            by_edge.insert(face[i], face[(i + 1) % k], f as u32);
+        }
+    }
+    let mismatch = || Error::InvalidMesh("sqrt(2) hierarchy does not match the input".into());
+    if cur.nf() != input.nf() || order.len() != input.nv {
+        return Err(mismatch());
+    }
+    let mut hit = vec![false; input.nf()];
+    for f in 0..cur.nf() {
+        let c: Vec<u32> = cur.face(f).iter().map(|&v| order[v as usize]).collect();
+        let g = by_edge.get(c[0], c[1]).ok_or_else(mismatch)? as usize;
+        let face = input.face(g);
+        let r = face.iter().position(|&v| v == c[0]).ok_or_else(mismatch)?;
+        let same = face.len() == c.len() && (0..c.len()).all(|i| face[(r + i) % c.len()] == c[i]);
+        if !same || std::mem::replace(&mut hit[g], true) {
+            return Err(mismatch());
+        }
+    }
+    Ok(Canonical {
+        base,
+        levels,
+        fine: cur,
+        order,
+        sqrt2: true,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hierarchy::fixtures::prism_with_triangles;
+
+    #[test]
+    fn recovers_every_depth_from_a_shuffled_mesh() {
+        let mut t = prism_with_triangles();
+        for depth in 1..=5 {
+            t = crate::sqrt2::fine(&Level::new(&t).unwrap());
+            // Shuffle vertex numbers and face order, rotate corners.
+            let n = t.nv;
+            let perm: Vec<u32> = (0..n as u32).map(|i| (i * 7919 + 13) % n as u32).collect();
+            let mut s = Topo::new(n);
+            let nf = t.nf();
+            for j in 0..nf {
+                let f = (j * 31 + 5) % nf;
+                let face = t.face(f);
+                let r = j % face.len();
+                let c: Vec<u32> = (0..face.len())
+                    .map(|i| perm[face[(i + r) % face.len()] as usize])
+                    .collect();
+                s.push(&c);
+            }
+            if perm.iter().collect::<std::collections::HashSet<_>>().len() != n {
+                continue;
+            }
+            let rec = recover(&s, 16).expect("a hierarchy");
+            assert_eq!(rec.levels(), depth, "depth");
+            // The prism (10 vertices, 8 faces) or, with fewer base vertices, its dual.
+            assert_eq!(
+                rec.base.nf(),
+                10,
+                "the dual base has 8 vertices and 10 faces"
+            );
+            assert_eq!(used(&rec.base), 8);
+            let canon = canonicalise(&rec, &s).unwrap();
+            assert_eq!(canon.levels.len(), depth);
+        }
+    }
+}
