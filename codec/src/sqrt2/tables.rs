@@ -53,3 +53,27 @@ pub const OMEGA: [[i32; 7]; 14] = [
     [-6594, -10182, -13052, -30, 2312, 2525, 2700],
     [-6344, -10149, -13079, -19, 2290, 2531, 2705],
 ];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sqrt2::solve;
+
+    #[test]
+    fn frozen_tables_are_the_solver_output() {
+        let alpha = solve::alpha_table(crate::sqrt2::TABLE_MAX);
+        let omega = solve::omega_table(crate::sqrt2::TABLE_MAX);
+        assert_eq!(alpha.len(), ALPHA.len());
+        for (n, (frozen, solved)) in ALPHA.iter().zip(&alpha).enumerate() {
+            let frozen: Vec<i64> = frozen.iter().map(|&w| w as i64).collect();
+            assert_eq!(&frozen, solved, "alpha, valence {}", n + 3);
+            assert_eq!(frozen.len(), n + 3);
+            // With the corner's own 1/2, every corner stencil sums to exactly one.
+            assert_eq!(frozen.iter().sum::<i64>(), 1 << 15, "valence {}", n + 3);
+        }
+        for (n, (frozen, solved)) in OMEGA.iter().zip(&omega).enumerate() {
+            let frozen = frozen.map(|w| w as i64);
+            assert_eq!(&frozen, solved, "omega, valence {}", n + 3);
+        }
+    }
+}
