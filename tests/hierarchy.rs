@@ -166,15 +166,20 @@ fn random_hierarchy(seed: u64, base: usize, levels: u32, bits: u32) -> Mesh {
         2 => subwave_corpus::open_grid(2, 1),
         _ => subwave_corpus::union(&[subwave_corpus::cube(), subwave_corpus::open_grid(1, 1)]),
     };
-    let fine = b.refined(levels).shuffled(&mut rng);
-    let mut m = to_mesh(&fine, 1.0);
+    let fine = b.refined(levels);
+    randomised(&fine, &mut rng, bits)
+}
+
+/// `fine` shuffled, with random coordinates of up to `bits` bits and an unreferenced
+/// vertex riding along.
+fn randomised(fine: &PolyMesh, rng: &mut Rng, bits: u32) -> Mesh {
+    let mut m = to_mesh(&fine.shuffled(rng), 1.0);
     let span = (1i64 << bits) - 1;
     for p in &mut m.positions {
         for c in p.iter_mut() {
             *c = (rng.next_u64() % (2 * span as u64 + 1)) as i64 - span;
         }
     }
-    // An unreferenced vertex rides along.
     m.positions.push([span, -span, 0]);
     m
 }
@@ -326,16 +331,7 @@ fn random_sqrt2_hierarchy(seed: u64, base: usize, steps: u32, bits: u32) -> Mesh
             subwave_corpus::mixed_polygons().sqrt2_refined(2),
         ]),
     };
-    let fine = b.sqrt2_refined(steps).shuffled(&mut rng);
-    let mut m = to_mesh(&fine, 1.0);
-    let span = (1i64 << bits) - 1;
-    for p in &mut m.positions {
-        for c in p.iter_mut() {
-            *c = (rng.next_u64() % (2 * span as u64 + 1)) as i64 - span;
-        }
-    }
-    m.positions.push([span, -span, 0]);
-    m
+    randomised(&b.sqrt2_refined(steps), &mut rng, bits)
 }
 
 proptest! {

@@ -127,7 +127,7 @@ fn merge(nv: usize, depth: usize, parts: &[(&[u32], &Chain)]) -> Recovered {
 }
 
 /// Connected components (through faces) as (local -> input numbers, local topology).
-fn components(nv: usize, topo: &Topo) -> Vec<(Vec<u32>, Topo)> {
+pub(crate) fn components(nv: usize, topo: &Topo) -> Vec<(Vec<u32>, Topo)> {
     let mut parent: Vec<u32> = (0..nv as u32).collect();
     fn find(p: &mut [u32], mut x: u32) -> u32 {
         while p[x as usize] != x {
@@ -157,15 +157,16 @@ fn components(nv: usize, topo: &Topo) -> Vec<(Vec<u32>, Topo)> {
         }
         let c = comp_of_root[r as usize];
         let (ids, t) = &mut out[c];
-        let mut lf = [0u32; 4];
-        for (i, &v) in face.iter().enumerate() {
+        let start = t.idx.len();
+        for &v in face {
             if local[v as usize] == NONE {
                 local[v as usize] = ids.len() as u32;
                 ids.push(v);
             }
-            lf[i] = local[v as usize];
+            t.idx.push(local[v as usize]);
         }
-        t.push(&lf);
+        debug_assert!(t.idx.len() > start);
+        t.starts.push(t.idx.len() as u32);
     }
     for (ids, t) in &mut out {
         t.nv = ids.len();

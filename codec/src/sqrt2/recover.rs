@@ -182,55 +182,13 @@ fn search(t: &Topo, max: usize) -> Vec<Coarse> {
 /// when there is none (no step can be undone).
 pub fn recover(topo: &Topo, max_levels: usize) -> Option<Recovered> {
     let n = topo.nv;
-    // Components by union-find over the faces' corners.
-    let mut parent: Vec<u32> = (0..n as u32).collect();
-    fn find(p: &mut [u32], mut v: u32) -> u32 {
-        while p[v as usize] != v {
-            p[v as usize] = p[p[v as usize] as usize];
-            v = p[v as usize];
-        }
-        v
-    }
-    for f in 0..topo.nf() {
-        let face = topo.face(f);
-        let a = find(&mut parent, face[0]);
-        for &v in &face[1..] {
-            let b = find(&mut parent, v);
-            if a != b {
-                parent[b as usize] = a;
-            }
-        }
-    }
-    // Faces per component, with local vertex numbers.
-    let mut comp_of = vec![NONE; n];
-    let mut comps: Vec<(Topo, Vec<u32>)> = Vec::new();
-    let mut local = vec![NONE; n];
-    for f in 0..topo.nf() {
-        let face = topo.face(f);
-        let r = find(&mut parent, face[0]) as usize;
-        if comp_of[r] == NONE {
-            comp_of[r] = comps.len() as u32;
-            comps.push((Topo::new(0), Vec::new()));
-        }
-        let (t, verts) = &mut comps[comp_of[r] as usize];
-        let corners: Vec<u32> = face
-            .iter()
-            .map(|&v| {
-                if local[v as usize] == NONE {
-                    local[v as usize] = verts.len() as u32;
-                    verts.push(v);
-                }
-                local[v as usize]
-            })
-            .collect();
-        t.push(&corners);
-    }
-    if comps.is_empty() {
+    if topo.nf() == 0 || !topo.all_quads() {
         return None;
     }
+    let mut comps = crate::hierarchy::cc::components(n, topo);
     let mut chains = Vec::with_capacity(comps.len());
     let mut depth = max_levels;
-    for (t, verts) in &mut comps {
+    for (verts, t) in &mut comps {
         t.nv = verts.len();
         let chain = search(t, depth);
         depth = depth.min(chain.len());
@@ -241,7 +199,7 @@ pub fn recover(topo: &Topo, max_levels: usize) -> Option<Recovered> {
     }
     let mut base = Topo::new(n);
     let mut face_points: Vec<PairMap> = (0..depth).map(|_| PairMap::with_capacity(16)).collect();
-    for ((_, verts), chain) in comps.iter().zip(&chains) {
+    for ((verts, _), chain) in comps.iter().zip(&chains) {
         let b = &chain[depth - 1].topo;
         for f in 0..b.nf() {
             let face: Vec<u32> = b.face(f).iter().map(|&v| verts[v as usize]).collect();
