@@ -21,39 +21,54 @@ fn to_mesh(p: &PolyMesh, scale: f64) -> Mesh {
     m
 }
 
-#[test]
-fn recovered_depth_reaches_the_manifest_on_cc_and_grid_meshes() {
+/// Encodes, with transform `w`, every shared-corpus mesh whose manifest topology is in
+/// `topologies`, ordered and shuffled, and hands each to `check` with its manifest entry;
+/// returns how many were checked (`None` without `../shared/corpus`).
+fn each_manifest_mesh(
+    topologies: &[&str],
+    w: Wavelet,
+    mut check: impl FnMut(&serde_json::Value, &str, &subwave::Loaded, &subwave::Encoded),
+) -> Option<usize> {
     let Some(dir) = common::shared_corpus() else {
         eprintln!("../shared/corpus not found; skipping");
-        return;
+        return None;
     };
     let manifest: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("manifest.json")).unwrap()).unwrap();
     let mut checked = 0;
     for e in manifest["meshes"].as_array().unwrap() {
-        let topology = e["topology"].as_str().unwrap();
-        if topology != "cc" && topology != "grid" {
+        if !topologies.contains(&e["topology"].as_str().unwrap()) {
             continue;
         }
-        let want = e["levels"].as_u64().unwrap();
         for key in ["file", "shuffled_file"] {
             let name = e[key].as_str().unwrap();
             let m = subwave::load(&std::fs::read(dir.join(name)).unwrap(), Some(16)).unwrap();
             let opts = EncodeOptions {
-                transform: TransformChoice::Fixed(Wavelet::Lazy),
+                transform: TransformChoice::Fixed(w),
                 ..Default::default()
             };
             let enc = subwave::encode_to_vec(&m.mesh, &m.quantization, &opts).unwrap();
-            assert_eq!(enc.header.family, subwave::Family::Cc, "{name}");
-            assert!(
-                enc.header.levels as u64 >= want,
-                "{name}: recovered {} levels, manifest says {want}",
-                enc.header.levels
-            );
+            check(e, name, &m, &enc);
             checked += 1;
         }
     }
-    assert!(checked >= 34, "checked only {checked} meshes");
+    Some(checked)
+}
+
+#[test]
+fn recovered_depth_reaches_the_manifest_on_cc_and_grid_meshes() {
+    let checked = each_manifest_mesh(&["cc", "grid"], Wavelet::Lazy, |e, name, _, enc| {
+        let want = e["levels"].as_u64().unwrap();
+        assert_eq!(enc.header.family, subwave::Family::Cc, "{name}");
+        assert!(
+            enc.header.levels as u64 >= want,
+            "{name}: recovered {} levels, manifest says {want}",
+            enc.header.levels
+        );
+    });
+    if let Some(checked) = checked {
+        assert!(checked >= 34, "checked only {checked} meshes");
+    }
 }
 
 fn cube_levels(levels: u32) -> (Mesh, subwave::Encoded) {
@@ -219,49 +234,31 @@ proptest! {
 
 #[test]
 fn sqrt2_meshes_recover_their_full_depth_in_any_order() {
-    let Some(dir) = common::shared_corpus() else {
-        eprintln!("../shared/corpus not found; skipping");
-        return;
-    };
-    let manifest: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("manifest.json")).unwrap()).unwrap();
-    let mut checked = 0;
-    for e in manifest["meshes"].as_array().unwrap() {
-        if e["topology"].as_str() != Some("sqrt2") {
-            continue;
-        }
+    let checked = each_manifest_mesh(&["sqrt2"], Wavelet::Sqrt2Lazy, |e, name, m, enc| {
         let want = e["levels"].as_u64().unwrap();
-        for key in ["file", "shuffled_file"] {
-            let name = e[key].as_str().unwrap();
-            let m = subwave::load(&std::fs::read(dir.join(name)).unwrap(), Some(16)).unwrap();
-            let opts = EncodeOptions {
-                transform: TransformChoice::Fixed(Wavelet::Sqrt2Lazy),
-                ..Default::default()
-            };
-            let enc = subwave::encode_to_vec(&m.mesh, &m.quantization, &opts).unwrap();
-            assert_eq!(enc.header.family, subwave::Family::Sqrt2, "{name}");
-            assert_eq!(enc.header.levels as u64, want, "{name}: sqrt(2) steps");
-            // The manifest's base or, with an even step count, its dual (the same
-            // refinement; the tie goes to fewer base vertices).
-            let (bv, bf) = (
-                e["base_vertex_count"].as_u64().unwrap(),
-                e["base_face_count"].as_u64().unwrap(),
-            );
-            let got = (enc.header.base_vertices, enc.header.base_faces);
-            assert!(
-                got == (bv, bf) || got == (bf, bv) && bf < bv,
-                "{name}: base {got:?}"
-            );
-            let dec = subwave::decode_slice(&enc.bytes).unwrap();
-            assert_eq!(
-                common::fingerprint(&dec.mesh),
-                common::fingerprint(&m.mesh),
-                "{name}"
-            );
-            checked += 1;
-        }
+        assert_eq!(enc.header.family, subwave::Family::Sqrt2, "{name}");
+        assert_eq!(enc.header.levels as u64, want, "{name}: sqrt(2) steps");
+        // The manifest's base or, with an even step count, its dual (the same
+        // refinement; the tie goes to fewer base vertices).
+        let (bv, bf) = (
+            e["base_vertex_count"].as_u64().unwrap(),
+            e["base_face_count"].as_u64().unwrap(),
+        );
+        let got = (enc.header.base_vertices, enc.header.base_faces);
+        assert!(
+            got == (bv, bf) || got == (bf, bv) && bf < bv,
+            "{name}: base {got:?}"
+        );
+        let dec = subwave::decode_slice(&enc.bytes).unwrap();
+        assert_eq!(
+            common::fingerprint(&dec.mesh),
+            common::fingerprint(&m.mesh),
+            "{name}"
+        );
+    });
+    if let Some(checked) = checked {
+        assert_eq!(checked, 8, "four sqrt2 meshes, ordered and shuffled");
     }
-    assert_eq!(checked, 8, "four sqrt2 meshes, ordered and shuffled");
 }
 
 #[test]

@@ -397,6 +397,24 @@ pub(crate) fn base_numbering(base_in: &Topo, finer: impl Iterator<Item = u32>) -
     (order, base)
 }
 
+/// Appends the input number of every coarse face's point, in face order: `points` maps
+/// a face's first directed edge (input numbers, through `order`) to its point.
+pub(crate) fn push_face_points(
+    lvl: &Level,
+    order: &[u32],
+    points: &PairMap,
+    next: &mut Vec<u32>,
+) -> Result<()> {
+    for f in 0..lvl.nf() {
+        let face = lvl.coarse.face(f);
+        let p = points
+            .get(order[face[0] as usize], order[face[1] as usize])
+            .ok_or_else(|| Error::InvalidMesh("inconsistent hierarchy (face point)".into()))?;
+        next.push(p);
+    }
+    Ok(())
+}
+
 /// Canonicalises a recovered hierarchy (SPEC.md 8.2). `all_vertices` is the input's
 /// vertex count: vertices no face uses are kept in the base mesh.
 pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
@@ -418,13 +436,7 @@ pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
                 .ok_or_else(|| Error::InvalidMesh("inconsistent hierarchy (edge point)".into()))?;
             next.push(p);
         }
-        for f in 0..lvl.nf() {
-            let face = lvl.coarse.face(f);
-            let p = rec.face_points[l]
-                .get(order[face[0] as usize], order[face[1] as usize])
-                .ok_or_else(|| Error::InvalidMesh("inconsistent hierarchy (face point)".into()))?;
-            next.push(p);
-        }
+        push_face_points(&lvl, &order, &rec.face_points[l], &mut next)?;
         cur = lvl.fine();
         levels.push(lvl);
         order = next;

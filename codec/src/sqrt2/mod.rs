@@ -200,34 +200,14 @@ impl Plan {
 
     /// Analysis: fine values `x[..nv + nf]` to coarse values and face-point details.
     pub fn analyse<T: Sample>(&self, x: &mut [T]) {
-        let (nv, nf) = (self.nv, self.nf);
         match self.wavelet {
-            Wavelet::Sqrt2Lazy | Wavelet::Ir2w => {
-                for f in 0..nf {
-                    let p = self.predict.eval(f, x);
-                    x[nv + f] = x[nv + f].minus(p);
-                }
-                if self.wavelet == Wavelet::Ir2w {
-                    let d = &x[nv..nv + nf];
-                    let u: Vec<T> = (0..nv).map(|v| self.update.eval(v, d)).collect();
-                    for (v, u) in u.into_iter().enumerate() {
-                        x[v] = x[v].minus(u);
-                    }
-                }
+            Wavelet::Sqrt2Lazy => self.predict_faces(x, true),
+            Wavelet::Ir2w => {
+                self.predict_faces(x, true);
+                self.ir2w_vertices(x, true);
             }
             Wavelet::Sqrt2Sym => {
-                // Step 1: v'' = [(16 n v - 3 S) / (13 n)], S = sum of v's face points.
-                let y: Vec<T> = (0..nv)
-                    .map(|v| {
-                        let (n, s) = self.own_sum(v, x);
-                        if n == 0 {
-                            x[v]
-                        } else {
-                            T::sym_scale(x[v], s, n as i128)
-                        }
-                    })
-                    .collect();
-                x[..nv].copy_from_slice(&y);
+                self.sym_scale(x, true);
                 self.sym_faces(x, true);
                 self.sym_vertices(x, true);
             }
@@ -235,40 +215,58 @@ impl Plan {
         }
     }
 
-    /// Synthesis: the exact inverse of [`Plan::analyse`].
+    /// Synthesis: the exact inverse of [`Plan::analyse`], its steps inverted in reverse.
     pub fn synthesise<T: Sample>(&self, x: &mut [T]) {
-        let (nv, nf) = (self.nv, self.nf);
         match self.wavelet {
-            Wavelet::Sqrt2Lazy | Wavelet::Ir2w => {
-                if self.wavelet == Wavelet::Ir2w {
-                    let d = &x[nv..nv + nf];
-                    let u: Vec<T> = (0..nv).map(|v| self.update.eval(v, d)).collect();
-                    for (v, u) in u.into_iter().enumerate() {
-                        x[v] = x[v].plus(u);
-                    }
-                }
-                for f in 0..nf {
-                    let p = self.predict.eval(f, x);
-                    x[nv + f] = x[nv + f].plus(p);
-                }
+            Wavelet::Sqrt2Lazy => self.predict_faces(x, false),
+            Wavelet::Ir2w => {
+                self.ir2w_vertices(x, false);
+                self.predict_faces(x, false);
             }
             Wavelet::Sqrt2Sym => {
                 self.sym_vertices(x, false);
                 self.sym_faces(x, false);
-                let v: Vec<T> = (0..nv)
-                    .map(|v| {
-                        let (n, s) = self.own_sum(v, x);
-                        if n == 0 {
-                            x[v]
-                        } else {
-                            T::sym_unscale(x[v], s, n as i128)
-                        }
-                    })
-                    .collect();
-                x[..nv].copy_from_slice(&v);
+                self.sym_scale(x, false);
             }
             _ => {}
         }
+    }
+
+    /// Every face point `f -= P_f` (analysis) or `f += P_f` (SPEC.md 9.7).
+    fn predict_faces<T: Sample>(&self, x: &mut [T], forward: bool) {
+        let nv = self.nv;
+        for f in 0..self.nf {
+            let p = self.predict.eval(f, x);
+            x[nv + f] = if forward {
+                x[nv + f].minus(p)
+            } else {
+                x[nv + f].plus(p)
+            };
+        }
+    }
+
+    /// ir2w's update: every coarse vertex `v -= U_v` (analysis) or `v += U_v`, all computed
+    /// from the details first (SPEC.md 9.7).
+    fn ir2w_vertices<T: Sample>(&self, x: &mut [T], forward: bool) {
+        let (nv, nf) = (self.nv, self.nf);
+        let d = &x[nv..nv + nf];
+        let u: Vec<T> = (0..nv).map(|v| self.update.eval(v, d)).collect();
+        for (v, u) in u.into_iter().enumerate() {
+            x[v] = if forward { x[v].minus(u) } else { x[v].plus(u) };
+        }
+    }
+
+    /// sqrt2-sym step 1: `v'' = [(16 n v - 3 S) / (13 n)]` with S the sum of v's face
+    /// points (analysis), or its exact inverse (SPEC.md 9.8).
+    fn sym_scale<T: Sample>(&self, x: &mut [T], forward: bool) {
+        let y: Vec<T> = (0..self.nv)
+            .map(|v| match self.own_sum(v, x) {
+                (0, _) => x[v],
+                (n, s) if forward => T::sym_scale(x[v], s, n as i128),
+                (n, s) => T::sym_unscale(x[v], s, n as i128),
+            })
+            .collect();
+        x[..self.nv].copy_from_slice(&y);
     }
 
     /// Vertex `v`'s face count and the sum of its faces' values.

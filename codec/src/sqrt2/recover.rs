@@ -9,7 +9,7 @@
 //! smallest depth.
 
 use crate::error::{Error, Result};
-use crate::hierarchy::{base_numbering, Canonical, Level, PairMap, Topo, NONE};
+use crate::hierarchy::{base_numbering, push_face_points, Canonical, Level, PairMap, Topo, NONE};
 
 /// A recovered sqrt(2) hierarchy, in the input's vertex numbers.
 #[derive(Debug, Clone)]
@@ -238,13 +238,7 @@ pub fn canonicalise(rec: &Recovered, input: &Topo) -> Result<Canonical> {
             return Err(Error::InvalidMesh("sqrt(2) level with a boundary".into()));
         }
         let mut next = order.clone();
-        for f in 0..lvl.nf() {
-            let face = lvl.coarse.face(f);
-            let p = rec.face_points[l]
-                .get(order[face[0] as usize], order[face[1] as usize])
-                .ok_or_else(|| Error::InvalidMesh("inconsistent hierarchy (face point)".into()))?;
-            next.push(p);
-        }
+        push_face_points(&lvl, &order, &rec.face_points[l], &mut next)?;
         cur = super::fine(&lvl);
         levels.push(lvl);
         order = next;
