@@ -219,7 +219,7 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
     topo.starts = mesh.face_starts.clone();
     // The best hierarchy coding, and the canonical hierarchy it was made from.
     let mut best: Option<Payloads> = None;
-    let mut chosen: Option<(Canonical, [Vec<i64>; 3])> = None;
+    let mut chosen: Option<Canonical> = None;
     if opts.max_levels > 0 {
         let (want_cc, want_sqrt2) = match opts.transform {
             TransformChoice::Auto => (true, true),
@@ -278,12 +278,12 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
             }
             if best.as_ref().is_none_or(|b| p.size() < b.size()) {
                 best = Some(p);
-                chosen = Some((canon, pos));
+                chosen = Some(canon);
             }
         }
     }
     let (payloads, order, fine) = match (best, chosen) {
-        (Some(p), Some((canon, _))) => (p, canon.order, FaceOrder::Hierarchy(canon.fine)),
+        (Some(p), Some(canon)) => (p, canon.order, FaceOrder::Hierarchy(canon.fine)),
         _ => {
             // Faces in the input's order or breadth-first, whichever codes smaller;
             // vertices in order of first use (SPEC.md 6.1).
