@@ -87,25 +87,33 @@ pub struct Encoded {
     pub sections: Vec<SectionInfo>,
 }
 
-/// How the coded faces relate to the input's.
-enum FaceOrder {
-    /// The finest level of a hierarchy, canonical numbering.
-    Hierarchy(Topo),
-    /// The flat path's face order (`order[coded] = input`), corners unrotated.
-    Flat(Vec<u32>),
-}
-
 /// Section payloads before they are wrapped in a container.
 struct Payloads {
     header: Header,
     base: Vec<u8>,
     levels: Vec<Vec<u8>>,
+    /// The ORDR section, when the input order is kept: it depends on the coded order,
+    /// so candidates are compared with it.
+    order: Option<Vec<u8>>,
 }
 
 impl Payloads {
     fn size(&self) -> usize {
-        self.base.len() + self.levels.iter().map(Vec::len).sum::<usize>()
+        self.base.len()
+            + self.levels.iter().map(Vec::len).sum::<usize>()
+            + self.order.as_ref().map_or(0, Vec::len)
     }
+}
+
+/// The ORDR payload (SPEC.md 7): the coded vertex order (`vertices[coded] = input`),
+/// face order and corner rotations.
+fn order_section(vertices: &[u32], faces: Vec<u32>, rotations: Vec<u32>) -> Vec<u8> {
+    let o = order::InputOrder {
+        vertices: vertices.to_vec(),
+        faces,
+        rotations,
+    };
+    order::encode(&o, FORMAT_VERSION)
 }
 
 fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Header {
@@ -183,6 +191,7 @@ fn code_hierarchy(
         header,
         base: base_bytes,
         levels: level_bytes,
+        order: None,
     })
 }
 
@@ -258,7 +267,11 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
                         .map(|&o| mesh.positions[o as usize][k])
                         .collect()
                 });
-                if let Some(p) = code_hierarchy(&canon, &pos, first, &flat_h) {
+                if let Some(mut p) = code_hierarchy(&canon, &pos, first, &flat_h) {
+                    if opts.keep_order {
+                        let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
+                        p.order = Some(order_section(&canon.order, faces, rotations));
+                    }
                     if fam_best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
                         fam_best = Some((p, canon, pos));
                     }
@@ -269,7 +282,8 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
             };
             if opts.transform == TransformChoice::Auto {
                 for &w in others.iter().filter(|&&w| w != first) {
-                    if let Some(q) = code_hierarchy(&canon, &pos, w, &flat_h) {
+                    if let Some(mut q) = code_hierarchy(&canon, &pos, w, &flat_h) {
+                        q.order = p.order.clone();
                         if q.size() < p.size() {
                             p = q;
                         }
@@ -282,30 +296,32 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
             }
         }
     }
-    let (payloads, order, fine) = match (best, chosen) {
-        (Some(p), Some(canon)) => (p, canon.order, FaceOrder::Hierarchy(canon.fine)),
+    let (payloads, order) = match (best, chosen) {
+        (Some(p), Some(canon)) => (p, canon.order),
         _ => {
-            // Faces in the input's order or breadth-first, whichever codes smaller;
-            // vertices in order of first use (SPEC.md 6.1).
-            let mut best_flat: Option<(Vec<u8>, Vec<u32>, Vec<u32>)> = None;
+            // Faces in the input's order or breadth-first, whichever codes smaller (with
+            // the ORDR section when the order is kept); vertices in order of first use
+            // (SPEC.md 6.1).
+            let mut best_flat: Option<(Payloads, Vec<u32>)> = None;
             for forder in [
-                (0..mesh.face_count() as u32).collect(),
+                (0..mesh.face_count() as u32).collect::<Vec<u32>>(),
                 flat::face_order(mesh),
             ] {
                 let by_faces = flat::permute_faces(mesh, &forder);
                 let order = flat::canonical_order(&by_faces);
-                let bytes = flat::encode(&flat::permute(&by_faces, &order), FORMAT_VERSION);
-                if best_flat.as_ref().is_none_or(|b| bytes.len() < b.0.len()) {
-                    best_flat = Some((bytes, order, forder));
+                let p = Payloads {
+                    header: flat_h.clone(),
+                    base: flat::encode(&flat::permute(&by_faces, &order), FORMAT_VERSION),
+                    levels: Vec::new(),
+                    order: opts
+                        .keep_order
+                        .then(|| order_section(&order, forder, vec![0; mesh.face_count()])),
+                };
+                if best_flat.as_ref().is_none_or(|b| p.size() < b.0.size()) {
+                    best_flat = Some((p, order));
                 }
             }
-            let (base, order, forder) = best_flat.expect("two candidates");
-            let p = Payloads {
-                header: flat_h,
-                base,
-                levels: Vec::new(),
-            };
-            (p, order, FaceOrder::Flat(forder))
+            best_flat.expect("two candidates")
         }
     };
     let header = payloads.header.clone();
@@ -330,21 +346,8 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
     for l in &payloads.levels {
         put(&mut w, SectionKind::LEVEL, l)?;
     }
-    if opts.keep_order {
-        let (faces, rotations) = match &fine {
-            FaceOrder::Hierarchy(fine) => face_order(mesh, fine, &order)?,
-            FaceOrder::Flat(forder) => (forder.clone(), vec![0; mesh.face_count()]),
-        };
-        let o = order::InputOrder {
-            vertices: order.clone(),
-            faces,
-            rotations,
-        };
-        put(
-            &mut w,
-            SectionKind::ORDER,
-            &order::encode(&o, FORMAT_VERSION),
-        )?;
+    if let Some(o) = &payloads.order {
+        put(&mut w, SectionKind::ORDER, o)?;
     }
     let bytes = w.finish();
     sections.push(SectionInfo {
