@@ -335,3 +335,36 @@ fn every_truncation_of_a_hierarchy_is_rejected_or_a_correct_coarser_level() {
         b.len()
     );
 }
+
+#[test]
+fn tangent_mode_on_a_catmull_clark_level_is_corrupt() {
+    // Mode 2 (SPEC.md 10.3) exists for sqrt(2) levels only; rewrite a Catmull-Clark
+    // container's first level to claim it, checksums kept valid.
+    let obj = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/mixed_cc2.obj")).unwrap();
+    let m = subwave::load(&obj, None).unwrap();
+    let enc = subwave::encode_to_vec(&m.mesh, &m.quantization, &EncodeOptions::default()).unwrap();
+    assert_eq!(enc.header.family, subwave::Family::Cc);
+    let c = subwave_container::Container::parse(&enc.bytes, &Limits::default()).unwrap();
+    let mut w = ContainerWriter::new();
+    let mut first = true;
+    for s in &c.sections {
+        if s.kind == SectionKind::END {
+            continue;
+        }
+        let mut p = s.payload.to_vec();
+        if s.kind == SectionKind::LEVEL && first {
+            assert!(p[0] <= 1);
+            p[0] = 2;
+            first = false;
+        }
+        w.section(s.kind, &p);
+    }
+    assert!(!first);
+    match subwave::decode_slice(&w.finish()) {
+        Err(Error::CorruptStream {
+            section: "LEVL",
+            what,
+        }) => assert!(what.contains("tangent"), "{what}"),
+        other => panic!("expected a corrupt level, got {other:?}"),
+    }
+}

@@ -77,6 +77,7 @@ fn frozen_containers_still_decode() {
         ("unstructured.v5.swv", "unstructured.obj"),
         ("cube_cc4.flat.v5.swv", "cube_cc4.obj"),
         ("prism_sqrt2_5.v6.swv", "prism_sqrt2_5.obj"),
+        ("prism_sqrt2_5.v7.swv", "prism_sqrt2_5.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

@@ -4,6 +4,8 @@
 
 mod common;
 
+use std::path::Path;
+
 use proptest::prelude::*;
 use subwave::{DecodeOptions, EncodeOptions, Mesh, Quantization, TransformChoice, Wavelet};
 use subwave_corpus::{PolyMesh, Rng};
@@ -350,5 +352,32 @@ proptest! {
                 prop_assert_eq!(common::fingerprint(&dec.mesh), common::fingerprint(&mesh));
             }
         }
+    }
+}
+
+#[test]
+fn tangent_mode_codes_fitted_sqrt2_levels_exactly() {
+    // corpus/prism_sqrt2_5.obj puts every face point at its face's centroid, then
+    // displaces the mesh (the corpus crate's sqrt2_refined and displace): its finer
+    // levels code smallest in tangent mode (SPEC.md 10.3).
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus/prism_sqrt2_5.obj");
+    let m = subwave::load(&std::fs::read(path).unwrap(), None).unwrap();
+    for w in Wavelet::SQRT2 {
+        let opts = EncodeOptions {
+            transform: TransformChoice::Fixed(w),
+            keep_order: true,
+            ..Default::default()
+        };
+        let enc = subwave::encode_to_vec(&m.mesh, &m.quantization, &opts).unwrap();
+        let modes: Vec<u8> = enc.sections.iter().filter_map(|s| s.mode).collect();
+        assert_eq!(modes.len(), 5, "{w:?}");
+        if w == Wavelet::Sqrt2Lazy {
+            assert!(modes.iter().filter(|&&m| m == 2).count() >= 3, "{modes:?}");
+        }
+        let info = subwave::inspect(&enc.bytes, &Default::default()).unwrap();
+        let read: Vec<u8> = info.sections.iter().filter_map(|s| s.mode).collect();
+        assert_eq!(read, modes);
+        let dec = subwave::decode_slice(&enc.bytes).unwrap();
+        assert_eq!(dec.mesh, m.mesh, "{w:?}");
     }
 }

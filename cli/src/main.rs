@@ -50,8 +50,8 @@ enum Command {
         /// Store the input's vertex and face order so decompression restores it.
         #[arg(long)]
         keep_order: bool,
-        /// Wavelet for subdivision levels: auto (smallest file), lazy, bilinear, bicubic,
-        /// biquintic, dyadic-sym.
+        /// Wavelet for subdivision levels: auto (smallest file); Catmull-Clark: lazy,
+        /// bilinear, bicubic, biquintic, dyadic-sym; sqrt(2): sqrt2-lazy, ir2w, sqrt2-sym.
         #[arg(long, default_value = "auto", value_parser = parse_transform)]
         transform: TransformChoice,
         /// Look for at most N refinement levels (0: code the mesh flat).
@@ -350,7 +350,10 @@ fn print_info(info: &subwave::Info, as_json: bool) {
             "transform": h.transform.name(),
             "quantization": quant_json(&h.quantization),
             "keep_order": h.has_order,
-            "sections": info.sections.iter().map(|s| json!({"kind": s.kind, "bytes": s.bytes})).collect::<Vec<_>>(),
+            "sections": info.sections.iter().map(|s| match s.mode {
+                Some(m) => json!({"kind": s.kind, "bytes": s.bytes, "mode": m}),
+                None => json!({"kind": s.kind, "bytes": s.bytes}),
+            }).collect::<Vec<_>>(),
             "bytes": info.bytes,
             "bits_per_vertex": bits_per_vertex,
         });
@@ -379,7 +382,10 @@ fn print_info(info: &subwave::Info, as_json: bool) {
     let secs: Vec<String> = info
         .sections
         .iter()
-        .map(|s| format!("{} {} B", s.kind, s.bytes))
+        .map(|s| match s.mode {
+            Some(m) => format!("{} {} B (mode {m})", s.kind, s.bytes),
+            None => format!("{} {} B", s.kind, s.bytes),
+        })
         .collect();
     println!("sections        {}", secs.join(", "));
     println!(

@@ -185,6 +185,14 @@ fn plan(fr: Option<(usize, [i64; 3])>) -> ([usize; 3], Option<[i64; 3]>) {
     }
 }
 
+/// The part of target `g` tangent to the plane of normal `n` (SPEC.md 10.3):
+/// `g - [(g . n) n / |n|^2]`, every component rounded alone.
+fn tangential(g: [i64; 3], n: [i64; 3]) -> [i64; 3] {
+    let n2: i128 = n.iter().map(|&v| v as i128 * v as i128).sum();
+    let gn: i128 = (0..3).map(|k| g[k] as i128 * n[k] as i128).sum();
+    std::array::from_fn(|k| g[k] - crate::transform::round_div(gn * n[k] as i128, n2))
+}
+
 /// Prediction of component `j` from the first component's value `dk`: `[dk n_j / n_k]`.
 fn predict(dk: i64, n: [i64; 3], k: usize, j: usize) -> i64 {
     let (mut num, mut den) = (dk as i128 * n[j] as i128, n[k] as i128);
@@ -252,22 +260,65 @@ pub fn encode(
     coarse: &[Vec<i64>; 3],
     act: &mut Vec<u8>,
     version: u16,
+    targets: Option<&[[i64; 3]]>,
 ) -> Vec<u8> {
     if version < 3 {
-        return encode_mode(level, sqrt2, x, coarse, act, false, version);
+        return encode_mode(level, sqrt2, x, coarse, act, Mode::Plain, version)
+            .expect("plain details are in range");
     }
-    let mut act_plain = act.clone();
-    let plain = encode_mode(level, sqrt2, x, coarse, &mut act_plain, false, version);
-    let framed = encode_mode(level, sqrt2, x, coarse, act, true, version);
-    let (mode, body) = if framed.len() < plain.len() {
-        (1u8, framed)
-    } else {
-        (0u8, plain)
-    };
+    let mut modes = vec![Mode::Plain, Mode::Framed];
+    if let Some(t) = targets.filter(|_| version >= 7) {
+        modes.push(Mode::Tangent(t));
+    }
+    let mut best: Option<(u8, Vec<u8>, Vec<u8>)> = None;
+    for mode in modes {
+        let mut a = act.clone();
+        let Some(body) = encode_mode(level, sqrt2, x, coarse, &mut a, mode, version) else {
+            continue;
+        };
+        if best.as_ref().is_none_or(|b| body.len() < b.1.len()) {
+            best = Some((mode.byte(), body, a));
+        }
+    }
+    let (mode, body, a) = best.expect("at least one mode");
+    *act = a;
     let mut out = Vec::with_capacity(body.len() + 1);
     out.push(mode);
     out.extend_from_slice(&body);
     out
+}
+
+/// How a level's details are coded (SPEC.md 10.2, 10.3).
+#[derive(Clone, Copy)]
+enum Mode<'a> {
+    /// x, y, z as they are.
+    Plain,
+    /// In the coarse normal's frame.
+    Framed,
+    /// In the normal's frame, less each detail's target's tangential part.
+    Tangent(&'a [[i64; 3]]),
+}
+
+impl Mode<'_> {
+    fn byte(self) -> u8 {
+        match self {
+            Mode::Plain => 0,
+            Mode::Framed => 1,
+            Mode::Tangent(_) => 2,
+        }
+    }
+
+    fn framed(self) -> bool {
+        !matches!(self, Mode::Plain)
+    }
+
+    /// What is subtracted from detail `i` before coding it in frame `fr`.
+    fn offset(self, i: usize, fr: Option<(usize, [i64; 3])>) -> Option<[i64; 3]> {
+        match (self, fr) {
+            (Mode::Tangent(t), Some((_, n))) => Some(tangential(t[i], n)),
+            _ => None,
+        }
+    }
 }
 
 fn encode_mode(
@@ -276,9 +327,10 @@ fn encode_mode(
     x: &[Vec<i64>; 3],
     coarse: &[Vec<i64>; 3],
     act: &mut Vec<u8>,
-    framed: bool,
+    mode: Mode<'_>,
     version: u16,
-) -> Vec<u8> {
+) -> Option<Vec<u8>> {
+    let framed = mode.framed();
     let mut enc = Encoder::new();
     let mut m = Models::new(version);
     let (nv, nd) = (level.nv, details(level, sqrt2));
@@ -290,16 +342,22 @@ fn encode_mode(
     };
     for i in 0..nd {
         let (class, nbr, fd) = slot(level, act, sqrt2, i);
-        let d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
+        let mut d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
         let fr = if framed {
             frame(level, &normals, fd)
         } else {
             None
         };
+        if let Some(c) = mode.offset(i, fr) {
+            d = std::array::from_fn(|k| d[k] - c[k]);
+            if d.iter().any(|v| v.abs() > MAX_LIFTED) {
+                return None;
+            }
+        }
         put(&mut enc, &mut m, class, nbr, d, fr);
         act[nv + i] = activity(d);
     }
-    enc.finish()
+    Some(enc.finish())
 }
 
 /// Decodes what [`encode`] wrote into `x[k][nv..]`; `x[k][..nv]` are the coarse values.
@@ -310,6 +368,7 @@ pub fn decode(
     x: &mut [Vec<i64>; 3],
     act: &mut Vec<u8>,
     version: u16,
+    targets: Option<&[[i64; 3]]>,
 ) -> Result<()> {
     let (nv, nd) = (level.nv, details(level, sqrt2));
     // Density bound (SPEC.md 2.6), checked before the level's arrays are sized.
@@ -319,16 +378,26 @@ pub fn decode(
             format!("{} bytes cannot hold {} details", payload.len(), nd),
         ));
     }
-    let (framed, payload) = if version >= 3 {
+    let (mode, payload) = if version >= 3 {
         match payload.split_first() {
-            Some((0, rest)) => (false, rest),
-            Some((1, rest)) => (true, rest),
+            Some((0, rest)) => (Mode::Plain, rest),
+            Some((1, rest)) => (Mode::Framed, rest),
+            Some((2, rest)) if version >= 7 => match targets {
+                Some(t) if t.len() == nd => (Mode::Tangent(t), rest),
+                _ => {
+                    return Err(Error::corrupt(
+                        "LEVL",
+                        "tangent mode on a level without tangent targets",
+                    ))
+                }
+            },
             Some((m, _)) => return Err(Error::corrupt("LEVL", format!("unknown level mode {m}"))),
             None => return Err(Error::corrupt("LEVL", "empty level section")),
         }
     } else {
-        (false, payload)
+        (Mode::Plain, payload)
     };
+    let framed = mode.framed();
     let mut dec = Decoder::new(payload, "LEVL")?;
     let mut m = Models::new(version);
     act.resize(nv + nd, 0);
@@ -347,11 +416,20 @@ pub fn decode(
         } else {
             None
         };
-        let d = get(&mut dec, &mut m, class, nbr, fr)?;
+        let r = get(&mut dec, &mut m, class, nbr, fr)?;
+        let mut d = r;
+        if let Some(c) = mode.offset(i, fr) {
+            for k in 0..3 {
+                d[k] = r[k]
+                    .checked_add(c[k])
+                    .filter(|v| v.abs() <= MAX_LIFTED)
+                    .ok_or_else(|| Error::corrupt("LEVL", "detail out of range"))?;
+            }
+        }
         for k in 0..3 {
             x[k][nv + i] = d[k];
         }
-        act[nv + i] = activity(d);
+        act[nv + i] = activity(r);
     }
     Ok(())
 }

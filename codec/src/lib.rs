@@ -71,6 +71,9 @@ pub struct SectionInfo {
     pub kind: String,
     /// Bytes it occupies, overhead included.
     pub bytes: usize,
+    /// A level section's coding mode (SPEC.md 10.1: 0 plain, 1 normal frame, 2 tangent),
+    /// for containers of version 3 on; `None` for other sections.
+    pub mode: Option<u8>,
 }
 
 /// The result of [`encode`].
@@ -174,7 +177,18 @@ fn code_hierarchy(
         .levels
         .iter()
         .zip(&coarse)
-        .map(|(l, c)| levels::encode(l, canon.sqrt2, &x, c, &mut act, FORMAT_VERSION))
+        .map(|(l, c)| {
+            let targets = canon.sqrt2.then(|| sqrt2::tangent_targets(l, None, c));
+            levels::encode(
+                l,
+                canon.sqrt2,
+                &x,
+                c,
+                &mut act,
+                FORMAT_VERSION,
+                targets.as_deref(),
+            )
+        })
         .collect();
     let mut header = header.clone();
     header.base_vertices = nb as u64;
@@ -338,6 +352,7 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
         sections.push(SectionInfo {
             kind: kind.to_string(),
             bytes: payload.len() + subwave_container::SECTION_OVERHEAD,
+            mode: level_mode(kind, FORMAT_VERSION, payload),
         });
         Ok(())
     };
@@ -353,6 +368,7 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
     sections.push(SectionInfo {
         kind: SectionKind::END.to_string(),
         bytes: subwave_container::SECTION_OVERHEAD,
+        mode: None,
     });
     Ok(Encoded {
         bytes,
@@ -416,6 +432,13 @@ fn expect_kind(c: &Container<'_>, i: usize, kind: SectionKind, what: &str) -> Re
     }
 }
 
+/// The mode byte of a level section (SPEC.md 10.1), version 3 on.
+fn level_mode(kind: SectionKind, version: u16, payload: &[u8]) -> Option<u8> {
+    (kind == SectionKind::LEVEL && version >= 3)
+        .then(|| payload.first().copied())
+        .flatten()
+}
+
 /// Reads the header and section table (SPEC.md 2, 5), checking every checksum.
 pub fn inspect(bytes: &[u8], limits: &Limits) -> Result<Info> {
     let c = Container::parse(bytes, limits)?;
@@ -429,6 +452,7 @@ pub fn inspect(bytes: &[u8], limits: &Limits) -> Result<Info> {
             .map(|s| SectionInfo {
                 kind: s.kind.to_string(),
                 bytes: s.total_len(),
+                mode: level_mode(s.kind, c.version, s.payload),
             })
             .collect(),
         bytes: bytes.len(),
@@ -575,16 +599,25 @@ fn synthesise_levels(
         if is_sqrt2 && !sqrt2::closed(&level) {
             return Err(Error::corrupt("BASE", "a sqrt(2) level with a boundary"));
         }
+        let payload = c.sections[2 + l].payload;
+        let plan = is_sqrt2.then(|| sqrt2::Plan::new(&level, w));
+        // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
+        let targets = match &plan {
+            Some(p) if c.version >= 7 && payload.first() == Some(&2) => {
+                Some(sqrt2::tangent_targets(&level, Some(p), &x))
+            }
+            _ => None,
+        };
         levels::decode(
-            c.sections[2 + l].payload,
+            payload,
             &level,
             is_sqrt2,
             &mut x,
             &mut act,
             c.version,
+            targets.as_deref(),
         )?;
-        if is_sqrt2 {
-            let plan = sqrt2::Plan::new(&level, w);
+        if let Some(plan) = plan {
             for xs in x.iter_mut() {
                 plan.synthesise(xs);
             }

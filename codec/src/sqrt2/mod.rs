@@ -146,23 +146,7 @@ impl Plan {
                     rings: &rings,
                     topo,
                 };
-                for f in 0..nf {
-                    let s = topo.starts[f] as usize;
-                    let k = topo.face(f).len();
-                    for c in s..s + k {
-                        let v = topo.idx[c];
-                        let n = nb.valence(v);
-                        if table_valence(n) {
-                            plan.predict.term(v, (ONE / 2) as i32);
-                            for (j, &a) in tables::ALPHA[n - 3].iter().enumerate() {
-                                plan.predict.term(nb.at(c, j), a);
-                            }
-                        } else {
-                            plan.predict.term(v, ONE as i32);
-                        }
-                    }
-                    plan.predict.push(k as i64 * ONE as i64);
-                }
+                plan.predict = predict_rows(level, &nb);
                 if w == Wavelet::Ir2w {
                     plan.update = ir2w_update(level, &nb);
                 }
@@ -323,6 +307,64 @@ impl Plan {
             x[v] = if forward { x[v].minus(p) } else { x[v].plus(p) };
         }
     }
+}
+
+/// IR2W's prediction of every face point from the coarse vertices (SPEC.md 9.7, eq. 1).
+fn predict_rows(level: &Level, nb: &Neighbours<'_>) -> Rows {
+    let topo = &level.coarse;
+    let mut rows = Rows::new();
+    for f in 0..level.nf() {
+        let s = topo.starts[f] as usize;
+        let k = topo.face(f).len();
+        for c in s..s + k {
+            let v = topo.idx[c];
+            let n = nb.valence(v);
+            if table_valence(n) {
+                rows.term(v, (ONE / 2) as i32);
+                for (j, &a) in tables::ALPHA[n - 3].iter().enumerate() {
+                    rows.term(nb.at(c, j), a);
+                }
+            } else {
+                rows.term(v, ONE as i32);
+            }
+        }
+        rows.push(k as i64 * ONE as i64);
+    }
+    rows
+}
+
+/// The tangent targets of a level's face points (SPEC.md 10.3): per face, the rounded
+/// centroid of its corners minus IR2W's prediction (eq. 1), both from the coarse values
+/// `coarse`. Reuses `plan`'s prediction when it has one.
+pub fn tangent_targets(
+    level: &Level,
+    plan: Option<&Plan>,
+    coarse: &[Vec<i64>; 3],
+) -> Vec<[i64; 3]> {
+    let own;
+    let rows = match plan {
+        Some(p) if p.predict.den.len() == level.nf() => &p.predict,
+        _ => {
+            let rings = Rings::new(&level.coarse);
+            let nb = Neighbours {
+                rings: &rings,
+                topo: &level.coarse,
+            };
+            own = predict_rows(level, &nb);
+            &own
+        }
+    };
+    (0..level.nf())
+        .map(|f| {
+            let face = level.coarse.face(f);
+            std::array::from_fn(|k| {
+                let x = &coarse[k];
+                let sum: i128 = face.iter().map(|&v| x[v as usize] as i128).sum();
+                let centroid = crate::transform::round_div(sum, face.len() as i128);
+                centroid - rows.eval(f, &x[..])
+            })
+        })
+        .collect()
 }
 
 /// The ir2w update rows (SPEC.md 9.7): every quad face whose corners have table valences,
