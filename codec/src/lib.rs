@@ -582,8 +582,13 @@ fn synthesise_levels(
         std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect());
     let mut act = vec![levels::UNKNOWN; topo.nv];
     let is_sqrt2 = h.family == Family::Sqrt2;
+    // A sqrt(2) level's successor, derived from it (cheaper than from its fine faces).
+    let mut next: Option<Level> = None;
     for l in 0..upto as usize {
-        let level = Level::new(&topo)?;
+        let level = match next.take() {
+            Some(n) => n,
+            None => Level::new(&topo)?,
+        };
         // Refuse a refinement larger than the header's finest mesh before building it.
         let (fine_nv, fine_faces) = if is_sqrt2 {
             (sqrt2::fine_nv(&level), level.ne())
@@ -629,11 +634,13 @@ fn synthesise_levels(
         if x.iter().flatten().any(|v| v.abs() > levels::MAX_LIFTED) {
             return Err(Error::corrupt("LEVL", "reconstructed value out of range"));
         }
-        topo = if is_sqrt2 {
-            sqrt2::fine(&level)
+        if is_sqrt2 && l + 1 < upto as usize {
+            next = Some(sqrt2::next_level(&level)?);
+        } else if is_sqrt2 {
+            topo = sqrt2::fine(&level);
         } else {
-            level.fine()
-        };
+            topo = level.fine();
+        }
     }
     if upto == h.levels
         && (topo.nv as u64 != h.vertices

@@ -164,7 +164,7 @@ impl Topo {
 /// One Catmull-Clark refinement of a coarse topology, with the adjacency the lifting
 /// steps need (SPEC.md 8.1). Fine vertex numbering: coarse vertices `0..nv`, then one
 /// edge point per coarse edge (`nv + e`), then one face point per face (`nv + ne + f`).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Level {
     /// Coarse vertices.
     pub nv: usize,
@@ -265,6 +265,23 @@ impl Level {
                 face_edges.push(id);
             }
         }
+        Ok(Level::from_edges(
+            coarse.clone(),
+            edges,
+            edge_faces,
+            face_edges,
+        ))
+    }
+
+    /// The level of `coarse` whose edges, their faces and the faces' edges are already
+    /// known (exactly as [`Level::new`] would find them).
+    pub(crate) fn from_edges(
+        coarse: Topo,
+        edges: Vec<[u32; 2]>,
+        edge_faces: Vec<[u32; 2]>,
+        face_edges: Vec<u32>,
+    ) -> Level {
+        let nv = coarse.nv;
         let (ve_starts, vert_edges) = csr(
             nv,
             edges
@@ -276,17 +293,17 @@ impl Level {
             nv,
             (0..coarse.nf()).flat_map(|f| coarse.face(f).iter().map(move |&v| (v, f as u32))),
         );
-        Ok(Level {
+        Level {
             nv,
             edges,
             edge_faces,
-            coarse: coarse.clone(),
+            coarse,
             face_edges,
             vert_edges,
             vert_faces,
             ve_starts,
             vf_starts,
-        })
+        }
     }
 
     /// The fine topology (SPEC.md 8.1): per coarse face f, per corner i, the quad

@@ -44,6 +44,69 @@ pub fn fine(level: &Level) -> Topo {
     t
 }
 
+/// The level of [`fine`]`(level)`, equal to `Level::new(&fine(level))` but derived from
+/// `level` without looking edges up: a fine edge joins a corner's vertex to its face's
+/// point, so it is numbered by the corner. Falls back to [`Level::new`] unless every face
+/// has distinct corners (then each corner is one fine edge between the quads of its two
+/// coarse edges). The level must be [`closed`].
+pub fn next_level(level: &Level) -> crate::error::Result<Level> {
+    let topo = &level.coarse;
+    let distinct = (0..topo.nf()).all(|f| {
+        let face = topo.face(f);
+        face.iter()
+            .enumerate()
+            .all(|(i, v)| !face[i + 1..].contains(v))
+    });
+    let fine_topo = fine(level);
+    if !distinct {
+        return Level::new(&fine_topo);
+    }
+    // Per coarse edge, its two occurrences as (corner, next corner) slots, in face order.
+    let mut occ = vec![[[NONE; 2]; 2]; level.ne()];
+    let mut seen = vec![0u8; level.ne()];
+    for f in 0..topo.nf() {
+        let s = topo.starts[f] as usize;
+        let k = topo.face(f).len();
+        for i in 0..k {
+            let e = level.face_edges[s + i] as usize;
+            let n = seen[e] as usize;
+            occ[e][n] = [(s + i) as u32, (s + (i + 1) % k) as u32];
+            seen[e] = 1;
+        }
+    }
+    // The corner slot of vertex v in the face occurrence `o`.
+    let slot = |o: [u32; 2], v: u32| {
+        if topo.idx[o[0] as usize] == v {
+            o[0]
+        } else {
+            o[1]
+        }
+    };
+    let n_edges = topo.idx.len();
+    let mut id = vec![NONE; n_edges];
+    let mut edges = Vec::with_capacity(n_edges);
+    let mut edge_faces = Vec::with_capacity(n_edges);
+    let mut face_edges = Vec::with_capacity(fine_topo.idx.len());
+    for (q, &[a, b]) in level.edges.iter().enumerate() {
+        let [o1, o2] = occ[q];
+        let quad = fine_topo.face(q);
+        // Quad (a, F2, b, F1): its edges belong to these corners.
+        let corners = [slot(o2, a), slot(o2, b), slot(o1, b), slot(o1, a)];
+        for (i, &c) in corners.iter().enumerate() {
+            let c = c as usize;
+            if id[c] == NONE {
+                id[c] = edges.len() as u32;
+                edges.push([quad[i], quad[(i + 1) % 4]]);
+                edge_faces.push([q as u32, NONE]);
+            } else {
+                edge_faces[id[c] as usize][1] = q as u32;
+            }
+            face_edges.push(id[c]);
+        }
+    }
+    Ok(Level::from_edges(fine_topo, edges, edge_faces, face_edges))
+}
+
 /// Number of fine vertices of a sqrt(2) step.
 pub fn fine_nv(level: &Level) -> usize {
     level.nv + level.nf()
@@ -141,7 +204,7 @@ impl Plan {
         };
         match w {
             Wavelet::Sqrt2Lazy | Wavelet::Ir2w => {
-                let rings = Rings::new(topo);
+                let rings = Rings::from_level(level);
                 let nb = Neighbours {
                     rings: &rings,
                     topo,
@@ -345,7 +408,7 @@ pub fn tangent_targets(
     let rows = match plan {
         Some(p) if p.predict.den.len() == level.nf() => &p.predict,
         _ => {
-            let rings = Rings::new(&level.coarse);
+            let rings = Rings::from_level(level);
             let nb = Neighbours {
                 rings: &rings,
                 topo: &level.coarse,
@@ -442,6 +505,28 @@ mod tests {
                 ((s >> 20) % (1 << bits)) as i64 - (1 << (bits - 1))
             })
             .collect()
+    }
+
+    #[test]
+    fn next_level_is_the_level_of_the_fine_faces() {
+        let prism = prism_with_triangles();
+        // The same closed mesh with one face reversed (inconsistent orientation).
+        let mut flipped = Topo::new(prism.nv);
+        for f in 0..prism.nf() {
+            let mut face = prism.face(f).to_vec();
+            if f == 0 {
+                face.reverse();
+            }
+            flipped.push(&face);
+        }
+        for base in [prism, flipped] {
+            let mut level = Level::new(&base).unwrap();
+            for _ in 0..5 {
+                let next = next_level(&level).unwrap();
+                assert_eq!(next, Level::new(&fine(&level)).unwrap());
+                level = next;
+            }
+        }
     }
 
     #[test]
