@@ -148,6 +148,8 @@ fn code_hierarchy(
     // The coarse values of each level, as the decoder will have them when it reads the
     // level's details.
     let mut coarse: Vec<[Vec<i64>; 3]> = vec![Default::default(); canon.levels.len()];
+    // sqrt(2) levels: their tangent targets (SPEC.md 10.3), from the same coarse values.
+    let mut targets: Vec<Option<Vec<[i64; 3]>>> = vec![None; canon.levels.len()];
     for (l, level) in canon.levels.iter().enumerate().rev() {
         if canon.sqrt2 {
             let n = sqrt2::fine_nv(level);
@@ -155,13 +157,15 @@ fn code_hierarchy(
             for xs in x.iter_mut() {
                 plan.analyse(&mut xs[..n]);
             }
+            coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
+            targets[l] = Some(sqrt2::tangent_targets(level, Some(&plan), &coarse[l]));
         } else {
             let n = level.fine_nv();
             for xs in x.iter_mut() {
                 transform::analyse(level, w, &mut xs[..n]);
             }
+            coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
         }
-        coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
     }
     if x.iter().flatten().any(|v| v.abs() > levels::MAX_LIFTED) {
         return None;
@@ -177,8 +181,8 @@ fn code_hierarchy(
         .levels
         .iter()
         .zip(&coarse)
-        .map(|(l, c)| {
-            let targets = canon.sqrt2.then(|| sqrt2::tangent_targets(l, None, c));
+        .zip(&targets)
+        .map(|((l, c), t)| {
             levels::encode(
                 l,
                 canon.sqrt2,
@@ -186,7 +190,7 @@ fn code_hierarchy(
                 c,
                 &mut act,
                 FORMAT_VERSION,
-                targets.as_deref(),
+                t.as_deref(),
             )
         })
         .collect();

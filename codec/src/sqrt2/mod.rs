@@ -63,15 +63,13 @@ pub fn next_level(level: &Level) -> crate::error::Result<Level> {
     }
     // Per coarse edge, its two occurrences as (corner, next corner) slots, in face order.
     let mut occ = vec![[[NONE; 2]; 2]; level.ne()];
-    let mut seen = vec![0u8; level.ne()];
     for f in 0..topo.nf() {
         let s = topo.starts[f] as usize;
         let k = topo.face(f).len();
         for i in 0..k {
             let e = level.face_edges[s + i] as usize;
-            let n = seen[e] as usize;
+            let n = (occ[e][0][0] != NONE) as usize;
             occ[e][n] = [(s + i) as u32, (s + (i + 1) % k) as u32];
-            seen[e] = 1;
         }
     }
     // The corner slot of vertex v in the face occurrence `o`.
@@ -245,6 +243,11 @@ impl Plan {
         plan
     }
 
+    /// IR2W's prediction rows, for the transforms that predict with them (sqrt2-lazy, ir2w).
+    fn prediction(&self) -> Option<&Rows> {
+        matches!(self.wavelet, Wavelet::Sqrt2Lazy | Wavelet::Ir2w).then_some(&self.predict)
+    }
+
     /// Analysis: fine values `x[..nv + nf]` to coarse values and face-point details.
     pub fn analyse<T: Sample>(&self, x: &mut [T]) {
         match self.wavelet {
@@ -398,16 +401,16 @@ fn predict_rows(level: &Level, nb: &Neighbours<'_>) -> Rows {
 
 /// The tangent targets of a level's face points (SPEC.md 10.3): per face, the rounded
 /// centroid of its corners minus IR2W's prediction (eq. 1), both from the coarse values
-/// `coarse`. Reuses `plan`'s prediction when it has one.
+/// `coarse`. Reuses the prediction of `plan` (this level's) when it has one.
 pub fn tangent_targets(
     level: &Level,
     plan: Option<&Plan>,
     coarse: &[Vec<i64>; 3],
 ) -> Vec<[i64; 3]> {
     let own;
-    let rows = match plan {
-        Some(p) if p.predict.den.len() == level.nf() => &p.predict,
-        _ => {
+    let rows = match plan.and_then(Plan::prediction) {
+        Some(rows) => rows,
+        None => {
             let rings = Rings::from_level(level);
             let nb = Neighbours {
                 rings: &rings,
