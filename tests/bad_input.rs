@@ -368,3 +368,63 @@ fn tangent_mode_on_a_catmull_clark_level_is_corrupt() {
         other => panic!("expected a corrupt level, got {other:?}"),
     }
 }
+
+/// The sphere_polar3 container with its header rewritten by `edit` (checksums valid).
+fn polar_with_header(edit: impl FnOnce(&mut subwave::Header)) -> Vec<u8> {
+    let obj = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/corpus/sphere_polar3.obj"
+    ))
+    .unwrap();
+    let m = subwave::load(&obj, None).unwrap();
+    let enc = subwave::encode_to_vec(&m.mesh, &m.quantization, &EncodeOptions::default()).unwrap();
+    assert_eq!(enc.header.family, subwave::Family::Polar);
+    let c = subwave_container::Container::parse(&enc.bytes, &Limits::default()).unwrap();
+    let mut h = enc.header.clone();
+    edit(&mut h);
+    let mut w = ContainerWriter::new();
+    for s in &c.sections {
+        match s.kind {
+            SectionKind::END => {}
+            SectionKind::HEADER => w.section(s.kind, &h.write()),
+            _ => w.section(s.kind, s.payload),
+        }
+    }
+    w.finish()
+}
+
+#[test]
+fn polar_headers_that_do_not_fit_their_base_mesh_are_refused() {
+    // Unchanged, the rewritten container decodes.
+    assert!(subwave::decode_slice(&polar_with_header(|_| {})).is_ok());
+    let base = |h: &subwave::Header| h.base_vertices as u32;
+    type Edit = Box<dyn FnOnce(&mut subwave::Header)>;
+    let cases: Vec<(&str, Edit)> = vec![
+        ("no poles", Box::new(|h| h.poles.clear())),
+        (
+            "not a base vertex",
+            Box::new(move |h| h.poles = vec![base(h)]),
+        ),
+        ("a ring vertex (quads)", Box::new(|h| h.poles = vec![5])),
+        ("one pole of two", Box::new(|h| h.poles.truncate(1))),
+        (
+            "a sqrt(2) transform",
+            Box::new(|h| h.transform = subwave::Transform::Wavelet(subwave::Wavelet::Ir2w)),
+        ),
+    ];
+    for (what, edit) in cases {
+        match subwave::decode_slice(&polar_with_header(edit)) {
+            Err(Error::Container(_)) | Err(Error::CorruptStream { .. }) => {}
+            other => panic!("{what}: expected a malformed or corrupt container, got {other:?}"),
+        }
+    }
+    // Before version 8 family 3 was reserved: the same header read as version 7.
+    let bytes = polar_with_header(|_| {});
+    let c = subwave_container::Container::parse(&bytes, &Limits::default()).unwrap();
+    let head = c.sections[0].payload;
+    assert!(subwave::Header::read(head, 0, &Limits::default(), 8).is_ok());
+    match subwave::Header::read(head, 0, &Limits::default(), 7) {
+        Err(Error::Unsupported(what)) => assert!(what.contains("family code 3"), "{what}"),
+        other => panic!("expected unsupported, got {other:?}"),
+    }
+}

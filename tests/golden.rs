@@ -78,6 +78,7 @@ fn frozen_containers_still_decode() {
         ("cube_cc4.flat.v5.swv", "cube_cc4.obj"),
         ("prism_sqrt2_5.v6.swv", "prism_sqrt2_5.obj"),
         ("prism_sqrt2_5.v7.swv", "prism_sqrt2_5.obj"),
+        ("sphere_polar3.v8.swv", "sphere_polar3.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

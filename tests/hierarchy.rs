@@ -1,4 +1,4 @@
-//! Catmull-Clark and sqrt(2) hierarchies: recovery depth on the shared corpus, coarser levels from
+//! Catmull-Clark, polar and sqrt(2) hierarchies: recovery depth on the shared corpus, coarser levels from
 //! whole and cut-off files, and exact round trips of random hierarchies through every
 //! transform.
 
@@ -70,6 +70,93 @@ fn recovered_depth_reaches_the_manifest_on_cc_and_grid_meshes() {
     });
     if let Some(checked) = checked {
         assert!(checked >= 34, "checked only {checked} meshes");
+    }
+}
+
+#[test]
+fn polar_meshes_recover_their_full_depth_in_any_order() {
+    let checked = each_manifest_mesh(&["polar"], Wavelet::Bicubic, |e, name, m, enc| {
+        assert_eq!(enc.header.family, subwave::Family::Polar, "{name}");
+        assert_eq!(
+            enc.header.levels as u64,
+            e["levels"].as_u64().unwrap(),
+            "{name}"
+        );
+        assert_eq!(
+            (enc.header.base_vertices, enc.header.base_faces),
+            (
+                e["base_vertex_count"].as_u64().unwrap(),
+                e["base_face_count"].as_u64().unwrap()
+            ),
+            "{name}"
+        );
+        let poles = e["pole_base_valences"].as_array().unwrap().len();
+        assert_eq!(enc.header.poles.len(), poles, "{name}");
+        let dec = subwave::decode_slice(&enc.bytes).unwrap();
+        assert_eq!(
+            common::fingerprint(&dec.mesh),
+            common::fingerprint(&m.mesh),
+            "{name}"
+        );
+    });
+    if let Some(checked) = checked {
+        assert_eq!(checked, 4, "two polar meshes, ordered and shuffled");
+    }
+}
+
+/// A random polar hierarchy: a latitude-longitude sphere (`n` spokes, `rings` rings) or
+/// the mixed base with a fan of 5 triangles in place of a pentagon, refined `levels`
+/// times, shuffled, with random coordinates of up to `bits` bits.
+fn random_polar_hierarchy(seed: u64, base: usize, levels: u32, bits: u32) -> (Mesh, usize) {
+    let mut rng = Rng::new(seed);
+    let (b, poles) = match base {
+        0 => (subwave_corpus::polar_sphere(4, 1), vec![0, 1]),
+        1 => (subwave_corpus::polar_sphere(7, 2), vec![0, 1]),
+        _ => {
+            let mut b = subwave_corpus::mixed_polygons();
+            let hub = b.positions.len() as u32;
+            b.positions.push([0.0, 0.0, -0.8]);
+            let top = b.faces.remove(0);
+            for i in 0..top.len() {
+                b.faces.push(vec![hub, top[i], top[(i + 1) % top.len()]]);
+            }
+            (b, vec![hub])
+        }
+    };
+    let fine = b.polar_refined(&poles, levels);
+    (randomised(&fine, &mut rng, bits), poles.len())
+}
+
+#[test]
+fn polar_levels_decode_coarser_meshes_with_their_fans() {
+    let (mesh, _) = random_polar_hierarchy(4, 1, 3, 20);
+    let enc = subwave::encode_to_vec(
+        &mesh,
+        &Quantization::Decimal { decimals: 0 },
+        &EncodeOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(enc.header.family, subwave::Family::Polar);
+    assert_eq!(enc.header.levels, 3);
+    let full = subwave::decode_slice(&enc.bytes).unwrap();
+    assert_eq!(common::fingerprint(&full.mesh), common::fingerprint(&mesh));
+    for k in 0..=3u8 {
+        let dec = subwave::decode(
+            &enc.bytes,
+            &DecodeOptions {
+                max_level: Some(k),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        // Two poles of valence 7 * 2^k, each with its fan; all other faces quads.
+        let triangles = dec.mesh.iter_faces().filter(|f| f.len() == 3).count();
+        assert_eq!(triangles, 2 * (7 << k), "level {k}");
+        assert!(dec.mesh.iter_faces().all(|f| f.len() == 3 || f.len() == 4));
+        for &p in &enc.header.poles {
+            let fan = dec.mesh.iter_faces().filter(|f| f.contains(&p)).count();
+            assert_eq!(fan, 7 << k, "level {k}: pole {p}");
+        }
     }
 }
 
@@ -212,6 +299,29 @@ proptest! {
             let opts = EncodeOptions { transform: TransformChoice::Fixed(w), keep_order: keep, ..Default::default() };
             let enc = subwave::encode_to_vec(&mesh, &Quantization::Decimal { decimals: 0 }, &opts).unwrap();
             prop_assert_eq!(enc.header.levels as u32, levels);
+            let dec = subwave::decode_slice(&enc.bytes).unwrap();
+            if keep {
+                prop_assert_eq!(&dec.mesh, &mesh);
+            } else {
+                prop_assert_eq!(common::fingerprint(&dec.mesh), common::fingerprint(&mesh));
+            }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+    #[test]
+    fn random_polar_hierarchies_round_trip_through_every_catmull_clark_transform(
+        seed in any::<u64>(), base in 0usize..3, levels in 1u32..4, bits in 1u32..45, keep in any::<bool>()
+    ) {
+        let (mesh, poles) = random_polar_hierarchy(seed, base, levels, bits);
+        for w in Wavelet::ALL {
+            let opts = EncodeOptions { transform: TransformChoice::Fixed(w), keep_order: keep, ..Default::default() };
+            let enc = subwave::encode_to_vec(&mesh, &Quantization::Decimal { decimals: 0 }, &opts).unwrap();
+            prop_assert_eq!(enc.header.family, subwave::Family::Polar);
+            prop_assert!(enc.header.levels as u32 >= levels);
+            prop_assert_eq!(enc.header.poles.len(), poles);
             let dec = subwave::decode_slice(&enc.bytes).unwrap();
             if keep {
                 prop_assert_eq!(&dec.mesh, &mesh);

@@ -347,6 +347,7 @@ fn print_info(info: &subwave::Info, as_json: bool) {
             "base_faces": h.base_faces,
             "levels": h.levels,
             "family": h.family.name(),
+            "poles": h.poles,
             "transform": h.transform.name(),
             "quantization": quant_json(&h.quantization),
             "keep_order": h.has_order,
@@ -369,6 +370,14 @@ fn print_info(info: &subwave::Info, as_json: bool) {
     );
     println!("levels          {}", h.levels);
     println!("family          {}", h.family.name());
+    if !h.poles.is_empty() {
+        let list: Vec<String> = h.poles.iter().map(|p| (p + 1).to_string()).collect();
+        println!(
+            "poles           {} (base vertices {})",
+            h.poles.len(),
+            list.join(", ")
+        );
+    }
     println!("transform       {}", h.transform.name());
     println!("quantisation    {}", h.quantization.describe());
     println!(

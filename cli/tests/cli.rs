@@ -211,6 +211,35 @@ fn warnings_name_what_was_dropped_and_q_silences_them() {
 }
 
 #[test]
+fn info_reports_a_polar_hierarchy_and_its_poles() {
+    let input = corpus("sphere_polar3.obj");
+    let swv = tmp("polar.swv");
+    assert!(run(&[
+        "compress",
+        input.to_str().unwrap(),
+        swv.to_str().unwrap(),
+        "--keep-order"
+    ])
+    .status
+    .success());
+    let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
+    assert_eq!(v["family"], "polar");
+    assert_eq!(v["levels"], 3);
+    assert_eq!(v["poles"].as_array().unwrap().len(), 2);
+    let text = run(&["info", swv.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&text.stdout).contains("poles           2"));
+    let out = tmp("polar.obj");
+    assert!(
+        run(&["decompress", swv.to_str().unwrap(), out.to_str().unwrap()])
+            .status
+            .success()
+    );
+    // The file comes back byte for byte.
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&input).unwrap());
+    assert_eq!(v["base_vertices"], 17);
+}
+
+#[test]
 fn max_level_on_a_cut_file_and_info_reports_cc() {
     let input = corpus("cube_cc4.obj");
     let swv = tmp("levels.swv");

@@ -130,6 +130,9 @@ pub struct Header {
     pub source: Source,
     /// Whether an ORDR section restores the input vertex order.
     pub has_order: bool,
+    /// Polar hierarchies (family 3): the base mesh's poles, increasing (SPEC.md 8.6);
+    /// empty for every other family.
+    pub poles: Vec<u32>,
 }
 
 const FLAG_ORDER: u64 = 1;
@@ -175,6 +178,15 @@ impl Header {
         }
         w.u8(self.source.code());
         w.varint(if self.has_order { FLAG_ORDER } else { 0 });
+        if self.family == Family::Polar {
+            w.varint(self.poles.len() as u64);
+            let mut prev = 0u64;
+            for (i, &p) in self.poles.iter().enumerate() {
+                let p = p as u64;
+                w.varint(if i == 0 { p } else { p - prev - 1 });
+                prev = p;
+            }
+        }
         w.out
     }
 
@@ -219,7 +231,7 @@ impl Header {
             0 => Family::None,
             1 => Family::Cc,
             2 => Family::Sqrt2,
-            3 => Family::Polar,
+            3 if version >= 8 => Family::Polar,
             f => {
                 return Err(Error::Unsupported(format!(
                     "subdivision family code {f} (byte {at})"
@@ -292,6 +304,29 @@ impl Header {
                 "header flags {flags:#x} (byte {at})"
             )));
         }
+        // Polar hierarchies (version 8 on): the poles, as gaps (SPEC.md 5).
+        let mut poles = Vec::new();
+        if family == Family::Polar && levels > 0 {
+            let n = r.varint("pole count")?;
+            if n == 0 || n > base_vertices {
+                return Err(malformed(
+                    r.offset(),
+                    format!("{n} poles for {base_vertices} base vertices"),
+                ));
+            }
+            let mut next = 0u64;
+            for _ in 0..n {
+                let p = next.saturating_add(r.varint("pole")?);
+                if p >= base_vertices {
+                    return Err(malformed(
+                        r.offset(),
+                        format!("pole {p} is not a base vertex"),
+                    ));
+                }
+                poles.push(p as u32);
+                next = p + 1;
+            }
+        }
         r.finish("the header")?;
         let h = Header {
             vertices,
@@ -306,6 +341,7 @@ impl Header {
             quantization,
             source,
             has_order: flags & FLAG_ORDER != 0,
+            poles,
         };
         h.check(offset, limits)?;
         Ok(h)
@@ -340,6 +376,7 @@ impl Header {
             let sqrt2 = match self.family {
                 Family::Cc => false,
                 Family::Sqrt2 => true,
+                Family::Polar if !self.poles.is_empty() => false,
                 f => return Err(Error::Unsupported(format!("{} hierarchies", f.name()))),
             };
             match self.transform {
@@ -360,7 +397,8 @@ impl Header {
             }
             if self.base_vertices > self.vertices
                 || self.base_faces > self.faces
-                || self.corners != 4 * self.faces
+                || self.corners > 4 * self.faces
+                || (self.family != Family::Polar && self.corners != 4 * self.faces)
                 || self.base_corners < 3 * self.base_faces
             {
                 return Err(malformed(

@@ -133,6 +133,7 @@ fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Header {
         quantization: *q,
         source: opts.source,
         has_order: opts.keep_order,
+        poles: Vec::new(),
     }
 }
 
@@ -201,9 +202,12 @@ fn code_hierarchy(
     header.levels = canon.levels.len() as u8;
     header.family = if canon.sqrt2 {
         Family::Sqrt2
+    } else if !canon.poles.is_empty() {
+        Family::Polar
     } else {
         Family::Cc
     };
+    header.poles = canon.poles.clone();
     header.transform = Transform::Wavelet(w);
     Some(Payloads {
         header,
@@ -261,6 +265,8 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
             for rec in hierarchy::cc::recover_all(mesh.vertex_count(), &topo, max) {
                 canons.push(hierarchy::canonicalise(&rec)?);
             }
+            // Polar levels take the Catmull-Clark transforms (SPEC.md 8.6).
+            canons.extend(hierarchy::polar::recover(mesh.vertex_count(), &topo, max));
             // A mesh and its dual can both be the base: compare them with one transform.
             families.push((canons, Wavelet::Bicubic, &Wavelet::ALL));
         }
@@ -586,6 +592,29 @@ fn synthesise_levels(
         std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect());
     let mut act = vec![levels::UNKNOWN; topo.nv];
     let is_sqrt2 = h.family == Family::Sqrt2;
+    // Polar hierarchies: which vertices are poles (the same at every level, SPEC.md 8.6);
+    // every face at a pole must be a triangle.
+    let mut pole = vec![
+        false;
+        if h.family == Family::Polar {
+            topo.nv
+        } else {
+            0
+        }
+    ];
+    for &p in &h.poles {
+        *pole
+            .get_mut(p as usize)
+            .ok_or_else(|| Error::corrupt("HEAD", "a pole is not a base vertex"))? = true;
+    }
+    if !pole.is_empty() {
+        for f in 0..topo.nf() {
+            let face = topo.face(f);
+            if face.len() != 3 && face.iter().any(|&v| pole[v as usize]) {
+                return Err(Error::corrupt("BASE", "a face at a pole is not a triangle"));
+            }
+        }
+    }
     // A sqrt(2) level's successor, derived from it (cheaper than from its fine faces).
     let mut next: Option<Level> = None;
     for l in 0..upto as usize {
@@ -597,7 +626,7 @@ fn synthesise_levels(
         let (fine_nv, fine_faces) = if is_sqrt2 {
             (sqrt2::fine_nv(&level), level.ne())
         } else {
-            (level.fine_nv(), level.coarse.idx.len())
+            (level.fine_nv(), level.fine_faces_with(&pole))
         };
         if fine_nv as u64 > h.vertices || fine_faces as u64 > h.faces {
             return Err(Error::corrupt(
@@ -643,7 +672,10 @@ fn synthesise_levels(
         } else if is_sqrt2 {
             topo = sqrt2::fine(&level);
         } else {
-            topo = level.fine();
+            topo = level.fine_with(&pole);
+            if !pole.is_empty() {
+                pole.resize(topo.nv, false);
+            }
         }
     }
     if upto == h.levels

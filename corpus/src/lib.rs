@@ -190,6 +190,36 @@ impl PolyMesh {
         m
     }
 
+    /// One polar step (SPEC.md 8.6): a Catmull-Clark step in which, at each corner of a
+    /// triangle that is one of `poles`, the quad (pole, edge point, face point, edge
+    /// point) is split along (pole, face point) into two triangles. Positions follow the
+    /// Catmull-Clark rules.
+    pub fn polar_step(&self, poles: &[u32]) -> PolyMesh {
+        let mut m = self.catmull_clark();
+        let mut quads = std::mem::take(&mut m.faces).into_iter();
+        for f in &self.faces {
+            for c in f {
+                let q = quads.next().expect("one quad per corner");
+                if f.len() == 3 && poles.contains(c) {
+                    m.faces.push(vec![q[0], q[1], q[2]]);
+                    m.faces.push(vec![q[0], q[2], q[3]]);
+                } else {
+                    m.faces.push(q);
+                }
+            }
+        }
+        m
+    }
+
+    /// `levels` polar steps with the same poles.
+    pub fn polar_refined(&self, poles: &[u32], levels: u32) -> PolyMesh {
+        let mut m = self.clone();
+        for _ in 0..levels {
+            m = m.polar_step(poles);
+        }
+        m
+    }
+
     /// `levels` Catmull-Clark steps.
     pub fn refined(&self, levels: u32) -> PolyMesh {
         let mut m = self.clone();
@@ -282,6 +312,29 @@ pub fn cube() -> PolyMesh {
         vec![0, 4, 6, 2],
         vec![1, 3, 7, 5],
     ];
+    PolyMesh { positions, faces }
+}
+
+/// A latitude-longitude sphere: poles 0 (top) and 1 (bottom), each with a fan of `n`
+/// triangles, and `rings` rings of `n` vertices joined by quads.
+pub fn polar_sphere(n: u32, rings: u32) -> PolyMesh {
+    let mut positions = vec![[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
+    for r in 0..rings {
+        let lat = std::f64::consts::PI * (r + 1) as f64 / (rings + 1) as f64;
+        for j in 0..n {
+            let lon = std::f64::consts::TAU * j as f64 / n as f64;
+            positions.push([lat.sin() * lon.cos(), lat.sin() * lon.sin(), lat.cos()]);
+        }
+    }
+    let v = |r: u32, j: u32| 2 + r * n + j % n;
+    let mut faces = Vec::new();
+    for j in 0..n {
+        faces.push(vec![0, v(0, j), v(0, j + 1)]);
+        faces.push(vec![1, v(rings - 1, j + 1), v(rings - 1, j)]);
+        for r in 0..rings - 1 {
+            faces.push(vec![v(r, j), v(r + 1, j), v(r + 1, j + 1), v(r, j + 1)]);
+        }
+    }
     PolyMesh { positions, faces }
 }
 
@@ -424,6 +477,8 @@ pub fn small_corpus() -> Vec<(&'static str, String)> {
     let shuffled = cube4.shuffled(&mut rng);
     let mut prism = mixed_polygons().sqrt2_refined(5);
     prism.displace(0.03, 0.002, &mut rng);
+    let mut polar = polar_sphere(5, 3).polar_refined(&[0, 1], 3);
+    polar.displace(0.03, 0.002, &mut rng);
     vec![
         ("cube_cc4.obj", cube4.to_obj(6)),
         ("cube_cc4.shuffled.obj", shuffled.to_obj(6)),
@@ -433,6 +488,7 @@ pub fn small_corpus() -> Vec<(&'static str, String)> {
         ("terrain_grid33.obj", terrain(5, 3).to_obj(3)),
         ("unstructured.obj", unstructured(12, 5).to_obj(6)),
         ("prism_sqrt2_5.obj", prism.to_obj(6)),
+        ("sphere_polar3.obj", polar.to_obj(6)),
     ]
 }
 

@@ -16,21 +16,21 @@ use super::{PairMap, Recovered, Topo, NONE};
 
 /// One coarsening of a component: the coarse mesh in the fine mesh's local numbers.
 #[derive(Debug, Clone)]
-struct Coarsening {
+pub(super) struct Coarsening {
     /// Coarse topology; vertex `i` is fine vertex `to_fine[i]`.
-    coarse: Topo,
-    to_fine: Vec<u32>,
+    pub(super) coarse: Topo,
+    pub(super) to_fine: Vec<u32>,
     /// (coarse a, coarse b) with a < b -> fine edge point.
     edge_points: Vec<((u32, u32), u32)>,
     /// Per coarse face: its fine face point.
-    face_points: Vec<u32>,
+    pub(super) face_points: Vec<u32>,
 }
 
 /// A chain of coarsenings, finest first, with the number of base vertices it ends at.
 #[derive(Debug, Clone, Default)]
-struct Chain {
-    steps: Vec<Coarsening>,
-    base_vertices: usize,
+pub(super) struct Chain {
+    pub(super) steps: Vec<Coarsening>,
+    pub(super) base_vertices: usize,
 }
 
 /// Finds the deepest Catmull-Clark hierarchy of at most `max_levels` levels. Faces are
@@ -78,7 +78,7 @@ pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Recovered> 
 }
 
 /// Merges the components' chains, cut to the common depth, in input numbers.
-fn merge(nv: usize, depth: usize, parts: &[(&[u32], &Chain)]) -> Recovered {
+pub(super) fn merge(nv: usize, depth: usize, parts: &[(&[u32], &Chain)]) -> Recovered {
     let mut edge_points: Vec<PairMap> = (0..depth).map(|_| PairMap::with_capacity(64)).collect();
     let mut face_points: Vec<PairMap> = (0..depth).map(|_| PairMap::with_capacity(64)).collect();
     let mut base = Topo::new(nv);
@@ -123,6 +123,7 @@ fn merge(nv: usize, depth: usize, parts: &[(&[u32], &Chain)]) -> Recovered {
         base,
         edge_points,
         face_points,
+        poles: Vec::new(),
     }
 }
 
@@ -176,7 +177,7 @@ pub(crate) fn components(nv: usize, topo: &Topo) -> Vec<(Vec<u32>, Topo)> {
 
 /// The deepest chains of coarsenings of a component, best first, at most two: ranked by
 /// depth, then fewer base vertices, then the fixed candidate order.
-fn chains(topo: &Topo, max_levels: usize) -> Vec<Chain> {
+pub(super) fn chains(topo: &Topo, max_levels: usize) -> Vec<Chain> {
     if max_levels == 0 || !topo.all_quads() {
         return vec![Chain {
             steps: Vec::new(),
@@ -196,10 +197,16 @@ fn chains(topo: &Topo, max_levels: usize) -> Vec<Chain> {
             });
         }
     }
+    best(all, topo.nv)
+}
+
+/// The (at most two) best of `all`: deepest, then fewest base vertices, then first; a
+/// chain of no steps when `all` is empty.
+pub(super) fn best(mut all: Vec<Chain>, nv: usize) -> Vec<Chain> {
     if all.is_empty() {
         return vec![Chain {
             steps: Vec::new(),
-            base_vertices: topo.nv,
+            base_vertices: nv,
         }];
     }
     // Stable sort keeps the candidate order among equals.
@@ -217,7 +224,12 @@ fn chains(topo: &Topo, max_levels: usize) -> Vec<Chain> {
 
 /// BFS 2-colouring over an adjacency given as CSR; `None` if not bipartite or not
 /// connected (a component must be one piece).
-fn two_colour(n: usize, starts: &[u32], adj: &[u32], members: &[bool]) -> Option<Vec<u8>> {
+pub(super) fn two_colour(
+    n: usize,
+    starts: &[u32],
+    adj: &[u32],
+    members: &[bool],
+) -> Option<Vec<u8>> {
     let mut colour = vec![2u8; n];
     let first = members.iter().position(|&m| m)?;
     colour[first] = 0;
@@ -240,7 +252,7 @@ fn two_colour(n: usize, starts: &[u32], adj: &[u32], members: &[bool]) -> Option
     (reached == members.iter().filter(|&&m| m).count()).then_some(colour)
 }
 
-fn adjacency(n: usize, pairs: &[(u32, u32)]) -> (Vec<u32>, Vec<u32>) {
+pub(super) fn adjacency(n: usize, pairs: &[(u32, u32)]) -> (Vec<u32>, Vec<u32>) {
     let mut starts = vec![0u32; n + 1];
     for &(a, b) in pairs {
         starts[a as usize + 1] += 1;
@@ -263,7 +275,7 @@ fn adjacency(n: usize, pairs: &[(u32, u32)]) -> (Vec<u32>, Vec<u32>) {
 /// Every valid coarsening of a connected all-quad component, in a fixed order: edge
 /// class first the colour class of vertex 0's opposite, then vertex 0's; within that, the
 /// old-vertex class containing the smallest non-edge vertex number first.
-fn candidates(t: &Topo) -> Vec<Coarsening> {
+pub(super) fn candidates(t: &Topo) -> Vec<Coarsening> {
     let n = t.nv;
     let nf = t.nf();
     for f in 0..nf {

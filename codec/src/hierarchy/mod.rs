@@ -3,6 +3,7 @@
 //! flat mesh in any vertex and face order (encoder only).
 
 pub mod cc;
+pub mod polar;
 
 use crate::error::{Error, Result};
 
@@ -309,6 +310,14 @@ impl Level {
     /// The fine topology (SPEC.md 8.1): per coarse face f, per corner i, the quad
     /// (corner i, edge point of edge i, face point, edge point of edge i - 1).
     pub fn fine(&self) -> Topo {
+        self.fine_with(&[])
+    }
+
+    /// The fine topology of a polar level (SPEC.md 8.6): as [`Level::fine`], except that
+    /// at each corner of a triangle that is a pole (`pole[v]`; vertices past the end of
+    /// `pole` are not poles) the quad is split along (corner, face point) into two
+    /// triangles.
+    pub fn fine_with(&self, pole: &[bool]) -> Topo {
         let mut t = Topo::new(self.fine_nv());
         t.idx.reserve(self.coarse.idx.len() * 4);
         t.starts.reserve(self.coarse.idx.len());
@@ -318,11 +327,29 @@ impl Level {
             let face = self.coarse.face(f);
             let fe = self.f_edges(f);
             let k = face.len();
+            let fp = f0 + f as u32;
             for i in 0..k {
-                t.push(&[face[i], e0 + fe[i], f0 + f as u32, e0 + fe[(i + k - 1) % k]]);
+                let (c, a, b) = (face[i], e0 + fe[i], e0 + fe[(i + k - 1) % k]);
+                if k == 3 && pole.get(c as usize).copied().unwrap_or(false) {
+                    t.push(&[c, a, fp]);
+                    t.push(&[c, fp, b]);
+                } else {
+                    t.push(&[c, a, fp, b]);
+                }
             }
         }
         t
+    }
+
+    /// The number of faces [`Level::fine_with`] makes.
+    pub fn fine_faces_with(&self, pole: &[bool]) -> usize {
+        let splits = (0..self.nf())
+            .map(|f| self.coarse.face(f))
+            .filter(|face| face.len() == 3)
+            .flatten()
+            .filter(|&&v| pole.get(v as usize).copied().unwrap_or(false))
+            .count();
+        self.coarse.idx.len() + splits
     }
 }
 
@@ -355,6 +382,9 @@ pub struct Recovered {
     /// Per level: coarse face, named by one directed edge (input numbers) -> its face
     /// point's input number.
     pub face_points: Vec<PairMap>,
+    /// Polar hierarchies: the poles (input numbers), the same vertices at every level;
+    /// empty for Catmull-Clark ones.
+    pub poles: Vec<u32>,
 }
 
 impl Recovered {
@@ -378,6 +408,9 @@ pub struct Canonical {
     pub order: Vec<u32>,
     /// The levels are sqrt(2) steps ([`crate::sqrt2`]), not Catmull-Clark ones.
     pub sqrt2: bool,
+    /// Polar hierarchies (SPEC.md 8.6): the poles in canonical numbers, increasing;
+    /// empty for every other hierarchy.
+    pub poles: Vec<u32>,
 }
 
 /// The canonical base numbering (SPEC.md 8.2): base vertices in order of first use
@@ -441,6 +474,15 @@ pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
             .chain(rec.face_points[l].values())
     });
     let (mut order, base) = base_numbering(&rec.base, finer);
+    let mut is_pole = vec![false; rec.base.nv];
+    for &p in &rec.poles {
+        is_pole[p as usize] = true;
+    }
+    // Canonical numbers: a pole keeps its number at every level.
+    let pole: Vec<bool> = order.iter().map(|&o| is_pole[o as usize]).collect();
+    let poles: Vec<u32> = (0..pole.len() as u32)
+        .filter(|&c| pole[c as usize])
+        .collect();
     let mut levels = Vec::with_capacity(rec.levels());
     let mut cur = base.clone();
     for l in 0..rec.levels() {
@@ -454,7 +496,7 @@ pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
             next.push(p);
         }
         push_face_points(&lvl, &order, &rec.face_points[l], &mut next)?;
-        cur = lvl.fine();
+        cur = lvl.fine_with(&pole);
         levels.push(lvl);
         order = next;
     }
@@ -464,7 +506,38 @@ pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
         fine: cur,
         order,
         sqrt2: false,
+        poles,
     })
+}
+
+/// Checks that the finest level of a canonical hierarchy (`fine`, with `order[c]` the
+/// input number of canonical vertex c) is `input`, face for face (each face once, up to
+/// corner rotation).
+pub(crate) fn check_matches(fine: &Topo, order: &[u32], input: &Topo) -> Result<()> {
+    let mut by_edge = PairMap::with_capacity(input.idx.len() + 4);
+    for f in 0..input.nf() {
+        let face = input.face(f);
+        let k = face.len();
+        for i in 0..k {
+            by_edge.insert(face[i], face[(i + 1) % k], f as u32);
+        }
+    }
+    let mismatch = || Error::InvalidMesh("the hierarchy does not match the input".into());
+    if fine.nf() != input.nf() || order.len() != input.nv {
+        return Err(mismatch());
+    }
+    let mut hit = vec![false; input.nf()];
+    for f in 0..fine.nf() {
+        let c: Vec<u32> = fine.face(f).iter().map(|&v| order[v as usize]).collect();
+        let g = by_edge.get(c[0], c[1]).ok_or_else(mismatch)? as usize;
+        let face = input.face(g);
+        let r = face.iter().position(|&v| v == c[0]).ok_or_else(mismatch)?;
+        let same = face.len() == c.len() && (0..c.len()).all(|i| face[(r + i) % c.len()] == c[i]);
+        if !same || std::mem::replace(&mut hit[g], true) {
+            return Err(mismatch());
+        }
+    }
+    Ok(())
 }
 
 /// Test fixtures shared by the hierarchy and transform tests.

@@ -9,7 +9,9 @@
 //! smallest depth.
 
 use crate::error::{Error, Result};
-use crate::hierarchy::{base_numbering, push_face_points, Canonical, Level, PairMap, Topo, NONE};
+use crate::hierarchy::{
+    base_numbering, check_matches, push_face_points, Canonical, Level, PairMap, Topo, NONE,
+};
 
 /// A recovered sqrt(2) hierarchy, in the input's vertex numbers.
 #[derive(Debug, Clone)]
@@ -244,35 +246,14 @@ pub fn canonicalise(rec: &Recovered, input: &Topo) -> Result<Canonical> {
         order = next;
     }
     // The finest level must be the input, face for face.
-    let mut by_edge = PairMap::with_capacity(input.idx.len() + 4);
-    for f in 0..input.nf() {
-        let face = input.face(f);
-        let k = face.len();
-        for i in 0..k {
-            by_edge.insert(face[i], face[(i + 1) % k], f as u32);
-        }
-    }
-    let mismatch = || Error::InvalidMesh("sqrt(2) hierarchy does not match the input".into());
-    if cur.nf() != input.nf() || order.len() != input.nv {
-        return Err(mismatch());
-    }
-    let mut hit = vec![false; input.nf()];
-    for f in 0..cur.nf() {
-        let c: Vec<u32> = cur.face(f).iter().map(|&v| order[v as usize]).collect();
-        let g = by_edge.get(c[0], c[1]).ok_or_else(mismatch)? as usize;
-        let face = input.face(g);
-        let r = face.iter().position(|&v| v == c[0]).ok_or_else(mismatch)?;
-        let same = face.len() == c.len() && (0..c.len()).all(|i| face[(r + i) % c.len()] == c[i]);
-        if !same || std::mem::replace(&mut hit[g], true) {
-            return Err(mismatch());
-        }
-    }
+    check_matches(&cur, &order, input)?;
     Ok(Canonical {
         base,
         levels,
         fine: cur,
         order,
         sqrt2: true,
+        poles: Vec::new(),
     })
 }
 
