@@ -14,6 +14,7 @@ pub mod io;
 pub mod levels;
 pub mod mesh;
 pub mod order;
+pub mod polar;
 pub mod quant;
 pub mod sqrt2;
 pub mod transform;

@@ -196,7 +196,7 @@ fn stencils(t: &Topo, rings: &Rings) -> Vec<Option<Vec<(u32, f64)>>> {
 }
 
 /// Solves `a x = b` by Gaussian elimination with partial pivoting.
-fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
+pub(crate) fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
     let n = b.len();
     for col in 0..n {
         let p = (col..n)
