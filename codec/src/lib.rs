@@ -267,7 +267,11 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
                 canons.push(hierarchy::canonicalise(&rec)?);
             }
             // Polar levels take the Catmull-Clark transforms (SPEC.md 8.6).
-            canons.extend(hierarchy::polar::recover(mesh.vertex_count(), &topo, max));
+            canons.extend(hierarchy::polar::recover_all(
+                mesh.vertex_count(),
+                &topo,
+                max,
+            ));
             // A mesh and its dual can both be the base: compare them with one transform.
             families.push((canons, Wavelet::Bicubic, &Wavelet::ALL));
         }

@@ -197,12 +197,12 @@ pub(super) fn chains(topo: &Topo, max_levels: usize) -> Vec<Chain> {
             });
         }
     }
-    best(all, topo.nv)
+    best(all, topo.nv, 2)
 }
 
-/// The (at most two) best of `all`: deepest, then fewest base vertices, then first; a
-/// chain of no steps when `all` is empty.
-pub(super) fn best(mut all: Vec<Chain>, nv: usize) -> Vec<Chain> {
+/// The (at most `keep`) best of `all`: deepest, then fewest base vertices, then first;
+/// a chain of no steps when `all` is empty.
+pub(super) fn best(mut all: Vec<Chain>, nv: usize, keep: usize) -> Vec<Chain> {
     if all.is_empty() {
         return vec![Chain {
             steps: Vec::new(),
@@ -218,7 +218,7 @@ pub(super) fn best(mut all: Vec<Chain>, nv: usize) -> Vec<Chain> {
     });
     let depth = all[0].steps.len();
     all.retain(|c| c.steps.len() == depth);
-    all.truncate(2);
+    all.truncate(keep);
     all
 }
 

@@ -19,16 +19,28 @@ use super::{canonicalise, check_matches, Canonical, PairMap, Recovered, Topo};
 /// `< nv`), canonicalised and checked against `topo`; `None` if the mesh has no pole or
 /// no polar level.
 pub fn recover(nv: usize, topo: &Topo, max_levels: usize) -> Option<Canonical> {
-    let rec = recover_raw(nv, topo, max_levels)?;
-    let canon = canonicalise(&rec).ok()?;
-    check_matches(&canon.fine, &canon.order, topo).ok()?;
-    Some(canon)
+    recover_all(nv, topo, max_levels).into_iter().next()
 }
 
-/// [`recover`] before canonicalisation.
-fn recover_raw(nv: usize, topo: &Topo, max_levels: usize) -> Option<Recovered> {
+/// Like [`recover`], also returning the equally deep alternatives where every component
+/// that ties takes its second, third or fourth coarsening (a regular polar grid coarsens
+/// in several ways; which codes smaller depends on the geometry). At most [`KEEP`]
+/// results, preferred first.
+pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Canonical> {
+    recover_raw(nv, topo, max_levels)
+        .into_iter()
+        .filter_map(|rec| {
+            let canon = canonicalise(&rec).ok()?;
+            check_matches(&canon.fine, &canon.order, topo).ok()?;
+            Some(canon)
+        })
+        .collect()
+}
+
+/// [`recover_all`] before canonicalisation.
+fn recover_raw(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Recovered> {
     if max_levels == 0 || topo.nf() == 0 {
-        return None;
+        return Vec::new();
     }
     // Poles: vertices whose faces are all triangles.
     let mut triangles = vec![0u32; nv];
@@ -48,29 +60,51 @@ fn recover_raw(nv: usize, topo: &Topo, max_levels: usize) -> Option<Recovered> {
         .map(|v| triangles[v] > 0 && others[v] == 0)
         .collect();
     if !pole.contains(&true) {
-        return None;
+        return Vec::new();
     }
     let mut parts = Vec::new();
     let mut depth = max_levels;
     for (ids, local) in cc::components(nv, topo) {
         let local_pole: Vec<bool> = ids.iter().map(|&i| pole[i as usize]).collect();
-        let chain = chains(&local, &local_pole, max_levels).swap_remove(0);
-        depth = depth.min(chain.steps.len());
+        let chains = chains(&local, &local_pole, max_levels);
+        depth = depth.min(chains[0].steps.len());
         if depth == 0 {
-            return None;
+            return Vec::new();
         }
-        parts.push((ids, chain));
+        parts.push((ids, chains));
     }
-    let refs: Vec<(&[u32], &Chain)> = parts.iter().map(|(ids, c)| (&ids[..], c)).collect();
-    let mut rec = cc::merge(nv, depth, &refs);
-    rec.poles = (0..nv as u32).filter(|&v| pole[v as usize]).collect();
-    Some(rec)
+    let poles: Vec<u32> = (0..nv as u32).filter(|&v| pole[v as usize]).collect();
+    let mut out = Vec::new();
+    for alternative in 0..KEEP {
+        let mut differs = false;
+        let refs: Vec<(&[u32], &Chain)> = parts
+            .iter()
+            .map(|(ids, c)| match c.get(alternative) {
+                Some(a) if alternative > 0 && a.steps.len() >= depth => {
+                    differs = true;
+                    (&ids[..], a)
+                }
+                _ => (&ids[..], &c[0]),
+            })
+            .collect();
+        if alternative > 0 && !differs {
+            break;
+        }
+        let mut rec = cc::merge(nv, depth, &refs);
+        rec.poles = poles.clone();
+        out.push(rec);
+    }
+    out
 }
+
+/// How many equally deep chains a component keeps: a polar grid coarsens in up to four
+/// ways (two pairings of the fans' triangles, two labelings of the merged quads).
+const KEEP: usize = 4;
 
 /// The best chains of polar coarsenings of a component whose poles are `pole`.
 fn chains(t: &Topo, pole: &[bool], max_levels: usize) -> Vec<Chain> {
     if max_levels == 0 {
-        return cc::best(Vec::new(), t.nv);
+        return cc::best(Vec::new(), t.nv, KEEP);
     }
     if t.all_quads() {
         return cc::chains(t, max_levels);
@@ -93,7 +127,7 @@ fn chains(t: &Topo, pole: &[bool], max_levels: usize) -> Vec<Chain> {
             }
         }
     }
-    cc::best(all, t.nv)
+    cc::best(all, t.nv, KEEP)
 }
 
 /// The all-quad meshes made by merging the poles' triangles in pairs (at most two, one per
