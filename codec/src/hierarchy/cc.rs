@@ -33,6 +33,19 @@ pub(super) struct Chain {
     pub(super) base_vertices: usize,
 }
 
+impl Chain {
+    /// This chain of coarsenings of `first`'s coarse mesh, with `first` in front.
+    pub(super) fn after(self, first: &Coarsening) -> Chain {
+        let mut steps = Vec::with_capacity(self.steps.len() + 1);
+        steps.push(first.clone());
+        steps.extend(self.steps);
+        Chain {
+            steps,
+            base_vertices: self.base_vertices,
+        }
+    }
+}
+
 /// Finds the deepest Catmull-Clark hierarchy of at most `max_levels` levels. Faces are
 /// `topo.face(f)` over vertex numbers `< nv`. Returns `None` when there is no level.
 pub fn recover(nv: usize, topo: &Topo, max_levels: usize) -> Option<Recovered> {
@@ -187,15 +200,7 @@ pub(super) fn chains(topo: &Topo, max_levels: usize) -> Vec<Chain> {
     let mut all: Vec<Chain> = Vec::new();
     for cand in candidates(topo) {
         let rests = chains(&cand.coarse, max_levels - 1);
-        for rest in rests {
-            let mut steps = Vec::with_capacity(rest.steps.len() + 1);
-            steps.push(cand.clone());
-            steps.extend(rest.steps);
-            all.push(Chain {
-                steps,
-                base_vertices: rest.base_vertices,
-            });
-        }
+        all.extend(rests.into_iter().map(|rest| rest.after(&cand)));
     }
     best(all, topo.nv, 2)
 }
@@ -477,7 +482,7 @@ fn build(
 
 #[cfg(test)]
 mod tests {
-    use super::super::fixtures::prism_with_triangles;
+    use super::super::fixtures::{prism_with_triangles, shuffle};
     use super::super::{canonicalise, Level};
     use super::*;
 
@@ -502,38 +507,6 @@ mod tests {
             cur = Level::new(&cur).unwrap().fine();
         }
         cur
-    }
-
-    /// Scrambles vertex numbers, face order and face starts.
-    fn shuffle(t: &Topo, seed: u64) -> Topo {
-        let mut s = seed | 1;
-        let mut rnd = move |n: usize| {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s % n as u64) as usize
-        };
-        let mut perm: Vec<u32> = (0..t.nv as u32).collect();
-        for i in (1..perm.len()).rev() {
-            perm.swap(i, rnd(i + 1));
-        }
-        let mut faces: Vec<Vec<u32>> = (0..t.nf())
-            .map(|f| {
-                let face = t.face(f);
-                let r = rnd(face.len());
-                (0..face.len())
-                    .map(|i| perm[face[(i + r) % face.len()] as usize])
-                    .collect()
-            })
-            .collect();
-        for i in (1..faces.len()).rev() {
-            faces.swap(i, rnd(i + 1));
-        }
-        let mut out = Topo::new(t.nv);
-        for f in &faces {
-            out.push(f);
-        }
-        out
     }
 
     fn face_set(t: &Topo, order: Option<&[u32]>) -> Vec<Vec<u32>> {

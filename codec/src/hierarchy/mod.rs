@@ -545,6 +545,38 @@ pub(crate) fn check_matches(fine: &Topo, order: &[u32], input: &Topo) -> Result<
 pub(crate) mod fixtures {
     use super::Topo;
 
+    /// Scrambles vertex numbers, face order and face starts.
+    pub(crate) fn shuffle(t: &Topo, seed: u64) -> Topo {
+        let mut s = seed | 1;
+        let mut rnd = move |n: usize| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s % n as u64) as usize
+        };
+        let mut perm: Vec<u32> = (0..t.nv as u32).collect();
+        for i in (1..perm.len()).rev() {
+            perm.swap(i, rnd(i + 1));
+        }
+        let mut faces: Vec<Vec<u32>> = (0..t.nf())
+            .map(|f| {
+                let face = t.face(f);
+                let r = rnd(face.len());
+                (0..face.len())
+                    .map(|i| perm[face[(i + r) % face.len()] as usize])
+                    .collect()
+            })
+            .collect();
+        for i in (1..faces.len()).rev() {
+            faces.swap(i, rnd(i + 1));
+        }
+        let mut out = Topo::new(t.nv);
+        for f in &faces {
+            out.push(f);
+        }
+        out
+    }
+
     /// A closed pentagonal prism with one side split into two triangles: a pentagon,
     /// triangles and quads, vertices of valence 3, 4 and 5.
     pub(crate) fn prism_with_triangles() -> Topo {

@@ -116,15 +116,8 @@ fn chains(t: &Topo, pole: &[bool], max_levels: usize) -> Vec<Chain> {
                 continue;
             }
             let coarse_pole: Vec<bool> = cand.to_fine.iter().map(|&f| pole[f as usize]).collect();
-            for rest in chains(&cand.coarse, &coarse_pole, max_levels - 1) {
-                let mut steps = Vec::with_capacity(rest.steps.len() + 1);
-                steps.push(cand.clone());
-                steps.extend(rest.steps);
-                all.push(Chain {
-                    steps,
-                    base_vertices: rest.base_vertices,
-                });
-            }
+            let rests = chains(&cand.coarse, &coarse_pole, max_levels - 1);
+            all.extend(rests.into_iter().map(|rest| rest.after(&cand)));
         }
     }
     cc::best(all, t.nv, KEEP)
@@ -224,7 +217,7 @@ fn fits(cand: &Coarsening, n: usize, diagonals: &[(u32, u32)]) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::super::fixtures::prism_with_triangles;
+    use super::super::fixtures::{prism_with_triangles, shuffle};
     use super::super::{Level, Topo};
     use super::*;
 
@@ -255,37 +248,6 @@ mod tests {
             }
         }
         t
-    }
-
-    fn shuffled(t: &Topo, seed: u64) -> Topo {
-        let mut s = seed | 1;
-        let mut rnd = move |n: usize| {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s % n as u64) as usize
-        };
-        let mut perm: Vec<u32> = (0..t.nv as u32).collect();
-        for i in (1..perm.len()).rev() {
-            perm.swap(i, rnd(i + 1));
-        }
-        let mut faces: Vec<Vec<u32>> = (0..t.nf())
-            .map(|f| {
-                let face = t.face(f);
-                let r = rnd(face.len());
-                (0..face.len())
-                    .map(|i| perm[face[(i + r) % face.len()] as usize])
-                    .collect()
-            })
-            .collect();
-        for i in (1..faces.len()).rev() {
-            faces.swap(i, rnd(i + 1));
-        }
-        let mut out = Topo::new(t.nv);
-        for f in &faces {
-            out.push(f);
-        }
-        out
     }
 
     #[test]
@@ -326,7 +288,7 @@ mod tests {
         ] {
             let fine = refine(&base, &poles, levels);
             for seed in 1..4 {
-                let input = shuffled(&fine, seed);
+                let input = shuffle(&fine, seed);
                 let canon = recover(input.nv, &input, 16).expect("a polar hierarchy");
                 assert_eq!(canon.levels.len(), levels);
                 assert_eq!(canon.poles.len(), poles.len());
