@@ -418,6 +418,16 @@ fn polar_headers_that_do_not_fit_their_base_mesh_are_refused() {
             other => panic!("{what}: expected a malformed or corrupt container, got {other:?}"),
         }
     }
+    // An unknown disc transform (the header's last byte) is unsupported.
+    let bytes = polar_with_header(|h| h.disc = subwave::DiscTransform::LazyCircularFirst);
+    assert!(subwave::decode_slice(&bytes).is_ok());
+    let c = subwave_container::Container::parse(&bytes, &Limits::default()).unwrap();
+    let mut head = c.sections[0].payload.to_vec();
+    *head.last_mut().unwrap() = 9;
+    match subwave::Header::read(&head, 0, &Limits::default(), 8) {
+        Err(Error::Unsupported(what)) => assert!(what.contains("disc transform code 9"), "{what}"),
+        other => panic!("expected unsupported, got {other:?}"),
+    }
     // Before version 8 family 3 was reserved: the same header read as version 7.
     let bytes = polar_with_header(|_| {});
     let c = subwave_container::Container::parse(&bytes, &Limits::default()).unwrap();

@@ -79,6 +79,7 @@ fn frozen_containers_still_decode() {
         ("prism_sqrt2_5.v6.swv", "prism_sqrt2_5.obj"),
         ("prism_sqrt2_5.v7.swv", "prism_sqrt2_5.obj"),
         ("sphere_polar3.v8.swv", "sphere_polar3.obj"),
+        ("sphere_polar3.disc.v8.swv", "sphere_polar3.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);
@@ -90,7 +91,8 @@ fn frozen_containers_still_decode() {
         .unwrap();
         if !path.exists() && std::env::var_os("SUBWAVE_BLESS").is_some() {
             let m = subwave::load(&source, None).unwrap();
-            // A ".flat." container is coded without levels (the flat path).
+            // A ".flat." container is coded without levels (the flat path), a ".disc."
+            // one with the polar wavelet in its discs (radial first).
             let enc = subwave::encode_to_vec(
                 &m.mesh,
                 &m.quantization,
@@ -98,6 +100,9 @@ fn frozen_containers_still_decode() {
                     keep_order: true,
                     source: m.source(),
                     max_levels: if swv.contains(".flat.") { 0 } else { 16 },
+                    disc: swv
+                        .contains(".disc.")
+                        .then_some(subwave::DiscTransform::LazyRadialFirst),
                     ..Default::default()
                 },
             )

@@ -312,16 +312,23 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(300))]
+    #![proptest_config(ProptestConfig::with_cases(200))]
+    /// Every Catmull-Clark transform, with and without the polar wavelet in the discs.
     #[test]
-    fn random_polar_hierarchies_round_trip_through_every_catmull_clark_transform(
+    fn random_polar_hierarchies_round_trip_through_every_transform(
         seed in any::<u64>(), base in 0usize..3, levels in 1u32..4, bits in 1u32..45, keep in any::<bool>()
     ) {
         let (mesh, poles) = random_polar_hierarchy(seed, base, levels, bits);
-        for w in Wavelet::ALL {
-            let opts = EncodeOptions { transform: TransformChoice::Fixed(w), keep_order: keep, ..Default::default() };
+        for (w, d) in Wavelet::ALL.into_iter().flat_map(|w| subwave::DiscTransform::ALL.map(|d| (w, d))) {
+            let opts = EncodeOptions {
+                transform: TransformChoice::Fixed(w),
+                keep_order: keep,
+                disc: Some(d),
+                ..Default::default()
+            };
             let enc = subwave::encode_to_vec(&mesh, &Quantization::Decimal { decimals: 0 }, &opts).unwrap();
             prop_assert_eq!(enc.header.family, subwave::Family::Polar);
+            prop_assert_eq!(enc.header.disc, d);
             prop_assert!(enc.header.levels as u32 >= levels);
             prop_assert_eq!(enc.header.poles.len(), poles);
             let dec = subwave::decode_slice(&enc.bytes).unwrap();

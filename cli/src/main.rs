@@ -57,6 +57,11 @@ enum Command {
         /// Look for at most N refinement levels (0: code the mesh flat).
         #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u8).range(0..=16))]
         levels: u8,
+        /// Polar hierarchies: the poles' discs take auto (smallest file), none (the
+        /// Catmull-Clark transform everywhere), lazy (the lazy polar wavelet, circular
+        /// analysis first) or lazy-radial (radial first).
+        #[arg(long, default_value = "auto", value_parser = parse_disc)]
+        polar_disc: DiscArg,
     },
     /// Decompress a .swv container into a mesh file.
     #[command(after_help = EXAMPLES)]
@@ -96,6 +101,9 @@ enum Command {
         /// Look for at most N refinement levels.
         #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u8).range(0..=16))]
         levels: u8,
+        /// Polar hierarchies' disc transform (as for compress).
+        #[arg(long, default_value = "auto", value_parser = parse_disc)]
+        polar_disc: DiscArg,
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
@@ -111,6 +119,23 @@ fn parse_transform(s: &str) -> Result<TransformChoice, String> {
         .ok_or_else(|| {
             format!("unknown transform '{s}'; use auto, lazy, bilinear, bicubic, biquintic, dyadic-sym (Catmull-Clark), sqrt2-lazy, ir2w or sqrt2-sym (sqrt(2))")
         })
+}
+
+/// `--polar-disc`: a disc transform, or none for auto.
+#[derive(Clone, Copy)]
+struct DiscArg(Option<subwave::DiscTransform>);
+
+fn parse_disc(s: &str) -> Result<DiscArg, String> {
+    use subwave::DiscTransform as D;
+    match s {
+        "auto" => Ok(DiscArg(None)),
+        "none" => Ok(DiscArg(Some(D::None))),
+        "lazy" => Ok(DiscArg(Some(D::LazyCircularFirst))),
+        "lazy-radial" => Ok(DiscArg(Some(D::LazyRadialFirst))),
+        _ => Err(format!(
+            "unknown polar disc transform '{s}'; use auto, none, lazy or lazy-radial"
+        )),
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -226,6 +251,7 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
             keep_order,
             transform,
             levels,
+            polar_disc,
         } => {
             let progress = Progress::new();
             progress.stage("reading");
@@ -238,6 +264,7 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
                 source: loaded.source(),
                 transform: *transform,
                 max_levels: *levels,
+                disc: polar_disc.0,
             };
             let enc = subwave::encode_to_vec(&loaded.mesh, &loaded.quantization, &opts)
                 .map_err(|e| fail(input, e))?;
@@ -300,11 +327,13 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
             bits,
             transform,
             levels,
+            polar_disc,
             json,
         } => {
             let opts = EncodeOptions {
                 transform: *transform,
                 max_levels: *levels,
+                disc: polar_disc.0,
                 ..Default::default()
             };
             verify(cli, input, *bits, &opts, *json)
@@ -348,6 +377,7 @@ fn print_info(info: &subwave::Info, as_json: bool) {
             "levels": h.levels,
             "family": h.family.name(),
             "poles": h.poles,
+            "disc_transform": h.disc.name(),
             "transform": h.transform.name(),
             "quantization": quant_json(&h.quantization),
             "keep_order": h.has_order,
@@ -377,6 +407,7 @@ fn print_info(info: &subwave::Info, as_json: bool) {
             h.poles.len(),
             list.join(", ")
         );
+        println!("disc transform  {}", h.disc.name());
     }
     println!("transform       {}", h.transform.name());
     println!("quantisation    {}", h.quantization.describe());

@@ -226,8 +226,30 @@ fn info_reports_a_polar_hierarchy_and_its_poles() {
     assert_eq!(v["family"], "polar");
     assert_eq!(v["levels"], 3);
     assert_eq!(v["poles"].as_array().unwrap().len(), 2);
+    assert!(v["disc_transform"].is_string());
     let text = run(&["info", swv.to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&text.stdout).contains("poles           2"));
+    // The polar wavelet in the discs, forced, round-trips through the command too.
+    let forced = tmp("polar-disc.swv");
+    assert!(run(&[
+        "compress",
+        input.to_str().unwrap(),
+        forced.to_str().unwrap(),
+        "--polar-disc",
+        "lazy-radial"
+    ])
+    .status
+    .success());
+    let v2 = json(&run(&["info", forced.to_str().unwrap(), "--json"]));
+    assert_eq!(v2["disc_transform"], "polar-lazy (radial first)");
+    let o = run(&[
+        "compress",
+        input.to_str().unwrap(),
+        forced.to_str().unwrap(),
+        "--polar-disc",
+        "nope",
+    ]);
+    assert!(!o.status.success());
     let out = tmp("polar.obj");
     assert!(
         run(&["decompress", swv.to_str().unwrap(), out.to_str().unwrap()])

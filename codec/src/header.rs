@@ -2,6 +2,7 @@
 
 use subwave_container::{ByteReader, ByteWriter, Limits};
 
+use crate::discs::DiscTransform;
 use crate::error::{Error, Result};
 use crate::quant::{FloatWidth, Quantization};
 use crate::transform::Wavelet;
@@ -133,6 +134,9 @@ pub struct Header {
     /// Polar hierarchies (family 3): the base mesh's poles, increasing (SPEC.md 8.6);
     /// empty for every other family.
     pub poles: Vec<u32>,
+    /// Polar hierarchies: the transform of the poles' discs (SPEC.md 9.9); `None` for
+    /// every other family.
+    pub disc: DiscTransform,
 }
 
 const FLAG_ORDER: u64 = 1;
@@ -186,6 +190,7 @@ impl Header {
                 w.varint(if i == 0 { p } else { p - prev - 1 });
                 prev = p;
             }
+            w.u8(self.disc.code());
         }
         w.out
     }
@@ -306,6 +311,7 @@ impl Header {
         }
         // Polar hierarchies (version 8 on): the poles, as gaps (SPEC.md 5).
         let mut poles = Vec::new();
+        let mut disc = DiscTransform::None;
         if family == Family::Polar && levels > 0 {
             let n = r.varint("pole count")?;
             if n == 0 || n > base_vertices {
@@ -326,6 +332,11 @@ impl Header {
                 poles.push(p as u32);
                 next = p + 1;
             }
+            let at = r.offset();
+            let code = r.u8("disc transform")?;
+            disc = DiscTransform::from_code(code).ok_or_else(|| {
+                Error::Unsupported(format!("disc transform code {code} (byte {at})"))
+            })?;
         }
         r.finish("the header")?;
         let h = Header {
@@ -342,6 +353,7 @@ impl Header {
             source,
             has_order: flags & FLAG_ORDER != 0,
             poles,
+            disc,
         };
         h.check(offset, limits)?;
         Ok(h)

@@ -6,6 +6,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod coder;
+pub mod discs;
 pub mod error;
 pub mod flat;
 pub mod header;
@@ -19,6 +20,7 @@ pub mod quant;
 pub mod sqrt2;
 pub mod transform;
 
+pub use discs::DiscTransform;
 pub use error::{Error, Result};
 pub use header::{Family, Header, Source, Transform};
 pub use mesh::{Mesh, MAX_COORD};
@@ -52,6 +54,9 @@ pub struct EncodeOptions {
     pub transform: TransformChoice,
     /// Most refinement levels to look for (0: code the mesh flat).
     pub max_levels: u8,
+    /// Polar hierarchies: the transform of the poles' discs (SPEC.md 9.9); `None` tries
+    /// each with the best Catmull-Clark transform and keeps the smallest.
+    pub disc: Option<DiscTransform>,
 }
 
 impl Default for EncodeOptions {
@@ -61,6 +66,7 @@ impl Default for EncodeOptions {
             source: Source::Unknown,
             transform: TransformChoice::Auto,
             max_levels: 16,
+            disc: None,
         }
     }
 }
@@ -135,6 +141,7 @@ fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Header {
         source: opts.source,
         has_order: opts.keep_order,
         poles: Vec::new(),
+        disc: DiscTransform::None,
     }
 }
 
@@ -144,6 +151,7 @@ fn code_hierarchy(
     canon: &Canonical,
     pos: &[Vec<i64>; 3],
     w: Wavelet,
+    disc: DiscTransform,
     header: &Header,
 ) -> Option<Payloads> {
     let mut x = pos.clone();
@@ -162,9 +170,14 @@ fn code_hierarchy(
             coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
             targets[l] = Some(sqrt2::tangent_targets(level, Some(&plan), &coarse[l]));
         } else {
+            // Polar levels: the poles' discs first, then the rest (SPEC.md 9.9).
             let n = level.fine_nv();
+            let (discs, owned) = discs::discs(level, &canon.poles, l as u32, disc);
             for xs in x.iter_mut() {
-                transform::analyse(level, w, &mut xs[..n]);
+                for d in &discs {
+                    discs::analyse(d, disc, &mut xs[..n]);
+                }
+                transform::analyse_except(level, w, &mut xs[..n], &owned);
             }
             coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
         }
@@ -209,6 +222,11 @@ fn code_hierarchy(
         Family::Cc
     };
     header.poles = canon.poles.clone();
+    header.disc = if canon.poles.is_empty() {
+        DiscTransform::None
+    } else {
+        disc
+    };
     header.transform = Transform::Wavelet(w);
     Some(Payloads {
         header,
@@ -296,7 +314,11 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
                         .map(|&o| mesh.positions[o as usize][k])
                         .collect()
                 });
-                if let Some(mut p) = code_hierarchy(&canon, &pos, first, &flat_h) {
+                let disc = match opts.disc {
+                    Some(d) if !canon.poles.is_empty() => d,
+                    _ => DiscTransform::None,
+                };
+                if let Some(mut p) = code_hierarchy(&canon, &pos, first, disc, &flat_h) {
                     if opts.keep_order {
                         let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
                         p.order = Some(order_section(&canon.order, faces, rotations));
@@ -309,9 +331,23 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
             let Some((mut p, canon, pos)) = fam_best else {
                 continue;
             };
+            let disc = p.header.disc;
             if opts.transform == TransformChoice::Auto {
                 for &w in others.iter().filter(|&&w| w != first) {
-                    if let Some(mut q) = code_hierarchy(&canon, &pos, w, &flat_h) {
+                    if let Some(mut q) = code_hierarchy(&canon, &pos, w, disc, &flat_h) {
+                        q.order = p.order.clone();
+                        if q.size() < p.size() {
+                            p = q;
+                        }
+                    }
+                }
+            }
+            // A polar hierarchy: the other disc transforms, with the best transform.
+            if let (false, None, Transform::Wavelet(w)) =
+                (canon.poles.is_empty(), opts.disc, p.header.transform)
+            {
+                for d in DiscTransform::ALL.into_iter().filter(|&d| d != disc) {
+                    if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, &flat_h) {
                         q.order = p.order.clone();
                         if q.size() < p.size() {
                             p = q;
@@ -665,8 +701,12 @@ fn synthesise_levels(
                 plan.synthesise(xs);
             }
         } else {
+            let (discs, owned) = discs::discs(&level, &h.poles, l as u32, h.disc);
             for xs in x.iter_mut() {
-                transform::synthesise(&level, w, xs);
+                transform::synthesise_except(&level, w, xs, &owned);
+                for d in discs.iter().rev() {
+                    discs::synthesise(d, h.disc, xs);
+                }
             }
         }
         if x.iter().flatten().any(|v| v.abs() > levels::MAX_LIFTED) {

@@ -21,6 +21,22 @@ pub fn gamma(n: usize) -> Vec<f64> {
         .collect()
 }
 
+/// Fixed-point scale of the frozen gamma table: 2^16.
+pub const ONE: i64 = 1 << 16;
+
+/// Gamma of valence `n` times 2^16, rounded half away from zero, re-balanced so that the
+/// weights sum to exactly 2^15 (one half, the pole keeping the other half): the residual
+/// goes to k = 0. This is what the frozen table (`crate::discs::GAMMA`) holds.
+pub fn gamma_fixed(n: usize) -> Vec<i64> {
+    let mut g: Vec<i64> = gamma(n)
+        .iter()
+        .map(|&x| (x * ONE as f64).round() as i64)
+        .collect();
+    let s: i64 = g.iter().sum();
+    g[0] += ONE / 2 - s;
+    g
+}
+
 /// A closed polar net: poles `a` and `b`, `k` rings of `n` vertices between them (ring
 /// 0 next to `a`), each spoke a path a - ring 0 - ... - ring k-1 - b. Values per axis.
 #[derive(Debug, Clone, PartialEq)]

@@ -434,51 +434,52 @@ fn e_from_ends<T: Sample>(level: &Level, x: &[T], e: usize, s: Step) -> T {
     T::combine(s.p as i128, sv, 0, T::Acc::default(), s.q as i128)
 }
 
-fn step<T: Sample>(level: &Level, x: &mut [T], s: Step, forward: bool) {
+fn step<T: Sample>(level: &Level, x: &mut [T], s: Step, forward: bool, skip: &[bool]) {
     let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
     let e0 = nv;
     let f0 = nv + ne;
+    let live = |i: usize| !skip.get(i).copied().unwrap_or(false);
     match (s.kind, forward) {
         (Kind::S, true) => {
-            for v in 0..nv {
+            for v in (0..nv).filter(|&v| live(v)) {
                 if let Some(d) = v_update(level, x, v, s) {
                     x[v] = x[v].plus(d);
                 }
             }
-            for e in 0..ne {
+            for e in (0..ne).filter(|&e| live(e0 + e)) {
                 if let Some(d) = e_from_faces(level, x, e, s) {
                     x[e0 + e] = x[e0 + e].plus(d);
                 }
             }
         }
         (Kind::S, false) => {
-            for e in 0..ne {
+            for e in (0..ne).filter(|&e| live(e0 + e)) {
                 if let Some(d) = e_from_faces(level, x, e, s) {
                     x[e0 + e] = x[e0 + e].minus(d);
                 }
             }
-            for v in 0..nv {
+            for v in (0..nv).filter(|&v| live(v)) {
                 if let Some(d) = v_update(level, x, v, s) {
                     x[v] = x[v].minus(d);
                 }
             }
         }
         (Kind::W, true) => {
-            for f in 0..nf {
+            for f in (0..nf).filter(|&f| live(f0 + f)) {
                 let d = f_update(level, x, f, s);
                 x[f0 + f] = x[f0 + f].plus(d);
             }
-            for e in 0..ne {
+            for e in (0..ne).filter(|&e| live(e0 + e)) {
                 let d = e_from_ends(level, x, e, s);
                 x[e0 + e] = x[e0 + e].plus(d);
             }
         }
         (Kind::W, false) => {
-            for e in 0..ne {
+            for e in (0..ne).filter(|&e| live(e0 + e)) {
                 let d = e_from_ends(level, x, e, s);
                 x[e0 + e] = x[e0 + e].minus(d);
             }
-            for f in 0..nf {
+            for f in (0..nf).filter(|&f| live(f0 + f)) {
                 let d = f_update(level, x, f, s);
                 x[f0 + f] = x[f0 + f].minus(d);
             }
@@ -489,21 +490,33 @@ fn step<T: Sample>(level: &Level, x: &mut [T], s: Step, forward: bool) {
 /// Analysis of one level, in place: `x` holds the fine values (`level.fine_nv()`); after
 /// it, `x[..nv]` are the coarse values and the rest the details.
 pub fn analyse<T: Sample>(level: &Level, w: Wavelet, x: &mut [T]) {
+    analyse_except(level, w, x, &[]);
+}
+
+/// [`analyse`] leaving the fine values `i` with `skip[i]` unchanged (they are read as
+/// they are; indices past the end of `skip` are not skipped). Polar levels skip their
+/// pole discs, which the polar transform codes (SPEC.md 9.9).
+pub fn analyse_except<T: Sample>(level: &Level, w: Wavelet, x: &mut [T], skip: &[bool]) {
     if w == Wavelet::DyadicSym {
-        return dyadic_sym(level, x, true);
+        return dyadic_sym(level, x, true, skip);
     }
     for &s in w.steps() {
-        step(level, x, s, true);
+        step(level, x, s, true, skip);
     }
 }
 
 /// Synthesis of one level, in place: the exact inverse of [`analyse`].
 pub fn synthesise<T: Sample>(level: &Level, w: Wavelet, x: &mut [T]) {
+    synthesise_except(level, w, x, &[]);
+}
+
+/// The exact inverse of [`analyse_except`] with the same `skip`.
+pub fn synthesise_except<T: Sample>(level: &Level, w: Wavelet, x: &mut [T], skip: &[bool]) {
     if w == Wavelet::DyadicSym {
-        return dyadic_sym(level, x, false);
+        return dyadic_sym(level, x, false, skip);
     }
     for &s in w.steps().iter().rev() {
-        step(level, x, s, false);
+        step(level, x, s, false, skip);
     }
 }
 
@@ -584,11 +597,19 @@ fn ds_step3<T: Sample>(level: &Level, x: &[T], v: usize) -> T {
 }
 
 /// The three-step 4-fold symmetric dyadic lifting and its inverse (SPEC.md 9.5).
-fn dyadic_sym<T: Sample>(level: &Level, x: &mut [T], forward: bool) {
+fn dyadic_sym<T: Sample>(level: &Level, x: &mut [T], forward: bool, skip: &[bool]) {
     let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
     let (e0, f0) = (nv, nv + ne);
-    let inner: Vec<bool> = (0..nv).map(|v| interior(level, v)).collect();
-    let two_boundary = |v: usize| boundary_edges(level, v);
+    let live = |i: usize| !skip.get(i).copied().unwrap_or(false);
+    let inner: Vec<bool> = (0..nv).map(|v| live(v) && interior(level, v)).collect();
+    // Skipped vertices take no step: neither the interior ones nor the boundary rule.
+    let two_boundary = |v: usize| {
+        if live(v) {
+            boundary_edges(level, v)
+        } else {
+            (0, [0; 2])
+        }
+    };
     if forward {
         for v in 0..nv {
             if inner[v] {
@@ -596,11 +617,11 @@ fn dyadic_sym<T: Sample>(level: &Level, x: &mut [T], forward: bool) {
                 x[v] = u.scale(16, 11);
             }
         }
-        for e in 0..ne {
+        for e in (0..ne).filter(|&e| live(e0 + e)) {
             let d = ds_step2_e(level, x, e);
             x[e0 + e] = x[e0 + e].minus(d);
         }
-        for f in 0..nf {
+        for f in (0..nf).filter(|&f| live(f0 + f)) {
             let (sv, k) = sum(x, level.coarse.face(f).iter().map(|&c| c as usize));
             let d = T::combine(1, sv, 0, T::Acc::default(), k);
             x[f0 + f] = x[f0 + f].minus(d);
@@ -624,12 +645,12 @@ fn dyadic_sym<T: Sample>(level: &Level, x: &mut [T], forward: bool) {
                 x[v] = x[v].minus(T::combine(1, s, 0, T::Acc::default(), 4));
             }
         }
-        for f in 0..nf {
+        for f in (0..nf).filter(|&f| live(f0 + f)) {
             let (sv, k) = sum(x, level.coarse.face(f).iter().map(|&c| c as usize));
             let d = T::combine(1, sv, 0, T::Acc::default(), k);
             x[f0 + f] = x[f0 + f].plus(d);
         }
-        for e in 0..ne {
+        for e in (0..ne).filter(|&e| live(e0 + e)) {
             let d = ds_step2_e(level, x, e);
             x[e0 + e] = x[e0 + e].plus(d);
         }

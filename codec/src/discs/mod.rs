@@ -1,0 +1,529 @@
+//! Pole discs of polar levels and the integer lazy polar wavelet on them (SPEC.md 9.9):
+//! the refinement rules of polar subdivision (Zhao et al. 2009, eq. 2-6) inverted in
+//! integers, inside the image of each pole's base fan, joined to a Catmull-Clark
+//! transform outside it. [`crate::polar`] holds the floating-point reference.
+
+pub mod tables;
+
+use crate::hierarchy::Level;
+use crate::transform::round_div;
+
+/// Which polar transform a polar hierarchy's discs take (the header's disc byte).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DiscTransform {
+    /// No discs: the Catmull-Clark transform everywhere.
+    None,
+    /// The lazy polar wavelet, circular analysis first.
+    LazyCircularFirst,
+    /// The lazy polar wavelet, radial analysis first.
+    LazyRadialFirst,
+}
+
+impl DiscTransform {
+    /// Every choice, in code order.
+    pub const ALL: [DiscTransform; 3] = [
+        DiscTransform::None,
+        DiscTransform::LazyCircularFirst,
+        DiscTransform::LazyRadialFirst,
+    ];
+
+    /// The header code.
+    pub fn code(self) -> u8 {
+        match self {
+            DiscTransform::None => 0,
+            DiscTransform::LazyCircularFirst => 1,
+            DiscTransform::LazyRadialFirst => 2,
+        }
+    }
+
+    /// The transform of a header code.
+    pub fn from_code(c: u8) -> Option<DiscTransform> {
+        DiscTransform::ALL.into_iter().find(|d| d.code() == c)
+    }
+
+    /// The name `info` prints.
+    pub fn name(self) -> &'static str {
+        match self {
+            DiscTransform::None => "none",
+            DiscTransform::LazyCircularFirst => "polar-lazy (circular first)",
+            DiscTransform::LazyRadialFirst => "polar-lazy (radial first)",
+        }
+    }
+}
+
+/// One pole's disc on a level, in fine vertex numbers: the pole and the fine rings
+/// 1..=2R (R = 2^level rings on the coarse level, the last one the seam), each listing
+/// its 2n fine vertices in spoke order (even positions on the coarse spokes).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Disc {
+    /// The pole.
+    pub pole: u32,
+    /// Fine rings, innermost first.
+    pub rings: Vec<Vec<u32>>,
+}
+
+/// The discs of a polar level (coarse level `index`, 0 = the base mesh) and the mask of
+/// the fine values they own (the Catmull-Clark transform skips them). Poles are taken in
+/// increasing order; a pole gets no disc when its fan is not a closed fan of 4 to
+/// [`MAX_VALENCE`] triangles (for `order`'s radial step), when the rings beyond it do
+/// not continue through valence-4 vertices and quads, or when the disc would share a
+/// fine vertex with an earlier disc (SPEC.md 9.9).
+pub fn discs(level: &Level, poles: &[u32], index: u32, d: DiscTransform) -> (Vec<Disc>, Vec<bool>) {
+    let mut owned = vec![false; level.fine_nv()];
+    let mut out = Vec::new();
+    if d == DiscTransform::None || index > 20 {
+        return (out, Vec::new());
+    }
+    for &p in poles {
+        if let Some(disc) = disc(level, p, 1usize << index, d) {
+            let all = || std::iter::once(&disc.pole).chain(disc.rings.iter().flatten());
+            if all().all(|&v| !owned[v as usize]) {
+                for &v in all() {
+                    owned[v as usize] = true;
+                }
+                out.push(disc);
+            }
+        }
+    }
+    (out, owned)
+}
+
+/// The largest valence the radial step takes (the frozen gamma table's range).
+pub const MAX_VALENCE: usize = tables::GAMMA_MIN + tables::GAMMA.len() - 1;
+
+/// The edge joining coarse vertices a and b.
+fn edge(level: &Level, a: u32, b: u32) -> Option<u32> {
+    level.v_edges(a as usize).iter().copied().find(|&e| {
+        let [x, y] = level.edges[e as usize];
+        (x == a && y == b) || (x == b && y == a)
+    })
+}
+
+/// The face with corners `c` in this rotation (any start).
+fn face(level: &Level, c: &[u32]) -> Option<u32> {
+    level.v_faces(c[0] as usize).iter().copied().find(|&f| {
+        let face = level.coarse.face(f as usize);
+        let k = face.len();
+        k == c.len() && (0..k).any(|r| (0..k).all(|i| face[(r + i) % k] == c[i]))
+    })
+}
+
+fn disc(level: &Level, p: u32, rings: usize, d: DiscTransform) -> Option<Disc> {
+    // The fan, in rotation order: triangle j = (p, v_j, v_{j+1}).
+    let fan = level.v_faces(p as usize);
+    let n = fan.len();
+    let radial_valence = if d == DiscTransform::LazyRadialFirst {
+        2 * n
+    } else {
+        n
+    };
+    if n < 4 || radial_valence > MAX_VALENCE || level.v_edges(p as usize).len() != n {
+        return None;
+    }
+    let next = |f: u32| -> Option<(u32, u32)> {
+        let face = level.coarse.face(f as usize);
+        let i = face.iter().position(|&c| c == p)?;
+        (face.len() == 3).then(|| (face[(i + 1) % 3], face[(i + 2) % 3]))
+    };
+    let mut ring: Vec<u32> = Vec::with_capacity(n);
+    let mut tris: Vec<u32> = Vec::with_capacity(n);
+    let (mut a, _) = next(fan[0])?;
+    for _ in 0..n {
+        let f = fan
+            .iter()
+            .copied()
+            .find(|&f| next(f).map(|(x, _)| x) == Some(a))?;
+        ring.push(a);
+        tris.push(f);
+        a = next(f)?.1;
+    }
+    if a != ring[0] {
+        return None;
+    }
+    // Coarse rings 1..=rings (ring 0 = the pole), each vertex's outward neighbour the one
+    // edge neighbour that is neither inward nor on its ring.
+    let mut coarse: Vec<Vec<u32>> = vec![vec![p; n], ring];
+    while coarse.len() <= rings {
+        let (inner, cur) = (&coarse[coarse.len() - 2], &coarse[coarse.len() - 1]);
+        let mut outer = Vec::with_capacity(n);
+        for j in 0..n {
+            let v = cur[j];
+            let skip = [inner[j], cur[(j + n - 1) % n], cur[(j + 1) % n]];
+            let edges = level.v_edges(v as usize);
+            if edges.len() != 4 {
+                return None;
+            }
+            let mut others = edges.iter().map(|&e| {
+                let [x, y] = level.edges[e as usize];
+                if x == v {
+                    y
+                } else {
+                    x
+                }
+            });
+            let w: Vec<u32> = others.by_ref().filter(|o| !skip.contains(o)).collect();
+            if w.len() != 1 {
+                return None;
+            }
+            outer.push(w[0]);
+        }
+        coarse.push(outer);
+    }
+    let (nv, ne) = (level.nv as u32, level.ne() as u32);
+    let mut fine = Vec::with_capacity(2 * rings);
+    for i in 1..=rings {
+        // Fine ring 2i - 1: spoke edge points and the face points between rings i-1, i.
+        let mut odd = Vec::with_capacity(2 * n);
+        for j in 0..n {
+            odd.push(nv + edge(level, coarse[i - 1][j], coarse[i][j])?);
+            let f = if i == 1 {
+                tris[j]
+            } else {
+                let q = [
+                    coarse[i - 1][j],
+                    coarse[i - 1][(j + 1) % n],
+                    coarse[i][(j + 1) % n],
+                    coarse[i][j],
+                ];
+                face(level, &q).or_else(|| face(level, &[q[3], q[2], q[1], q[0]]))?
+            };
+            odd.push(nv + ne + f);
+        }
+        // Fine ring 2i: the ring's vertices and its edges' points.
+        let mut even = Vec::with_capacity(2 * n);
+        for j in 0..n {
+            even.push(coarse[i][j]);
+            even.push(nv + edge(level, coarse[i][j], coarse[i][(j + 1) % n])?);
+        }
+        fine.push(odd);
+        fine.push(even);
+    }
+    // Every vertex once.
+    let mut all: Vec<u32> = fine.iter().flatten().copied().chain([p]).collect();
+    all.sort_unstable();
+    if all.windows(2).any(|w| w[0] == w[1]) {
+        return None;
+    }
+    Some(Disc {
+        pole: p,
+        rings: fine,
+    })
+}
+
+/// `floor(a / 2)` of a 128-bit sum, wrapped to 64 bits (only corrupt data gets near).
+#[inline]
+fn half(a: i128) -> i64 {
+    a.div_euclid(2) as i64
+}
+
+/// Circular analysis of one closed ring of 2n values (even positions old vertices, odd
+/// positions edge points; SPEC.md 9.9).
+fn circular_analysis(x: &mut [i64], ring: &[u32]) {
+    let m = ring.len();
+    let at = |x: &[i64], i: usize| x[ring[i % m] as usize] as i128;
+    let v: Vec<i64> = (0..m / 2)
+        .map(|j| {
+            let r = round_div(at(x, 2 * j + m - 1) + at(x, 2 * j + 1), 2);
+            (2 * at(x, 2 * j) - r as i128) as i64
+        })
+        .collect();
+    let n = v.len();
+    for j in 0..n {
+        x[ring[2 * j] as usize] = v[j];
+    }
+    for j in 0..n {
+        let r = round_div(v[j] as i128 + v[(j + 1) % n] as i128, 2);
+        let e = &mut x[ring[2 * j + 1] as usize];
+        *e = e.wrapping_sub(r);
+    }
+}
+
+/// The inverse of [`circular_analysis`].
+fn circular_synthesis(x: &mut [i64], ring: &[u32]) {
+    let m = ring.len();
+    let n = m / 2;
+    for j in 0..n {
+        let r = round_div(
+            x[ring[2 * j] as usize] as i128 + x[ring[(2 * j + 2) % m] as usize] as i128,
+            2,
+        );
+        let e = &mut x[ring[2 * j + 1] as usize];
+        *e = e.wrapping_add(r);
+    }
+    let v: Vec<i64> = (0..n)
+        .map(|j| {
+            let at = |i: usize| x[ring[i % m] as usize] as i128;
+            let r = round_div(at(2 * j + m - 1) + at(2 * j + 1), 2);
+            half(at(2 * j) + r as i128)
+        })
+        .collect();
+    for j in 0..n {
+        x[ring[2 * j] as usize] = v[j];
+    }
+}
+
+/// The radial structure a radial step works on: the pole, then per fine ring the
+/// positions on its spokes (every `stride`-th value).
+struct Spokes<'a> {
+    pole: usize,
+    rings: &'a [Vec<u32>],
+    stride: usize,
+}
+
+impl Spokes<'_> {
+    fn n(&self) -> usize {
+        self.rings[0].len() / self.stride
+    }
+    /// Fine ring m (1-based), spoke j.
+    fn at(&self, m: usize, j: usize) -> usize {
+        self.rings[m - 1][j * self.stride] as usize
+    }
+}
+
+/// The gamma prediction of spoke point j next to the pole (SPEC.md 9.9).
+fn gamma_prediction(x: &[i64], s: &Spokes<'_>, p: i64, ring1: usize, j: usize) -> i64 {
+    let n = s.n();
+    let g = tables::GAMMA[n - tables::GAMMA_MIN];
+    let mut acc = (p as i128) << 15;
+    for k in 0..n {
+        acc += g[(k + n - j) % n] as i128 * x[s.at(ring1, k)] as i128;
+    }
+    round_div(acc, 1 << 16)
+}
+
+/// Radial analysis with the seam (the last fine ring) fixed.
+fn radial_analysis(x: &mut [i64], s: &Spokes<'_>) {
+    let n = s.n();
+    let r = s.rings.len() / 2; // coarse rings, the last one the seam
+    let e = |x: &[i64], i: usize, j: usize| x[s.at(2 * i - 1, j)] as i128;
+    let w = |x: &[i64], i: usize, j: usize| x[s.at(2 * i, j)] as i128;
+    let sum: i128 = (0..n).map(|j| e(x, 1, j)).sum();
+    let p = (2 * x[s.pole] as i128 - round_div(sum, n as i128) as i128) as i64;
+    let mut v = vec![0i64; r * n]; // coarse ring i (1-based) at (i - 1) * n + j
+    for i in 1..=r {
+        for j in 0..n {
+            v[(i - 1) * n + j] = if i == r {
+                w(x, i, j) as i64
+            } else if i == 1 {
+                round_div(8 * w(x, 1, j) - p as i128 - 2 * e(x, 2, j), 5)
+            } else {
+                let q = round_div(e(x, i, j) + e(x, i + 1, j), 2);
+                (2 * w(x, i, j) - q as i128) as i64
+            };
+        }
+    }
+    x[s.pole] = p;
+    for i in 1..r {
+        for j in 0..n {
+            x[s.at(2 * i, j)] = v[(i - 1) * n + j];
+        }
+    }
+    for j in 0..n {
+        let pred = gamma_prediction(x, s, p, 2, j);
+        let at = s.at(1, j);
+        x[at] = x[at].wrapping_sub(pred);
+        for i in 2..=r {
+            let pred = round_div(v[(i - 2) * n + j] as i128 + v[(i - 1) * n + j] as i128, 2);
+            let at = s.at(2 * i - 1, j);
+            x[at] = x[at].wrapping_sub(pred);
+        }
+    }
+}
+
+/// The inverse of [`radial_analysis`].
+fn radial_synthesis(x: &mut [i64], s: &Spokes<'_>) {
+    let n = s.n();
+    let r = s.rings.len() / 2;
+    let p = x[s.pole];
+    for j in 0..n {
+        let pred = gamma_prediction(x, s, p, 2, j);
+        let at = s.at(1, j);
+        x[at] = x[at].wrapping_add(pred);
+        for i in 2..=r {
+            let pred = round_div(x[s.at(2 * i - 2, j)] as i128 + x[s.at(2 * i, j)] as i128, 2);
+            let at = s.at(2 * i - 1, j);
+            x[at] = x[at].wrapping_add(pred);
+        }
+    }
+    let e = |x: &[i64], i: usize, j: usize| x[s.at(2 * i - 1, j)] as i128;
+    for i in 1..r {
+        for j in 0..n {
+            let at = s.at(2 * i, j);
+            let v = x[at] as i128;
+            x[at] = if i == 1 {
+                // The one w' with [(8 w' - c) / 5] = v: ceil((10 v + 2 c - 5) / 16).
+                let c = p as i128 + 2 * e(x, 2, j);
+                -(-(10 * v + 2 * c - 5)).div_euclid(16) as i64
+            } else {
+                let q = round_div(e(x, i, j) + e(x, i + 1, j), 2);
+                half(v + q as i128)
+            };
+        }
+    }
+    let sum: i128 = (0..n).map(|j| e(x, 1, j)).sum();
+    x[s.pole] = half(p as i128 + round_div(sum, n as i128) as i128);
+}
+
+/// Analysis of one disc, in place (SPEC.md 9.9).
+pub fn analyse(disc: &Disc, d: DiscTransform, x: &mut [i64]) {
+    match d {
+        DiscTransform::None => {}
+        DiscTransform::LazyCircularFirst => {
+            for ring in &disc.rings {
+                circular_analysis(x, ring);
+            }
+            radial_analysis(x, &spokes(disc, 2));
+        }
+        DiscTransform::LazyRadialFirst => {
+            radial_analysis(x, &spokes(disc, 1));
+            for ring in disc.rings.iter().skip(1).step_by(2) {
+                circular_analysis(x, ring);
+            }
+        }
+    }
+}
+
+/// Synthesis of one disc, the exact inverse of [`analyse`].
+pub fn synthesise(disc: &Disc, d: DiscTransform, x: &mut [i64]) {
+    match d {
+        DiscTransform::None => {}
+        DiscTransform::LazyCircularFirst => {
+            radial_synthesis(x, &spokes(disc, 2));
+            for ring in disc.rings.iter().rev() {
+                circular_synthesis(x, ring);
+            }
+        }
+        DiscTransform::LazyRadialFirst => {
+            for ring in disc.rings.iter().skip(1).step_by(2) {
+                circular_synthesis(x, ring);
+            }
+            radial_synthesis(x, &spokes(disc, 1));
+        }
+    }
+}
+
+fn spokes(disc: &Disc, stride: usize) -> Spokes<'_> {
+    Spokes {
+        pole: disc.pole as usize,
+        rings: &disc.rings,
+        stride,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hierarchy::Topo;
+
+    #[test]
+    fn the_frozen_gamma_table_is_the_reference_solvers() {
+        for (i, row) in tables::GAMMA.iter().enumerate() {
+            let n = i + tables::GAMMA_MIN;
+            let want = crate::polar::gamma_fixed(n);
+            assert_eq!(
+                row.iter().map(|&g| g as i64).collect::<Vec<_>>(),
+                want,
+                "n = {n}"
+            );
+            assert_eq!(want.iter().sum::<i64>(), 1 << 15);
+        }
+    }
+
+    /// A lat-long sphere with poles 0 and 1, refined `levels` times by the polar rule.
+    fn sphere_levels(n: u32, rings: u32, levels: usize) -> Vec<Level> {
+        let mut t = Topo::new((2 + n * rings) as usize);
+        let v = |r: u32, j: u32| 2 + r * n + j % n;
+        for j in 0..n {
+            t.push(&[0, v(0, j), v(0, j + 1)]);
+            t.push(&[1, v(rings - 1, j + 1), v(rings - 1, j)]);
+            for r in 0..rings - 1 {
+                t.push(&[v(r, j), v(r + 1, j), v(r + 1, j + 1), v(r, j + 1)]);
+            }
+        }
+        let mut out = Vec::new();
+        for _ in 0..levels {
+            let l = Level::new(&t).unwrap();
+            let mut pole = vec![false; l.nv];
+            pole[0] = true;
+            pole[1] = true;
+            t = l.fine_with(&pole);
+            out.push(l);
+        }
+        out
+    }
+
+    #[test]
+    fn discs_are_found_on_every_level_and_invert_exactly() {
+        let levels = sphere_levels(5, 6, 3);
+        let mut s = 12345u64;
+        for (index, level) in levels.iter().enumerate() {
+            for d in [
+                DiscTransform::LazyCircularFirst,
+                DiscTransform::LazyRadialFirst,
+            ] {
+                let (discs, owned) = discs(level, &[0, 1], index as u32, d);
+                assert_eq!(discs.len(), 2, "level {index}");
+                let rings = 1usize << index;
+                for disc in &discs {
+                    assert_eq!(disc.rings.len(), 2 * rings);
+                    assert!(disc.rings.iter().all(|r| r.len() == (2 * 5) << index));
+                }
+                let count = owned.iter().filter(|&&o| o).count();
+                assert_eq!(count, 2 * (1 + 2 * rings * 2 * (5 << index)));
+                for bits in [3u32, 20, 44] {
+                    let x0: Vec<i64> = (0..level.fine_nv())
+                        .map(|_| {
+                            s ^= s << 13;
+                            s ^= s >> 7;
+                            s ^= s << 17;
+                            (s % (1 << bits)) as i64 - (1 << (bits - 1))
+                        })
+                        .collect();
+                    let mut x = x0.clone();
+                    for disc in &discs {
+                        analyse(disc, d, &mut x);
+                    }
+                    // Only the discs' values change.
+                    for i in 0..x.len() {
+                        if !owned[i] {
+                            assert_eq!(x[i], x0[i]);
+                        }
+                    }
+                    for disc in discs.iter().rev() {
+                        synthesise(disc, d, &mut x);
+                    }
+                    assert_eq!(x, x0, "level {index}, {d:?}, {bits} bits");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn smooth_values_leave_small_details() {
+        // A linear function is reproduced by the refinement rules away from the pole's
+        // gamma rule, so its details there are rounding only.
+        let levels = sphere_levels(6, 6, 2);
+        let level = &levels[1];
+        let (discs, _) = discs(level, &[0, 1], 1, DiscTransform::LazyCircularFirst);
+        let mut x: Vec<i64> = vec![1000; level.fine_nv()];
+        let x0 = x.clone();
+        for disc in &discs {
+            analyse(disc, DiscTransform::LazyCircularFirst, &mut x);
+        }
+        // A constant: every detail 0, every coarse value the constant.
+        for disc in &discs {
+            assert_eq!(x[disc.pole as usize], 1000);
+            for (m, ring) in disc.rings.iter().enumerate() {
+                for (pos, &v) in ring.iter().enumerate() {
+                    let coarse = m % 2 == 1 && pos % 2 == 0;
+                    assert_eq!(
+                        x[v as usize],
+                        if coarse { 1000 } else { 0 },
+                        "ring {m} pos {pos}"
+                    );
+                }
+            }
+        }
+        assert_ne!(x, x0);
+    }
+}
