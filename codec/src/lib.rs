@@ -164,11 +164,21 @@ fn code_hierarchy(
         if canon.sqrt2 {
             let n = sqrt2::fine_nv(level);
             let plan = sqrt2::Plan::new(level, w);
-            for xs in x.iter_mut() {
-                plan.analyse(&mut xs[..n]);
+            // sqrt2-lazy keeps the coarse values: one prediction per face serves the
+            // analysis and the tangent targets.
+            if let Some(p) = plan.lazy_predictions(&x) {
+                for (xs, pk) in x.iter_mut().zip(&p) {
+                    plan.lazy_with(&mut xs[..n], pk, true);
+                }
+                coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
+                targets[l] = Some(sqrt2::tangent_targets_from(level, &coarse[l], &p));
+            } else {
+                for xs in x.iter_mut() {
+                    plan.analyse(&mut xs[..n]);
+                }
+                coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
+                targets[l] = Some(sqrt2::tangent_targets(level, Some(&plan), &coarse[l]));
             }
-            coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
-            targets[l] = Some(sqrt2::tangent_targets(level, Some(&plan), &coarse[l]));
         } else {
             // Polar levels: the poles' discs first, then the rest (SPEC.md 9.9).
             let n = level.fine_nv();
@@ -680,11 +690,16 @@ fn synthesise_levels(
         }
         let payload = c.sections[2 + l].payload;
         let plan = is_sqrt2.then(|| sqrt2::Plan::new(&level, w));
-        // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
-        let targets = match &plan {
-            Some(p) if c.version >= 7 && payload.first() == Some(&2) => {
-                Some(sqrt2::tangent_targets(&level, Some(p), &x))
-            }
+        // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3); with
+        // sqrt2-lazy their predictions serve the synthesis too.
+        let tangent = c.version >= 7 && payload.first() == Some(&2);
+        let predictions = match &plan {
+            Some(p) if tangent => p.lazy_predictions(&x),
+            _ => None,
+        };
+        let targets = match (&plan, &predictions) {
+            (Some(_), Some(pr)) => Some(sqrt2::tangent_targets_from(&level, &x, pr)),
+            (Some(p), None) if tangent => Some(sqrt2::tangent_targets(&level, Some(p), &x)),
             _ => None,
         };
         levels::decode(
@@ -697,8 +712,11 @@ fn synthesise_levels(
             targets.as_deref(),
         )?;
         if let Some(plan) = plan {
-            for xs in x.iter_mut() {
-                plan.synthesise(xs);
+            for (k, xs) in x.iter_mut().enumerate() {
+                match &predictions {
+                    Some(pr) => plan.lazy_with(xs, &pr[k], false),
+                    None => plan.synthesise(xs),
+                }
             }
         } else {
             let (discs, owned) = discs::discs(&level, &h.poles, l as u32, h.disc);

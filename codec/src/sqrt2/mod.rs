@@ -248,6 +248,29 @@ impl Plan {
         matches!(self.wavelet, Wavelet::Sqrt2Lazy | Wavelet::Ir2w).then_some(&self.predict)
     }
 
+    /// sqrt2-lazy only: per axis, every face point's prediction `P_f` from the coarse
+    /// values `x[k][..nv]`: what synthesis adds and the tangent targets subtract, computed
+    /// once for both; `None` for the other transforms (ir2w predicts from values its
+    /// update has not reached yet).
+    pub fn lazy_predictions(&self, x: &[Vec<i64>; 3]) -> Option<[Vec<i64>; 3]> {
+        (self.wavelet == Wavelet::Sqrt2Lazy).then(|| {
+            std::array::from_fn(|k| {
+                (0..self.nf)
+                    .map(|f| self.predict.eval(f, &x[k][..]))
+                    .collect()
+            })
+        })
+    }
+
+    /// sqrt2-lazy analysis (`forward`) or synthesis of one axis with the predictions of
+    /// [`Plan::lazy_predictions`]: the same as [`Plan::analyse`] / [`Plan::synthesise`].
+    pub fn lazy_with(&self, x: &mut [i64], p: &[i64], forward: bool) {
+        let d = &mut x[self.nv..self.nv + self.nf];
+        for (d, &p) in d.iter_mut().zip(p) {
+            *d = if forward { d.minus(p) } else { d.plus(p) };
+        }
+    }
+
     /// Analysis: fine values `x[..nv + nf]` to coarse values and face-point details.
     pub fn analyse<T: Sample>(&self, x: &mut [T]) {
         match self.wavelet {
@@ -420,6 +443,24 @@ pub fn tangent_targets(
             &own
         }
     };
+    targets(level, coarse, |k, f| rows.eval(f, &coarse[k][..]))
+}
+
+/// [`tangent_targets`] with the predictions at hand (from [`Plan::lazy_predictions`]).
+pub fn tangent_targets_from(
+    level: &Level,
+    coarse: &[Vec<i64>; 3],
+    predictions: &[Vec<i64>; 3],
+) -> Vec<[i64; 3]> {
+    targets(level, coarse, |k, f| predictions[k][f])
+}
+
+/// Per face and axis, the rounded centroid of its corners less `prediction(axis, face)`.
+fn targets(
+    level: &Level,
+    coarse: &[Vec<i64>; 3],
+    prediction: impl Fn(usize, usize) -> i64,
+) -> Vec<[i64; 3]> {
     (0..level.nf())
         .map(|f| {
             let face = level.coarse.face(f);
@@ -427,7 +468,7 @@ pub fn tangent_targets(
                 let x = &coarse[k];
                 let sum: i128 = face.iter().map(|&v| x[v as usize] as i128).sum();
                 let centroid = crate::transform::round_div(sum, face.len() as i128);
-                centroid - rows.eval(f, &x[..])
+                centroid - prediction(k, f)
             })
         })
         .collect()
