@@ -163,16 +163,17 @@ fn code_hierarchy(
     for (l, level) in canon.levels.iter().enumerate().rev() {
         if canon.sqrt2 {
             let n = sqrt2::fine_nv(level);
-            let plan = sqrt2::Plan::new(level, w);
             // sqrt2-lazy keeps the coarse values: one prediction per face serves the
             // analysis and the tangent targets.
-            if let Some(p) = plan.lazy_predictions(&x) {
+            if w == Wavelet::Sqrt2Lazy {
+                let p = sqrt2::predictions(level, &x);
                 for (xs, pk) in x.iter_mut().zip(&p) {
-                    plan.lazy_with(&mut xs[..n], pk, true);
+                    sqrt2::apply_predictions(&mut xs[..n], level.nv, pk, true);
                 }
                 coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
                 targets[l] = Some(sqrt2::tangent_targets_from(level, &coarse[l], &p));
             } else {
+                let plan = sqrt2::Plan::new(level, w);
                 for xs in x.iter_mut() {
                     plan.analyse(&mut xs[..n]);
                 }
@@ -689,17 +690,16 @@ fn synthesise_levels(
             return Err(Error::corrupt("BASE", "a sqrt(2) level with a boundary"));
         }
         let payload = c.sections[2 + l].payload;
-        let plan = is_sqrt2.then(|| sqrt2::Plan::new(&level, w));
-        // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3); with
-        // sqrt2-lazy their predictions serve the synthesis too.
+        // sqrt2-lazy: the face points' predictions, from the coarse values, serve the
+        // tangent targets and the synthesis; the other sqrt(2) transforms take a plan.
+        let lazy = is_sqrt2 && w == Wavelet::Sqrt2Lazy;
+        let predictions = lazy.then(|| sqrt2::predictions(&level, &x));
+        let plan = (is_sqrt2 && !lazy).then(|| sqrt2::Plan::new(&level, w));
+        // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
         let tangent = c.version >= 7 && payload.first() == Some(&2);
-        let predictions = match &plan {
-            Some(p) if tangent => p.lazy_predictions(&x),
-            _ => None,
-        };
-        let targets = match (&plan, &predictions) {
-            (Some(_), Some(pr)) => Some(sqrt2::tangent_targets_from(&level, &x, pr)),
-            (Some(p), None) if tangent => Some(sqrt2::tangent_targets(&level, Some(p), &x)),
+        let targets = match (&predictions, &plan) {
+            (Some(pr), _) if tangent => Some(sqrt2::tangent_targets_from(&level, &x, pr)),
+            (None, Some(p)) if tangent => Some(sqrt2::tangent_targets(&level, Some(p), &x)),
             _ => None,
         };
         levels::decode(
@@ -711,12 +711,13 @@ fn synthesise_levels(
             c.version,
             targets.as_deref(),
         )?;
-        if let Some(plan) = plan {
-            for (k, xs) in x.iter_mut().enumerate() {
-                match &predictions {
-                    Some(pr) => plan.lazy_with(xs, &pr[k], false),
-                    None => plan.synthesise(xs),
-                }
+        if let Some(pr) = &predictions {
+            for (xs, pk) in x.iter_mut().zip(pr) {
+                sqrt2::apply_predictions(xs, level.nv, pk, false);
+            }
+        } else if let Some(plan) = plan {
+            for xs in x.iter_mut() {
+                plan.synthesise(xs);
             }
         } else {
             let (discs, owned) = discs::discs(&level, &h.poles, l as u32, h.disc);

@@ -248,29 +248,6 @@ impl Plan {
         matches!(self.wavelet, Wavelet::Sqrt2Lazy | Wavelet::Ir2w).then_some(&self.predict)
     }
 
-    /// sqrt2-lazy only: per axis, every face point's prediction `P_f` from the coarse
-    /// values `x[k][..nv]`: what synthesis adds and the tangent targets subtract, computed
-    /// once for both; `None` for the other transforms (ir2w predicts from values its
-    /// update has not reached yet).
-    pub fn lazy_predictions(&self, x: &[Vec<i64>; 3]) -> Option<[Vec<i64>; 3]> {
-        (self.wavelet == Wavelet::Sqrt2Lazy).then(|| {
-            std::array::from_fn(|k| {
-                (0..self.nf)
-                    .map(|f| self.predict.eval(f, &x[k][..]))
-                    .collect()
-            })
-        })
-    }
-
-    /// sqrt2-lazy analysis (`forward`) or synthesis of one axis with the predictions of
-    /// [`Plan::lazy_predictions`]: the same as [`Plan::analyse`] / [`Plan::synthesise`].
-    pub fn lazy_with(&self, x: &mut [i64], p: &[i64], forward: bool) {
-        let d = &mut x[self.nv..self.nv + self.nf];
-        for (d, &p) in d.iter_mut().zip(p) {
-            *d = if forward { d.minus(p) } else { d.plus(p) };
-        }
-    }
-
     /// Analysis: fine values `x[..nv + nf]` to coarse values and face-point details.
     pub fn analyse<T: Sample>(&self, x: &mut [T]) {
         match self.wavelet {
@@ -422,6 +399,59 @@ fn predict_rows(level: &Level, nb: &Neighbours<'_>) -> Rows {
     rows
 }
 
+/// IR2W's prediction `P_f` of every face point of `level` (SPEC.md 9.7), all three axes
+/// in one pass over the corners, from the coarse values `x[k][..nv]`: the same numbers as
+/// a [`Plan`]'s prediction rows, without building them. sqrt2-lazy's synthesis adds them
+/// and its analysis subtracts them ([`apply_predictions`]); the tangent targets
+/// subtract them from the centroids ([`tangent_targets_from`]).
+pub fn predictions(level: &Level, x: &[Vec<i64>; 3]) -> [Vec<i64>; 3] {
+    let rings = Rings::from_level(level);
+    let nb = Neighbours {
+        rings: &rings,
+        topo: &level.coarse,
+    };
+    let topo = &level.coarse;
+    let mut out: [Vec<i64>; 3] = std::array::from_fn(|_| Vec::with_capacity(level.nf()));
+    for f in 0..level.nf() {
+        let s = topo.starts[f] as usize;
+        let k = topo.starts[f + 1] as usize - s;
+        let mut acc = [0i128; 3];
+        let mut add = |u: usize, w: i128| {
+            for (a, xa) in acc.iter_mut().zip(x) {
+                *a += w * xa[u] as i128;
+            }
+        };
+        for c in s..s + k {
+            let v = topo.idx[c];
+            let n = nb.valence(v);
+            if table_valence(n) {
+                add(v as usize, ONE / 2);
+                for (j, &a) in tables::ALPHA[n - 3].iter().enumerate() {
+                    add(nb.at(c, j) as usize, a as i128);
+                }
+            } else {
+                add(v as usize, ONE);
+            }
+        }
+        for (o, a) in out.iter_mut().zip(acc) {
+            o.push(crate::transform::round_div(a, k as i128 * ONE));
+        }
+    }
+    out
+}
+
+/// sqrt2-lazy on one axis with [`predictions`] from the same coarse values: analysis
+/// (`forward`, `f -= P_f`) or synthesis (`f += P_f`) of the face points `x[nv..]`.
+pub fn apply_predictions(x: &mut [i64], nv: usize, p: &[i64], forward: bool) {
+    for (d, &p) in x[nv..nv + p.len()].iter_mut().zip(p) {
+        *d = if forward {
+            d.wrapping_sub(p)
+        } else {
+            d.wrapping_add(p)
+        };
+    }
+}
+
 /// The tangent targets of a level's face points (SPEC.md 10.3): per face, the rounded
 /// centroid of its corners minus IR2W's prediction (eq. 1), both from the coarse values
 /// `coarse`. Reuses the prediction of `plan` (this level's) when it has one.
@@ -446,7 +476,7 @@ pub fn tangent_targets(
     targets(level, coarse, |k, f| rows.eval(f, &coarse[k][..]))
 }
 
-/// [`tangent_targets`] with the predictions at hand (from [`Plan::lazy_predictions`]).
+/// [`tangent_targets`] with the predictions at hand (from [`predictions`]).
 pub fn tangent_targets_from(
     level: &Level,
     coarse: &[Vec<i64>; 3],
@@ -532,6 +562,44 @@ fn ir2w_update(level: &Level, nb: &Neighbours<'_>) -> Rows {
         rows.push(ONE as i64);
     }
     rows
+}
+
+#[cfg(test)]
+mod prediction_tests {
+    use super::*;
+    use crate::hierarchy::fixtures::prism_with_triangles;
+
+    #[test]
+    fn one_pass_predictions_are_the_plans() {
+        // A closed mesh with valences 3 to 5, its sqrt(2) step, and a level beyond.
+        let mut t = prism_with_triangles();
+        let mut s = 99u64;
+        for _ in 0..3 {
+            let level = Level::new(&t).unwrap();
+            let x: [Vec<i64>; 3] = std::array::from_fn(|_| {
+                (0..fine_nv(&level))
+                    .map(|_| {
+                        s ^= s << 13;
+                        s ^= s >> 7;
+                        s ^= s << 17;
+                        (s % (1 << 40)) as i64 - (1 << 39)
+                    })
+                    .collect()
+            });
+            let p = predictions(&level, &x);
+            let plan = Plan::new(&level, Wavelet::Sqrt2Lazy);
+            for k in 0..3 {
+                let mut a = x[k].clone();
+                plan.analyse(&mut a);
+                let mut b = x[k].clone();
+                apply_predictions(&mut b, level.nv, &p[k], true);
+                assert_eq!(a, b);
+                apply_predictions(&mut b, level.nv, &p[k], false);
+                assert_eq!(b, x[k]);
+            }
+            t = fine(&level);
+        }
+    }
 }
 
 #[cfg(test)]
