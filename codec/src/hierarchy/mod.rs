@@ -36,7 +36,11 @@ impl PairMap {
     #[inline]
     fn slot(&self, key: u64) -> usize {
         let mask = self.keys.len() - 1;
-        let mut i = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 32) as usize & mask;
+        // Fibonacci hashing: the top bits of the product, after folding the high half
+        // (the first vertex) into the low one so that both halves reach every bit.
+        let bits = self.keys.len().trailing_zeros();
+        let h = (key ^ (key >> 29)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        let mut i = (h >> (64 - bits)) as usize;
         while self.keys[i] != EMPTY_KEY && self.keys[i] != key {
             i = (i + 1) & mask;
         }
@@ -514,30 +518,50 @@ pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
 /// input number of canonical vertex c) is `input`, face for face (each face once, up to
 /// corner rotation).
 pub(crate) fn check_matches(fine: &Topo, order: &[u32], input: &Topo) -> Result<()> {
-    let mut by_edge = PairMap::with_capacity(input.idx.len() + 4);
-    for f in 0..input.nf() {
-        let face = input.face(f);
-        let k = face.len();
-        for i in 0..k {
-            by_edge.insert(face[i], face[(i + 1) % k], f as u32);
+    FaceIndex::new(input).check(fine, order, input)
+}
+
+/// The input's faces by their directed edges, to check several candidate hierarchies
+/// against one input without rebuilding the table.
+pub(crate) struct FaceIndex(PairMap);
+
+impl FaceIndex {
+    pub(crate) fn new(input: &Topo) -> FaceIndex {
+        let mut by_edge = PairMap::with_capacity(input.idx.len() + 4);
+        for f in 0..input.nf() {
+            let face = input.face(f);
+            let k = face.len();
+            for i in 0..k {
+                by_edge.insert(face[i], face[(i + 1) % k], f as u32);
+            }
         }
+        FaceIndex(by_edge)
     }
-    let mismatch = || Error::InvalidMesh("the hierarchy does not match the input".into());
-    if fine.nf() != input.nf() || order.len() != input.nv {
-        return Err(mismatch());
-    }
-    let mut hit = vec![false; input.nf()];
-    for f in 0..fine.nf() {
-        let c: Vec<u32> = fine.face(f).iter().map(|&v| order[v as usize]).collect();
-        let g = by_edge.get(c[0], c[1]).ok_or_else(mismatch)? as usize;
-        let face = input.face(g);
-        let r = face.iter().position(|&v| v == c[0]).ok_or_else(mismatch)?;
-        let same = face.len() == c.len() && (0..c.len()).all(|i| face[(r + i) % c.len()] == c[i]);
-        if !same || std::mem::replace(&mut hit[g], true) {
+
+    /// [`check_matches`] with this index of `input`.
+    pub(crate) fn check(&self, fine: &Topo, order: &[u32], input: &Topo) -> Result<()> {
+        let mismatch = || Error::InvalidMesh("the hierarchy does not match the input".into());
+        if fine.nf() != input.nf() || order.len() != input.nv {
             return Err(mismatch());
         }
+        let mut hit = vec![false; input.nf()];
+        for f in 0..fine.nf() {
+            let c = fine.face(f);
+            let k = c.len();
+            let first = order[c[0] as usize];
+            let g = self
+                .0
+                .get(first, order[c[1] as usize])
+                .ok_or_else(mismatch)? as usize;
+            let face = input.face(g);
+            let r = face.iter().position(|&v| v == first).ok_or_else(mismatch)?;
+            let same = face.len() == k && (0..k).all(|i| face[(r + i) % k] == order[c[i] as usize]);
+            if !same || std::mem::replace(&mut hit[g], true) {
+                return Err(mismatch());
+            }
+        }
+        Ok(())
     }
-    Ok(())
 }
 
 /// Test fixtures shared by the hierarchy and transform tests.

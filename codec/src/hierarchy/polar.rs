@@ -13,7 +13,7 @@
 //! result must refine back to the input face for face.
 
 use super::cc::{self, Chain, Coarsening};
-use super::{canonicalise, check_matches, Canonical, PairMap, Recovered, Topo};
+use super::{canonicalise, Canonical, FaceIndex, PairMap, Recovered, Topo};
 
 /// The deepest polar hierarchy of at most `max_levels` levels of `topo` (vertex numbers
 /// `< nv`), canonicalised and checked against `topo`; `None` if the mesh has no pole or
@@ -27,11 +27,15 @@ pub fn recover(nv: usize, topo: &Topo, max_levels: usize) -> Option<Canonical> {
 /// in several ways; which codes smaller depends on the geometry). At most [`KEEP`]
 /// results, preferred first.
 pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Canonical> {
-    recover_raw(nv, topo, max_levels)
-        .into_iter()
+    let recs = recover_raw(nv, topo, max_levels);
+    if recs.is_empty() {
+        return Vec::new();
+    }
+    let index = FaceIndex::new(topo);
+    recs.into_iter()
         .filter_map(|rec| {
             let canon = canonicalise(&rec).ok()?;
-            check_matches(&canon.fine, &canon.order, topo).ok()?;
+            index.check(&canon.fine, &canon.order, topo).ok()?;
             Some(canon)
         })
         .collect()
@@ -218,7 +222,7 @@ fn fits(cand: &Coarsening, n: usize, diagonals: &[(u32, u32)]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::super::fixtures::{prism_with_triangles, shuffle};
-    use super::super::{Level, Topo};
+    use super::super::{check_matches, Level, Topo};
     use super::*;
 
     /// Refines `base` `levels` times with the polar rule, poles `poles`.
