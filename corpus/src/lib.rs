@@ -492,6 +492,16 @@ pub fn small_corpus() -> Vec<(&'static str, String)> {
     ]
 }
 
+/// A large polar mesh for benchmarks: a displaced latitude-longitude sphere (two poles
+/// of valence 8, 7 rings) refined `levels` times by the polar rule (`levels = 6` gives
+/// 261,634 vertices, `levels = 8` 4,185,602).
+pub fn large_polar(levels: u32) -> PolyMesh {
+    let mut rng = Rng::new(5);
+    let mut m = polar_sphere(8, 7).polar_refined(&[0, 1], levels);
+    m.displace(0.02, 0.001, &mut rng);
+    m
+}
+
 /// A large mesh for benchmarks: a displaced cube refined `levels` times
 /// (`levels = 9` gives 1,572,866 vertices).
 pub fn large_cube(levels: u32) -> PolyMesh {
