@@ -161,24 +161,21 @@ fn code_hierarchy(
     // sqrt(2) levels: their tangent targets (SPEC.md 10.3), from the same coarse values.
     let mut targets: Vec<Option<Vec<[i64; 3]>>> = vec![None; canon.levels.len()];
     for (l, level) in canon.levels.iter().enumerate().rev() {
-        if canon.sqrt2 {
+        // As the decoder: sqrt2-lazy keeps the coarse values, so one prediction per
+        // face serves the analysis and the tangent targets; the other sqrt(2)
+        // transforms take a plan.
+        let predictions =
+            (canon.sqrt2 && w == Wavelet::Sqrt2Lazy).then(|| sqrt2::predictions(level, &x));
+        let plan = (canon.sqrt2 && predictions.is_none()).then(|| sqrt2::Plan::new(level, w));
+        if let Some(p) = &predictions {
             let n = sqrt2::fine_nv(level);
-            // sqrt2-lazy keeps the coarse values: one prediction per face serves the
-            // analysis and the tangent targets.
-            if w == Wavelet::Sqrt2Lazy {
-                let p = sqrt2::predictions(level, &x);
-                for (xs, pk) in x.iter_mut().zip(&p) {
-                    sqrt2::apply_predictions(&mut xs[..n], level.nv, pk, true);
-                }
-                coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
-                targets[l] = Some(sqrt2::tangent_targets_from(level, &coarse[l], &p));
-            } else {
-                let plan = sqrt2::Plan::new(level, w);
-                for xs in x.iter_mut() {
-                    plan.analyse(&mut xs[..n]);
-                }
-                coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
-                targets[l] = Some(sqrt2::tangent_targets(level, Some(&plan), &coarse[l]));
+            for (xs, pk) in x.iter_mut().zip(p) {
+                sqrt2::apply_predictions(&mut xs[..n], level.nv, pk, true);
+            }
+        } else if let Some(plan) = &plan {
+            let n = sqrt2::fine_nv(level);
+            for xs in x.iter_mut() {
+                plan.analyse(&mut xs[..n]);
             }
         } else {
             // Polar levels: the poles' discs first, then the rest (SPEC.md 9.9).
@@ -190,8 +187,13 @@ fn code_hierarchy(
                 }
                 transform::analyse_except(level, w, &mut xs[..n], &owned);
             }
-            coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
         }
+        coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
+        targets[l] = match (&predictions, &plan) {
+            (Some(p), _) => Some(sqrt2::tangent_targets_from(level, &coarse[l], p)),
+            (None, Some(plan)) => Some(sqrt2::tangent_targets(level, plan, &coarse[l])),
+            (None, None) => None,
+        };
     }
     if x.iter().flatten().any(|v| v.abs() > levels::MAX_LIFTED) {
         return None;
@@ -325,10 +327,8 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
                         .map(|&o| mesh.positions[o as usize][k])
                         .collect()
                 });
-                let disc = match opts.disc {
-                    Some(d) if !canon.poles.is_empty() => d,
-                    _ => DiscTransform::None,
-                };
+                // code_hierarchy drops the disc transform of a hierarchy without poles.
+                let disc = opts.disc.unwrap_or(DiscTransform::None);
                 if let Some(mut p) = code_hierarchy(&canon, &pos, first, disc, &flat_h) {
                     if opts.keep_order {
                         let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
@@ -342,15 +342,20 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
             let Some((mut p, canon, pos)) = fam_best else {
                 continue;
             };
+            // Codes the chosen hierarchy with (w, d) and keeps it if smaller (the same
+            // ORDR section: the order depends on the hierarchy only).
+            let try_code = |p: &mut Payloads, w: Wavelet, d: DiscTransform| {
+                if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, &flat_h) {
+                    q.order = p.order.clone();
+                    if q.size() < p.size() {
+                        *p = q;
+                    }
+                }
+            };
             let disc = p.header.disc;
             if opts.transform == TransformChoice::Auto {
                 for &w in others.iter().filter(|&&w| w != first) {
-                    if let Some(mut q) = code_hierarchy(&canon, &pos, w, disc, &flat_h) {
-                        q.order = p.order.clone();
-                        if q.size() < p.size() {
-                            p = q;
-                        }
-                    }
+                    try_code(&mut p, w, disc);
                 }
             }
             // A polar hierarchy: the other disc transforms, with the best transform.
@@ -358,12 +363,7 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
                 (canon.poles.is_empty(), opts.disc, p.header.transform)
             {
                 for d in DiscTransform::ALL.into_iter().filter(|&d| d != disc) {
-                    if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, &flat_h) {
-                        q.order = p.order.clone();
-                        if q.size() < p.size() {
-                            p = q;
-                        }
-                    }
+                    try_code(&mut p, w, d);
                 }
             }
             if best.as_ref().is_none_or(|b| p.size() < b.size()) {
@@ -699,7 +699,7 @@ fn synthesise_levels(
         let tangent = c.version >= 7 && payload.first() == Some(&2);
         let targets = match (&predictions, &plan) {
             (Some(pr), _) if tangent => Some(sqrt2::tangent_targets_from(&level, &x, pr)),
-            (None, Some(p)) if tangent => Some(sqrt2::tangent_targets(&level, Some(p), &x)),
+            (None, Some(p)) if tangent => Some(sqrt2::tangent_targets(&level, p, &x)),
             _ => None,
         };
         levels::decode(

@@ -6,7 +6,7 @@
 //! subtracted, in reverse order) undoes analysis exactly for any weights: boundary rules
 //! and rounding can cost compression, never losslessness.
 
-use crate::hierarchy::Level;
+use crate::hierarchy::{flag, Level};
 
 /// The wavelet transforms on Catmull-Clark hierarchies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -438,7 +438,7 @@ fn step<T: Sample>(level: &Level, x: &mut [T], s: Step, forward: bool, skip: &[b
     let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
     let e0 = nv;
     let f0 = nv + ne;
-    let live = |i: usize| !skip.get(i).copied().unwrap_or(false);
+    let live = |i: usize| !flag(skip, i);
     match (s.kind, forward) {
         (Kind::S, true) => {
             for v in (0..nv).filter(|&v| live(v)) {
@@ -600,7 +600,7 @@ fn ds_step3<T: Sample>(level: &Level, x: &[T], v: usize) -> T {
 fn dyadic_sym<T: Sample>(level: &Level, x: &mut [T], forward: bool, skip: &[bool]) {
     let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
     let (e0, f0) = (nv, nv + ne);
-    let live = |i: usize| !skip.get(i).copied().unwrap_or(false);
+    let live = |i: usize| !flag(skip, i);
     let inner: Vec<bool> = (0..nv).map(|v| live(v) && interior(level, v)).collect();
     // Skipped vertices take no step: neither the interior ones nor the boundary rule.
     let two_boundary = |v: usize| {

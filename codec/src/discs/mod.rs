@@ -69,11 +69,11 @@ pub struct Disc {
 /// not continue through valence-4 vertices and quads, or when the disc would share a
 /// fine vertex with an earlier disc (SPEC.md 9.9).
 pub fn discs(level: &Level, poles: &[u32], index: u32, d: DiscTransform) -> (Vec<Disc>, Vec<bool>) {
-    let mut owned = vec![false; level.fine_nv()];
     let mut out = Vec::new();
-    if d == DiscTransform::None || index > 20 {
+    if d == DiscTransform::None || poles.is_empty() || index > 20 {
         return (out, Vec::new());
     }
+    let mut owned = vec![false; level.fine_nv()];
     for &p in poles {
         if let Some(disc) = disc(level, p, 1usize << index, d) {
             let all = || std::iter::once(&disc.pole).chain(disc.rings.iter().flatten());
@@ -153,7 +153,7 @@ fn disc(level: &Level, p: u32, rings: usize, d: DiscTransform) -> Option<Disc> {
             if edges.len() != 4 {
                 return None;
             }
-            let mut others = edges.iter().map(|&e| {
+            let others = edges.iter().map(|&e| {
                 let [x, y] = level.edges[e as usize];
                 if x == v {
                     y
@@ -161,7 +161,7 @@ fn disc(level: &Level, p: u32, rings: usize, d: DiscTransform) -> Option<Disc> {
                     x
                 }
             });
-            let w: Vec<u32> = others.by_ref().filter(|o| !skip.contains(o)).collect();
+            let w: Vec<u32> = others.filter(|o| !skip.contains(o)).collect();
             if w.len() != 1 {
                 return None;
             }

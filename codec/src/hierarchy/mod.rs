@@ -122,6 +122,13 @@ impl PairMap {
     }
 }
 
+/// Whether `mask[i]` is set; indices past the end of `mask` are not (an empty mask marks
+/// nothing: the pole flags of a level without poles, the values no disc owns).
+#[inline]
+pub(crate) fn flag(mask: &[bool], i: usize) -> bool {
+    mask.get(i).copied().unwrap_or(false)
+}
+
 /// Polygon topology: `nv` vertices and faces as index lists (CSR).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Topo {
@@ -334,7 +341,7 @@ impl Level {
             let fp = f0 + f as u32;
             for i in 0..k {
                 let (c, a, b) = (face[i], e0 + fe[i], e0 + fe[(i + k - 1) % k]);
-                if k == 3 && pole.get(c as usize).copied().unwrap_or(false) {
+                if k == 3 && flag(pole, c as usize) {
                     t.push(&[c, a, fp]);
                     t.push(&[c, fp, b]);
                 } else {
@@ -351,7 +358,7 @@ impl Level {
             .map(|f| self.coarse.face(f))
             .filter(|face| face.len() == 3)
             .flatten()
-            .filter(|&&v| pole.get(v as usize).copied().unwrap_or(false))
+            .filter(|&&v| flag(pole, v as usize))
             .count();
         self.coarse.idx.len() + splits
     }

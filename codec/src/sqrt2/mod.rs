@@ -455,25 +455,11 @@ pub fn apply_predictions(x: &mut [i64], nv: usize, p: &[i64], forward: bool) {
 /// The tangent targets of a level's face points (SPEC.md 10.3): per face, the rounded
 /// centroid of its corners minus IR2W's prediction (eq. 1), both from the coarse values
 /// `coarse`. Reuses the prediction of `plan` (this level's) when it has one.
-pub fn tangent_targets(
-    level: &Level,
-    plan: Option<&Plan>,
-    coarse: &[Vec<i64>; 3],
-) -> Vec<[i64; 3]> {
-    let own;
-    let rows = match plan.and_then(Plan::prediction) {
-        Some(rows) => rows,
-        None => {
-            let rings = Rings::from_level(level);
-            let nb = Neighbours {
-                rings: &rings,
-                topo: &level.coarse,
-            };
-            own = predict_rows(level, &nb);
-            &own
-        }
-    };
-    targets(level, coarse, |k, f| rows.eval(f, &coarse[k][..]))
+pub fn tangent_targets(level: &Level, plan: &Plan, coarse: &[Vec<i64>; 3]) -> Vec<[i64; 3]> {
+    match plan.prediction() {
+        Some(rows) => targets(level, coarse, |k, f| rows.eval(f, &coarse[k][..])),
+        None => tangent_targets_from(level, coarse, &predictions(level, coarse)),
+    }
 }
 
 /// [`tangent_targets`] with the predictions at hand (from [`predictions`]).
