@@ -139,13 +139,13 @@ pub fn roundtrip_mesh(data: &[u8]) {
         mesh.push_face(f);
     }
     let all: Vec<Wavelet> = Wavelet::ALL.into_iter().chain(Wavelet::SQRT2).collect();
-    let w = b.below(all.len() + 1);
+    let w = b.below(all.len() + 2);
     let opts = EncodeOptions {
         keep_order: b.u8() & 1 == 1,
-        transform: if w == 0 {
-            TransformChoice::Auto
-        } else {
-            TransformChoice::Fixed(all[w - 1])
+        transform: match w {
+            0 => TransformChoice::Auto,
+            1 => TransformChoice::Fit,
+            _ => TransformChoice::Fixed(all[w - 2]),
         },
         max_levels: b.below(17) as u8,
         ..Default::default()

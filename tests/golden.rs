@@ -80,6 +80,7 @@ fn frozen_containers_still_decode() {
         ("prism_sqrt2_5.v7.swv", "prism_sqrt2_5.obj"),
         ("sphere_polar3.v8.swv", "sphere_polar3.obj"),
         ("sphere_polar3.disc.v8.swv", "sphere_polar3.obj"),
+        ("subdivided_cc3.v9.swv", "subdivided_cc3.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

@@ -51,7 +51,8 @@ enum Command {
         #[arg(long)]
         keep_order: bool,
         /// Wavelet for subdivision levels: auto (smallest file); Catmull-Clark: lazy,
-        /// bilinear, bicubic, biquintic, dyadic-sym; sqrt(2): sqrt2-lazy, ir2w, sqrt2-sym.
+        /// bilinear, bicubic, biquintic, dyadic-sym, or fit (the subdivision fit, for
+        /// subdivided models); sqrt(2): sqrt2-lazy, ir2w, sqrt2-sym.
         #[arg(long, default_value = "auto", value_parser = parse_transform)]
         transform: TransformChoice,
         /// Look for at most N refinement levels (0: code the mesh flat).
@@ -111,13 +112,15 @@ enum Command {
 }
 
 fn parse_transform(s: &str) -> Result<TransformChoice, String> {
-    if s == "auto" {
-        return Ok(TransformChoice::Auto);
+    match s {
+        "auto" => return Ok(TransformChoice::Auto),
+        "fit" => return Ok(TransformChoice::Fit),
+        _ => {}
     }
     Wavelet::from_name(s)
         .map(TransformChoice::Fixed)
         .ok_or_else(|| {
-            format!("unknown transform '{s}'; use auto, lazy, bilinear, bicubic, biquintic, dyadic-sym (Catmull-Clark), sqrt2-lazy, ir2w or sqrt2-sym (sqrt(2))")
+            format!("unknown transform '{s}'; use auto, lazy, bilinear, bicubic, biquintic, dyadic-sym (Catmull-Clark), sqrt2-lazy, ir2w or sqrt2-sym (sqrt(2)), fit (subdivision fit)")
         })
 }
 
@@ -379,6 +382,10 @@ fn print_info(info: &subwave::Info, as_json: bool) {
             "poles": h.poles,
             "disc_transform": h.disc.name(),
             "transform": h.transform.name(),
+            "fit_bits": match h.transform {
+                subwave::Transform::Fit { bits } => Some(bits),
+                _ => None,
+            },
             "quantization": quant_json(&h.quantization),
             "keep_order": h.has_order,
             "sections": info.sections.iter().map(|s| match s.mode {
@@ -409,7 +416,12 @@ fn print_info(info: &subwave::Info, as_json: bool) {
         );
         println!("disc transform  {}", h.disc.name());
     }
-    println!("transform       {}", h.transform.name());
+    match h.transform {
+        subwave::Transform::Fit { bits } => {
+            println!("transform       fit (control values with {bits} extra bits)")
+        }
+        t => println!("transform       {}", t.name()),
+    }
     println!("quantisation    {}", h.quantization.describe());
     println!(
         "vertex order    {}",

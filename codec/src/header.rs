@@ -48,6 +48,12 @@ pub enum Transform {
     None,
     /// A lifted wavelet on Catmull-Clark levels.
     Wavelet(Wavelet),
+    /// The subdivision fit (SPEC.md 9.10): a control mesh with `bits` extra bits of
+    /// precision, refined by plain Catmull-Clark rules, and the finest values' residuals.
+    Fit {
+        /// Extra bits of the control values, `0..=16`.
+        bits: u8,
+    },
 }
 
 impl Transform {
@@ -56,6 +62,7 @@ impl Transform {
         match self {
             Transform::None => "none",
             Transform::Wavelet(w) => w.name(),
+            Transform::Fit { .. } => "fit",
         }
     }
 
@@ -63,6 +70,7 @@ impl Transform {
         match self {
             Transform::None => 0,
             Transform::Wavelet(w) => w.code(),
+            Transform::Fit { .. } => FIT_CODE,
         }
     }
 }
@@ -140,6 +148,8 @@ pub struct Header {
 }
 
 const FLAG_ORDER: u64 = 1;
+/// The transform code of the subdivision fit (format 9 on).
+const FIT_CODE: u8 = 9;
 
 impl Header {
     /// Serialises the header.
@@ -158,6 +168,9 @@ impl Header {
         w.u8(self.levels);
         w.u8(self.family.code());
         w.u8(self.transform.code());
+        if let Transform::Fit { bits } = self.transform {
+            w.u8(bits);
+        }
         match self.quantization {
             Quantization::Decimal { decimals } => {
                 w.u8(0);
@@ -246,6 +259,17 @@ impl Header {
         let at = r.offset();
         let transform = match r.u8("transform")? {
             0 => Transform::None,
+            FIT_CODE if version >= 9 => {
+                let at = r.offset();
+                let bits = r.u8("fit precision")?;
+                if bits > crate::fit::MAX_EXTRA_BITS {
+                    return Err(malformed(
+                        at,
+                        format!("a fit with {bits} extra bits, at most 16"),
+                    ));
+                }
+                Transform::Fit { bits }
+            }
             t => match Wavelet::from_code(t) {
                 // sqrt(2) transforms from format 6.
                 Some(w) if version >= 2 && (version >= 6 || !w.is_sqrt2()) => Transform::Wavelet(w),
@@ -406,6 +430,13 @@ impl Header {
                     ));
                 }
                 Transform::Wavelet(_) => {}
+                Transform::Fit { .. } if self.family != Family::Cc => {
+                    return Err(malformed(
+                        offset,
+                        format!("a fit on {} levels", self.family.name()),
+                    ));
+                }
+                Transform::Fit { .. } => {}
             }
             if self.base_vertices > self.vertices
                 || self.base_faces > self.faces

@@ -8,6 +8,7 @@
 pub mod coder;
 pub mod discs;
 pub mod error;
+pub mod fit;
 pub mod flat;
 pub mod header;
 pub mod hierarchy;
@@ -41,6 +42,8 @@ pub enum TransformChoice {
     Auto,
     /// This one.
     Fixed(Wavelet),
+    /// The subdivision fit (SPEC.md 9.10) on a Catmull-Clark hierarchy.
+    Fit,
 }
 
 /// How to encode.
@@ -249,6 +252,88 @@ fn code_hierarchy(
     })
 }
 
+/// Mean [`fit::defect`] over the axes of the finest level above which `auto` does not
+/// try the fit: rounded subdivision gives about 70 / 12 (the variance of the rounding
+/// noise it sums), fitted detail far more.
+const FIT_SCREEN: f64 = 12.0;
+
+/// The least-squares fit stops when no control value moves by more than this (units of
+/// the grid): far below the 2^-10 of the finest precision tried.
+const FIT_TOLERANCE: f64 = 1e-5;
+
+/// Extra bits `auto` tries for the fit's control values.
+const FIT_BITS: [u8; 3] = [6, 8, 10];
+
+/// Codes a Catmull-Clark hierarchy as a subdivision fit (SPEC.md 9.10): the control
+/// values from least squares, then for each precision in `bits` the integer subdivision
+/// and the residuals; the smallest coding. `None` when `screen` is set and the finest
+/// level is far from any subdivision, or when a control value leaves the range.
+fn code_fit(
+    canon: &Canonical,
+    pos: &[Vec<i64>; 3],
+    header: &Header,
+    bits: &[u8],
+    screen: bool,
+) -> Option<Payloads> {
+    let last = canon.levels.last()?;
+    if !canon.poles.is_empty() {
+        return None;
+    }
+    if screen {
+        let d: f64 = pos
+            .iter()
+            .map(|x| fit::defect(last, x).unwrap_or(f64::MAX))
+            .sum();
+        if d / 3.0 > FIT_SCREEN {
+            return None;
+        }
+    }
+    let nb = canon.base.nv;
+    let op = fit::Operator::new(&canon.levels);
+    let fine: Vec<[f64; 3]> = (0..pos[0].len())
+        .map(|i| std::array::from_fn(|k| pos[k][i] as f64))
+        .collect();
+    let control = op.fit(&fine, &fine[..nb], 400, FIT_TOLERANCE);
+    let mut best: Option<Payloads> = None;
+    for &b in bits {
+        let s = (1u64 << b) as f64;
+        let mut x: [Vec<i64>; 3] =
+            std::array::from_fn(|k| control.iter().map(|v| (v[k] * s).round() as i64).collect());
+        if x.iter().flatten().any(|v| v.abs() > levels::MAX_LIFTED) {
+            continue;
+        }
+        let mut base = Mesh::new();
+        base.positions = (0..nb).map(|i| [x[0][i], x[1][i], x[2][i]]).collect();
+        base.faces = canon.base.idx.clone();
+        base.face_starts = canon.base.starts.clone();
+        let base_bytes = flat::encode(&base, FORMAT_VERSION);
+        for l in &canon.levels {
+            for xs in x.iter_mut() {
+                fit::subdivide(l, xs);
+            }
+        }
+        let mut level_bytes = vec![Vec::new(); canon.levels.len() - 1];
+        level_bytes.push(fit::encode_residuals(&x, pos, b));
+        let mut h = header.clone();
+        h.base_vertices = nb as u64;
+        h.base_faces = canon.base.nf() as u64;
+        h.base_corners = canon.base.idx.len() as u64;
+        h.levels = canon.levels.len() as u8;
+        h.family = Family::Cc;
+        h.transform = Transform::Fit { bits: b };
+        let p = Payloads {
+            header: h,
+            base: base_bytes,
+            levels: level_bytes,
+            order: None,
+        };
+        if best.as_ref().is_none_or(|q| p.size() < q.size()) {
+            best = Some(p);
+        }
+    }
+    best
+}
+
 /// Matches canonical faces to the input's: position and first corner (SPEC.md 7).
 fn face_order(mesh: &Mesh, fine: &Topo, vorder: &[u32]) -> Result<(Vec<u32>, Vec<u32>)> {
     let mut by_edge: HashMap<(u32, u32), (u32, u32)> = HashMap::with_capacity(mesh.corner_count());
@@ -272,6 +357,17 @@ fn face_order(mesh: &Mesh, fine: &Topo, vorder: &[u32]) -> Result<(Vec<u32>, Vec
     Ok((perm, rot))
 }
 
+/// The mesh's positions in a hierarchy's canonical order, per axis.
+fn canonical_positions(mesh: &Mesh, canon: &Canonical) -> [Vec<i64>; 3] {
+    std::array::from_fn(|k| {
+        canon
+            .order
+            .iter()
+            .map(|&o| mesh.positions[o as usize][k])
+            .collect()
+    })
+}
+
 /// Encodes an integer mesh whose values map to the file's through `q`: as a
 /// Catmull-Clark hierarchy when one is found, else flat.
 pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Encoded> {
@@ -287,7 +383,9 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
         let (want_cc, want_sqrt2) = match opts.transform {
             TransformChoice::Auto => (true, true),
             TransformChoice::Fixed(w) => (!w.is_sqrt2(), w.is_sqrt2()),
+            TransformChoice::Fit => (true, false),
         };
+        let fit_only = opts.transform == TransformChoice::Fit;
         let max = opts.max_levels as usize;
         // Per family: its candidate hierarchies, the transform that compares them, and
         // the family's other transforms (tried on the better candidate with `auto`).
@@ -303,8 +401,28 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
                 &topo,
                 max,
             ));
+            // The subdivision fit, on each candidate whose finest level is near a
+            // subdivision (every candidate when asked for by name).
+            let try_fit = matches!(opts.transform, TransformChoice::Auto | TransformChoice::Fit);
+            for canon in canons.iter().filter(|_| try_fit) {
+                let pos = canonical_positions(mesh, canon);
+                let screen = !fit_only;
+                let bits: &[u8] = if fit_only { &[8] } else { &FIT_BITS };
+                if let Some(mut p) = code_fit(canon, &pos, &flat_h, bits, screen) {
+                    if opts.keep_order {
+                        let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
+                        p.order = Some(order_section(&canon.order, faces, rotations));
+                    }
+                    if best.as_ref().is_none_or(|b| p.size() < b.size()) {
+                        best = Some(p);
+                        chosen = Some(canon.clone());
+                    }
+                }
+            }
             // A mesh and its dual can both be the base: compare them with one transform.
-            families.push((canons, Wavelet::Bicubic, &Wavelet::ALL));
+            if !fit_only {
+                families.push((canons, Wavelet::Bicubic, &Wavelet::ALL));
+            }
         }
         if want_sqrt2 {
             let canons: Vec<Canonical> = sqrt2::recover::recover(&topo, max)
@@ -315,18 +433,12 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
         }
         for (canons, auto_first, others) in families {
             let first = match opts.transform {
-                TransformChoice::Auto => auto_first,
+                TransformChoice::Auto | TransformChoice::Fit => auto_first,
                 TransformChoice::Fixed(w) => w,
             };
             let mut fam_best: Option<(Payloads, Canonical, [Vec<i64>; 3])> = None;
             for canon in canons {
-                let pos: [Vec<i64>; 3] = std::array::from_fn(|k| {
-                    canon
-                        .order
-                        .iter()
-                        .map(|&o| mesh.positions[o as usize][k])
-                        .collect()
-                });
+                let pos = canonical_positions(mesh, &canon);
                 // code_hierarchy drops the disc transform of a hierarchy without poles.
                 let disc = opts.disc.unwrap_or(DiscTransform::None);
                 if let Some(mut p) = code_hierarchy(&canon, &pos, first, disc, &flat_h) {
@@ -598,13 +710,11 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
         bound,
         c.version,
     )?;
-    let mut mesh = if h.levels == 0 {
-        base
-    } else {
-        let Transform::Wavelet(w) = h.transform else {
-            return Err(Error::Unsupported("levels without a wavelet".into()));
-        };
-        synthesise_levels(&c, &h, base, w, level)?
+    let mut mesh = match h.transform {
+        _ if h.levels == 0 => base,
+        Transform::Wavelet(w) => synthesise_levels(&c, &h, base, w, level)?,
+        Transform::Fit { bits } => synthesise_fit(&c, &h, base, bits, level)?,
+        Transform::None => return Err(Error::Unsupported("levels without a transform".into())),
     };
     let mut input_order = false;
     if h.has_order && level == h.levels {
@@ -774,6 +884,66 @@ fn synthesise_levels(
         }
         mesh.positions.push(p);
     }
+    mesh.faces = topo.idx;
+    mesh.face_starts = topo.starts;
+    Ok(mesh)
+}
+
+/// Rebuilds levels 1..=`upto` of a subdivision fit (SPEC.md 9.10, 10.4): the control
+/// values refined in integers, rounded to the grid, and at the finest level the
+/// residuals added.
+fn synthesise_fit(c: &Container<'_>, h: &Header, base: Mesh, bits: u8, upto: u8) -> Result<Mesh> {
+    let mut topo = Topo::new(base.vertex_count());
+    topo.idx = base.faces;
+    topo.starts = base.face_starts;
+    let mut x: [Vec<i64>; 3] =
+        std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect());
+    for l in 0..upto as usize {
+        let level = Level::new(&topo)?;
+        if level.fine_nv() as u64 > h.vertices || level.fine_faces_with(&[]) as u64 > h.faces {
+            return Err(Error::corrupt(
+                "HEAD",
+                "the base mesh refines to more than the header's counts",
+            ));
+        }
+        if l + 1 < h.levels as usize && !c.sections[2 + l].payload.is_empty() {
+            return Err(Error::corrupt(
+                "LEVL",
+                "a fit's level other than the finest holds data",
+            ));
+        }
+        for xs in x.iter_mut() {
+            fit::subdivide(&level, xs);
+        }
+        topo = level.fine();
+    }
+    if upto == h.levels {
+        if topo.nv as u64 != h.vertices
+            || topo.nf() as u64 != h.faces
+            || topo.idx.len() as u64 != h.corners
+        {
+            return Err(Error::corrupt(
+                "HEAD",
+                "the refined mesh does not have the header's counts",
+            ));
+        }
+        let payload = c.sections[1 + upto as usize].payload;
+        fit::decode_residuals(payload, &mut x, bits, MAX_COORD)?;
+    } else {
+        // A coarser level: the control mesh's refinement, rounded to the grid.
+        let half = (1i64 << bits) >> 1;
+        for v in x.iter_mut().flatten() {
+            *v = (*v + half) >> bits;
+            if v.abs() > MAX_COORD {
+                return Err(Error::corrupt(
+                    "LEVL",
+                    "reconstructed coordinate out of range",
+                ));
+            }
+        }
+    }
+    let mut mesh = Mesh::new();
+    mesh.positions = (0..topo.nv).map(|i| [x[0][i], x[1][i], x[2][i]]).collect();
     mesh.faces = topo.idx;
     mesh.face_starts = topo.starts;
     Ok(mesh)

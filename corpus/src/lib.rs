@@ -479,6 +479,12 @@ pub fn small_corpus() -> Vec<(&'static str, String)> {
     prism.displace(0.03, 0.002, &mut rng);
     let mut polar = polar_sphere(5, 3).polar_refined(&[0, 1], 3);
     polar.displace(0.03, 0.002, &mut rng);
+    // Subdivided models: a displaced control mesh refined by plain Catmull-Clark, no
+    // detail added (the subdivision fit's case, SPEC.md 9.10), closed and with a border.
+    let mut control = mixed_polygons();
+    control.displace(0.2, 0.05, &mut rng);
+    let mut open_control = open_grid(4, 3);
+    open_control.displace(0.2, 0.05, &mut rng);
     vec![
         ("cube_cc4.obj", cube4.to_obj(6)),
         ("cube_cc4.shuffled.obj", shuffled.to_obj(6)),
@@ -489,6 +495,8 @@ pub fn small_corpus() -> Vec<(&'static str, String)> {
         ("unstructured.obj", unstructured(12, 5).to_obj(6)),
         ("prism_sqrt2_5.obj", prism.to_obj(6)),
         ("sphere_polar3.obj", polar.to_obj(6)),
+        ("subdivided_cc3.obj", control.refined(3).to_obj(6)),
+        ("subdivided_open_cc3.obj", open_control.refined(3).to_obj(6)),
     ]
 }
 

@@ -1,0 +1,304 @@
+//! The subdivision fit (SPEC.md 9.10, 10.4): subdivided models are coded as fits and
+//! decode exactly; the fit decodes exactly on any Catmull-Clark hierarchy, also with a
+//! border; coarser levels; hostile fit containers are refused.
+
+mod common;
+
+use std::path::Path;
+
+use proptest::prelude::*;
+use subwave::{DecodeOptions, EncodeOptions, Error, Limits, Mesh, Transform, TransformChoice};
+use subwave_container::{ContainerWriter, SectionKind};
+use subwave_corpus::{PolyMesh, Rng};
+
+fn own(name: &str, bits: Option<u8>) -> subwave::Loaded {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("corpus")
+        .join(name);
+    subwave::load(&std::fs::read(path).unwrap(), bits).unwrap()
+}
+
+fn encode(mesh: &Mesh, q: &subwave::Quantization, t: TransformChoice) -> subwave::Encoded {
+    let opts = EncodeOptions {
+        transform: t,
+        ..Default::default()
+    };
+    subwave::encode_to_vec(mesh, q, &opts).unwrap()
+}
+
+/// Decodes and checks every position and face against `mesh` (order aside).
+fn assert_exact(bytes: &[u8], mesh: &Mesh, what: &str) {
+    let dec = subwave::decode_slice(bytes).unwrap();
+    assert_eq!(
+        common::fingerprint(&dec.mesh),
+        common::fingerprint(mesh),
+        "{what}"
+    );
+}
+
+#[test]
+fn subdivided_models_are_coded_as_fits_and_decode_exactly() {
+    for name in ["subdivided_cc3.obj", "subdivided_open_cc3.obj"] {
+        for bits in [None, Some(16), Some(12)] {
+            let m = own(name, bits);
+            let auto = encode(&m.mesh, &m.quantization, TransformChoice::Auto);
+            assert!(
+                matches!(auto.header.transform, Transform::Fit { .. }),
+                "{name} {bits:?}: auto chose {}",
+                auto.header.transform.name()
+            );
+            assert_eq!(auto.header.levels, 3, "{name}");
+            assert_exact(&auto.bytes, &m.mesh, name);
+            // Far smaller than the best wavelet on the same hierarchy.
+            let cubic = encode(
+                &m.mesh,
+                &m.quantization,
+                TransformChoice::Fixed(subwave::Wavelet::Bicubic),
+            );
+            assert!(
+                2 * auto.bytes.len() < cubic.bytes.len(),
+                "{name} {bits:?}: fit {} B, bicubic {} B",
+                auto.bytes.len(),
+                cubic.bytes.len()
+            );
+        }
+    }
+}
+
+#[test]
+fn fits_of_meshes_with_detail_still_decode_exactly() {
+    for name in [
+        "cube_cc4.obj",
+        "open_cc2.obj",
+        "mixed_cc2.obj",
+        "two_components_cc2.obj",
+    ] {
+        for bits in [None, Some(16), Some(4)] {
+            let m = own(name, bits);
+            let enc = encode(&m.mesh, &m.quantization, TransformChoice::Fit);
+            assert!(
+                matches!(enc.header.transform, Transform::Fit { bits: 8 }),
+                "{name}"
+            );
+            assert_exact(&enc.bytes, &m.mesh, name);
+            // Detail is coded, not dropped: auto finds something smaller.
+            let auto = encode(&m.mesh, &m.quantization, TransformChoice::Auto);
+            assert!(auto.bytes.len() <= enc.bytes.len(), "{name}");
+        }
+    }
+}
+
+#[test]
+fn coarser_levels_of_a_fit_are_its_rounded_refinements() {
+    let m = own("subdivided_cc3.obj", Some(16));
+    let enc = encode(&m.mesh, &m.quantization, TransformChoice::Auto);
+    let full = subwave::decode_slice(&enc.bytes).unwrap().mesh;
+    let (lo, hi) = bounds(&full);
+    let mut prev_nv = 0;
+    for k in 0..=enc.header.levels {
+        let dec = subwave::decode(
+            &enc.bytes,
+            &DecodeOptions {
+                max_level: Some(k),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(dec.level, k);
+        assert!(dec.mesh.vertex_count() > prev_nv);
+        prev_nv = dec.mesh.vertex_count();
+        if k == enc.header.levels {
+            assert_eq!(common::fingerprint(&dec.mesh), common::fingerprint(&m.mesh));
+        } else if k > 0 {
+            // A refinement of the control mesh: near the surface, off it by no more
+            // than a tenth of its size.
+            let (l, h) = bounds(&dec.mesh);
+            for a in 0..3 {
+                let slack = (hi[a] - lo[a]) / 10;
+                assert!(l[a] >= lo[a] - slack && h[a] <= hi[a] + slack, "level {k}");
+            }
+        }
+    }
+    // Cut off after level 1, level 1 still decodes; the finest does not.
+    let c = subwave_container::Container::parse(&enc.bytes, &Limits::default()).unwrap();
+    let cut = c.sections[3].offset as usize;
+    let opts = |k| DecodeOptions {
+        max_level: Some(k),
+        ..Default::default()
+    };
+    assert!(subwave::decode(&enc.bytes[..cut], &opts(1)).is_ok());
+    assert!(subwave::decode(&enc.bytes[..cut], &opts(3)).is_err());
+}
+
+fn bounds(m: &Mesh) -> ([i64; 3], [i64; 3]) {
+    let mut lo = [i64::MAX; 3];
+    let mut hi = [i64::MIN; 3];
+    for p in &m.positions {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    (lo, hi)
+}
+
+/// The fit container of `subdivided_cc3.obj` at Q16, rewritten: `head` edits the header
+/// payload's bytes, `level` the payload of LEVL section `i` (0-based).
+fn rewritten(head: impl Fn(&mut Vec<u8>), level: impl Fn(usize, &mut Vec<u8>)) -> Vec<u8> {
+    let m = own("subdivided_cc3.obj", Some(16));
+    let enc = encode(&m.mesh, &m.quantization, TransformChoice::Auto);
+    let c = subwave_container::Container::parse(&enc.bytes, &Limits::default()).unwrap();
+    let mut w = ContainerWriter::new();
+    let mut li = 0;
+    for s in &c.sections {
+        let mut p = s.payload.to_vec();
+        match s.kind {
+            SectionKind::END => continue,
+            SectionKind::HEADER => head(&mut p),
+            SectionKind::LEVEL => {
+                level(li, &mut p);
+                li += 1;
+            }
+            _ => {}
+        }
+        w.section(s.kind, &p);
+    }
+    w.finish()
+}
+
+#[test]
+fn hostile_fit_containers_are_refused() {
+    // Unchanged, the rewritten container decodes.
+    assert!(subwave::decode_slice(&rewritten(|_| {}, |_, _| {})).is_ok());
+    // Where the precision byte is: the one byte two headers differing in it differ in
+    // (the transform code comes just before it).
+    let m = own("subdivided_cc3.obj", Some(16));
+    let enc = encode(&m.mesh, &m.quantization, TransformChoice::Auto);
+    let Transform::Fit { bits } = enc.header.transform else {
+        panic!("not a fit")
+    };
+    let head = enc.header.write();
+    let mut other = enc.header.clone();
+    other.transform = Transform::Fit { bits: bits + 1 };
+    let at = head
+        .iter()
+        .zip(other.write())
+        .position(|(a, b)| *a != b)
+        .unwrap();
+    assert_eq!(head[at - 1], 9);
+    let cases: Vec<(&str, Vec<u8>)> = vec![
+        ("17 extra bits", rewritten(|h| h[at] = 17, |_, _| {})),
+        (
+            "a fit on sqrt(2) levels",
+            rewritten(|h| h[at - 2] = 2, |_, _| {}),
+        ),
+        (
+            "data in a coarser level",
+            rewritten(
+                |_| {},
+                |i, p| {
+                    if i == 0 {
+                        p.push(0)
+                    }
+                },
+            ),
+        ),
+        (
+            "a wavelet mode byte",
+            rewritten(
+                |_| {},
+                |i, p| {
+                    if i == 2 {
+                        p[0] = 1
+                    }
+                },
+            ),
+        ),
+        (
+            "an empty residual section",
+            rewritten(
+                |_| {},
+                |i, p| {
+                    if i == 2 {
+                        p.clear()
+                    }
+                },
+            ),
+        ),
+        (
+            "residuals cut short",
+            rewritten(
+                |_| {},
+                |i, p| {
+                    if i == 2 {
+                        p.truncate(5)
+                    }
+                },
+            ),
+        ),
+    ];
+    for (what, bytes) in cases {
+        match subwave::decode_slice(&bytes) {
+            Err(Error::Container(_)) | Err(Error::CorruptStream { .. }) => {}
+            other => panic!("{what}: expected a malformed or corrupt container, got {other:?}"),
+        }
+    }
+    // Transform 9 did not exist before version 9.
+    match subwave::Header::read(&head, 0, &Limits::default(), 8) {
+        Err(Error::Unsupported(what)) => assert!(what.contains("transform code 9"), "{what}"),
+        other => panic!("expected unsupported, got {other:?}"),
+    }
+}
+
+fn to_mesh(p: &PolyMesh, scale: f64) -> Mesh {
+    let mut m = Mesh::new();
+    m.positions = p
+        .positions
+        .iter()
+        .map(|v| v.map(|c| (c * scale).round() as i64))
+        .collect();
+    for f in &p.faces {
+        m.push_face(f);
+    }
+    m
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// Random subdivided models (a random control mesh, refined 1 to 3 times, then a
+    /// random fraction of vertices nudged) round trip exactly through the fit and auto.
+    #[test]
+    fn random_subdivided_models_round_trip(
+        seed in any::<u64>(),
+        levels in 1u32..=3,
+        scale in prop_oneof![Just(1e2), Just(1e5), Just(1e9)],
+        nudge in 0usize..50,
+        open in any::<bool>(),
+    ) {
+        let mut rng = Rng::new(seed);
+        let mut control = if open {
+            subwave_corpus::open_grid(3, 2)
+        } else {
+            subwave_corpus::mixed_polygons()
+        };
+        control.displace(0.3, 0.2, &mut rng);
+        let mut fine = to_mesh(&control.refined(levels), scale);
+        let n = fine.positions.len();
+        for _ in 0..nudge {
+            let i = rng.below(n);
+            fine.positions[i][rng.below(3)] += rng.below(7) as i64 - 3;
+        }
+        let q = subwave::Quantization::Decimal { decimals: 0 };
+        for t in [TransformChoice::Fit, TransformChoice::Auto] {
+            let enc = encode(&fine, &q, t);
+            let dec = subwave::decode_slice(&enc.bytes).unwrap();
+            prop_assert_eq!(common::fingerprint(&dec.mesh), common::fingerprint(&fine));
+            // A changed byte: an error or some mesh, never a panic.
+            let mut bad = enc.bytes.clone();
+            let i = rng.below(bad.len());
+            bad[i] ^= 1 << rng.below(8);
+            let _ = subwave::decode_slice(&bad);
+        }
+    }
+}
