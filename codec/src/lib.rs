@@ -266,8 +266,9 @@ const FIT_BITS: [u8; 3] = [6, 8, 10];
 
 /// Codes a Catmull-Clark hierarchy as a subdivision fit (SPEC.md 9.10): the control
 /// values from least squares, then for each precision in `bits` the integer subdivision
-/// and the residuals; the smallest coding. `None` when `screen` is set and the finest
-/// level is far from any subdivision, or when a control value leaves the range.
+/// and the residuals; the smallest coding (B = 0 when no precision in `bits` keeps the
+/// values in range). `None` when `screen` is set and the finest level is far from any
+/// subdivision.
 fn code_fit(
     canon: &Canonical,
     pos: &[Vec<i64>; 3],
@@ -295,7 +296,11 @@ fn code_fit(
         .collect();
     let control = op.fit(&fine, &fine[..nb], 400, FIT_TOLERANCE);
     let mut best: Option<Payloads> = None;
-    for &b in bits {
+    // B = 0 last, for values too large for any precision asked for.
+    for b in bits.iter().copied().chain([0]) {
+        if b == 0 && best.is_some() {
+            break;
+        }
         let s = (1u64 << b) as f64;
         let mut x: [Vec<i64>; 3] =
             std::array::from_fn(|k| control.iter().map(|v| (v[k] * s).round() as i64).collect());
@@ -406,9 +411,7 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
             let try_fit = matches!(opts.transform, TransformChoice::Auto | TransformChoice::Fit);
             for canon in canons.iter().filter(|_| try_fit) {
                 let pos = canonical_positions(mesh, canon);
-                let screen = !fit_only;
-                let bits: &[u8] = if fit_only { &[8] } else { &FIT_BITS };
-                if let Some(mut p) = code_fit(canon, &pos, &flat_h, bits, screen) {
+                if let Some(mut p) = code_fit(canon, &pos, &flat_h, &FIT_BITS, !fit_only) {
                     if opts.keep_order {
                         let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
                         p.order = Some(order_section(&canon.order, faces, rotations));
