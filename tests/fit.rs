@@ -9,7 +9,7 @@ use std::path::Path;
 use proptest::prelude::*;
 use subwave::{DecodeOptions, EncodeOptions, Error, Limits, Mesh, Transform, TransformChoice};
 use subwave_container::{ContainerWriter, SectionKind};
-use subwave_corpus::{PolyMesh, Rng};
+use subwave_corpus::Rng;
 
 fn own(name: &str, bits: Option<u8>) -> subwave::Loaded {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -260,7 +260,7 @@ fn fits_near_the_coordinate_limit_keep_their_values_in_range() {
     // extra bits are taken, and the mesh still decodes exactly.
     let mut control = subwave_corpus::mixed_polygons();
     control.displace(0.2, 0.05, &mut Rng::new(3));
-    let mesh = to_mesh(&control.refined(2), (1u64 << 43) as f64);
+    let mesh = common::to_mesh(&control.refined(2), (1u64 << 43) as f64);
     let q = subwave::Quantization::Decimal { decimals: 0 };
     let enc = encode(&mesh, &q, TransformChoice::Fit);
     match enc.header.transform {
@@ -268,19 +268,6 @@ fn fits_near_the_coordinate_limit_keep_their_values_in_range() {
         t => panic!("expected a fit, got {}", t.name()),
     }
     assert_exact(&enc.bytes, &mesh, "near 2^44");
-}
-
-fn to_mesh(p: &PolyMesh, scale: f64) -> Mesh {
-    let mut m = Mesh::new();
-    m.positions = p
-        .positions
-        .iter()
-        .map(|v| v.map(|c| (c * scale).round() as i64))
-        .collect();
-    for f in &p.faces {
-        m.push_face(f);
-    }
-    m
 }
 
 proptest! {
@@ -303,7 +290,7 @@ proptest! {
             subwave_corpus::mixed_polygons()
         };
         control.displace(0.3, 0.2, &mut rng);
-        let mut fine = to_mesh(&control.refined(levels), scale);
+        let mut fine = common::to_mesh(&control.refined(levels), scale);
         let n = fine.positions.len();
         for _ in 0..nudge {
             let i = rng.below(n);

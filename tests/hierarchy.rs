@@ -10,19 +10,6 @@ use proptest::prelude::*;
 use subwave::{DecodeOptions, EncodeOptions, Mesh, Quantization, TransformChoice, Wavelet};
 use subwave_corpus::{PolyMesh, Rng};
 
-fn to_mesh(p: &PolyMesh, scale: f64) -> Mesh {
-    let mut m = Mesh::new();
-    m.positions = p
-        .positions
-        .iter()
-        .map(|v| v.map(|c| (c * scale).round() as i64))
-        .collect();
-    for f in &p.faces {
-        m.push_face(f);
-    }
-    m
-}
-
 /// Encodes, with transform `w`, every shared-corpus mesh whose manifest topology is in
 /// `topologies`, ordered and shuffled, checks it decodes exactly, and hands each to
 /// `check` with its manifest entry;
@@ -167,7 +154,7 @@ fn cube_levels(levels: u32) -> (Mesh, subwave::Encoded) {
     let mut p = subwave_corpus::cube().refined(levels);
     p.displace(0.05, 0.002, &mut rng);
     let p = p.shuffled(&mut rng);
-    let mesh = to_mesh(&p, 1e6);
+    let mesh = common::to_mesh(&p, 1e6);
     let opts = EncodeOptions {
         transform: TransformChoice::Fixed(Wavelet::Lazy),
         ..Default::default()
@@ -236,7 +223,7 @@ fn bicubic_coarse_levels_are_rescaled_to_the_geometry() {
     let mut rng = Rng::new(9);
     let mut p = subwave_corpus::cube().refined(3);
     p.displace(0.05, 0.0, &mut rng);
-    let mesh = to_mesh(&p, 1e6);
+    let mesh = common::to_mesh(&p, 1e6);
     let opts = EncodeOptions {
         transform: TransformChoice::Fixed(Wavelet::Bicubic),
         ..Default::default()
@@ -279,7 +266,7 @@ fn random_hierarchy(seed: u64, base: usize, levels: u32, bits: u32) -> Mesh {
 /// `fine` shuffled, with random coordinates of up to `bits` bits and an unreferenced
 /// vertex riding along.
 fn randomised(fine: &PolyMesh, rng: &mut Rng, bits: u32) -> Mesh {
-    let mut m = to_mesh(&fine.shuffled(rng), 1.0);
+    let mut m = common::to_mesh(&fine.shuffled(rng), 1.0);
     let span = (1i64 << bits) - 1;
     for p in &mut m.positions {
         for c in p.iter_mut() {
@@ -381,7 +368,7 @@ fn a_catmull_clark_mesh_is_also_a_sqrt2_mesh_of_twice_the_steps() {
     let mut rng = Rng::new(5);
     let mut p = subwave_corpus::mixed_polygons().refined(3);
     p.displace(0.02, 0.001, &mut rng);
-    let mesh = to_mesh(&p.shuffled(&mut rng), 1e5);
+    let mesh = common::to_mesh(&p.shuffled(&mut rng), 1e5);
     let q = Quantization::Decimal { decimals: 5 };
     for (w, family, levels) in [
         (Wavelet::Bicubic, subwave::Family::Cc, 3),
@@ -405,7 +392,7 @@ fn sqrt2_coarser_levels_are_the_interpolated_vertices() {
     let mut rng = Rng::new(9);
     let mut p = subwave_corpus::mixed_polygons().sqrt2_refined(5);
     p.displace(0.02, 0.001, &mut rng);
-    let mesh = to_mesh(&p, 1e6);
+    let mesh = common::to_mesh(&p, 1e6);
     let opts = EncodeOptions {
         transform: TransformChoice::Fixed(Wavelet::Sqrt2Lazy),
         ..Default::default()

@@ -452,15 +452,7 @@ mod tests {
     }
 
     fn values(n: usize, seed: u64) -> Vec<i64> {
-        let mut s = seed;
-        (0..n)
-            .map(|_| {
-                s = s
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                ((s >> 33) % 2_000_001) as i64 - 1_000_000
-            })
-            .collect()
+        crate::hierarchy::fixtures::pseudo(seed, n, 21)
     }
 
     fn triples(v: &[i64]) -> Vec<[f64; 3]> {

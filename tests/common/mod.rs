@@ -56,3 +56,17 @@ pub fn fingerprint(m: &Mesh) -> (Vec<[i64; 3]>, Vec<Vec<[i64; 3]>>) {
     faces.sort_unstable();
     (pos, faces)
 }
+
+/// A generated mesh's positions scaled and rounded to integers.
+pub fn to_mesh(p: &subwave_corpus::PolyMesh, scale: f64) -> Mesh {
+    let mut m = Mesh::new();
+    m.positions = p
+        .positions
+        .iter()
+        .map(|v| v.map(|c| (c * scale).round() as i64))
+        .collect();
+    for f in &p.faces {
+        m.push_face(f);
+    }
+    m
+}

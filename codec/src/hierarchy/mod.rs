@@ -608,6 +608,20 @@ pub(crate) mod fixtures {
         out
     }
 
+    /// `n` pseudo-random values in `-2^(bits - 1)..2^(bits - 1)` (a fixed sequence per
+    /// seed).
+    pub(crate) fn pseudo(seed: u64, n: usize, bits: u32) -> Vec<i64> {
+        let mut s = seed;
+        (0..n)
+            .map(|_| {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((s >> 20) % (1 << bits)) as i64 - (1 << (bits - 1))
+            })
+            .collect()
+    }
+
     /// A closed pentagonal prism with one side split into two triangles: a pentagon,
     /// triangles and quads, vertices of valence 3, 4 and 5.
     pub(crate) fn prism_with_triangles() -> Topo {

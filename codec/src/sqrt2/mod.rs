@@ -591,19 +591,7 @@ mod prediction_tests {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hierarchy::fixtures::prism_with_triangles;
-
-    fn pseudo(seed: u64, n: usize, bits: u32) -> Vec<i64> {
-        let mut s = seed;
-        (0..n)
-            .map(|_| {
-                s = s
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                ((s >> 20) % (1 << bits)) as i64 - (1 << (bits - 1))
-            })
-            .collect()
-    }
+    use crate::hierarchy::fixtures::{prism_with_triangles, pseudo};
 
     #[test]
     fn next_level_is_the_level_of_the_fine_faces() {
