@@ -4,7 +4,9 @@
 //! `/usr/bin/time -v target/release/examples/decode_peak FILE.swv [--read-only]`.
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let path = args.first().expect("usage: decode_peak FILE.swv [--read-only]");
+    let path = args
+        .first()
+        .expect("usage: decode_peak FILE.swv [--read-only]");
     let bytes = std::fs::read(path).expect("read");
     if args.iter().any(|a| a == "--read-only") {
         println!("read {} bytes", bytes.len());
