@@ -807,7 +807,7 @@ fn synthesise_levels(
         // tangent targets and the synthesis; the other sqrt(2) transforms take a plan.
         let lazy = is_sqrt2 && w == Wavelet::Sqrt2Lazy;
         let predictions = lazy.then(|| sqrt2::predictions(&level, &x));
-        let plan = (is_sqrt2 && !lazy).then(|| sqrt2::Plan::new(&level, w));
+        let plan = (is_sqrt2 && !lazy).then(|| sqrt2::Plan::for_synthesis(&level, w));
         // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
         let tangent = c.version >= 7 && payload.first() == Some(&2);
         let targets = match (&predictions, &plan) {
@@ -831,6 +831,12 @@ fn synthesise_levels(
         } else if let Some(plan) = plan {
             for xs in x.iter_mut() {
                 plan.synthesise(xs);
+            }
+            if plan.predicts_later() {
+                let pr = sqrt2::predictions(&level, &x);
+                for (xs, pk) in x.iter_mut().zip(&pr) {
+                    sqrt2::apply_predictions(xs, level.nv, pk, false);
+                }
             }
         } else {
             let (discs, owned) = discs::discs(&level, &h.poles, l as u32, h.disc);

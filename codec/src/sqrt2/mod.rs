@@ -160,6 +160,9 @@ pub struct Plan {
     /// sqrt2-sym: per vertex, its faces (step 1, step 3) and ring-2 faces (step 3).
     sym_own: Rows,
     sym_ring: Rows,
+    /// The face points' prediction is left to [`predictions`] (a decoder's ir2w plan:
+    /// [`Plan::synthesise`] runs the update only).
+    one_pass: bool,
 }
 
 /// Valences (ring lengths) and the neighbour of corner `c` at ring offset `j`.
@@ -199,6 +202,7 @@ impl Plan {
             update: Rows::new(),
             sym_own: Rows::new(),
             sym_ring: Rows::new(),
+            one_pass: false,
         };
         match w {
             Wavelet::Sqrt2Lazy | Wavelet::Ir2w => {
@@ -243,9 +247,40 @@ impl Plan {
         plan
     }
 
+    /// A decoder's plan of `w`: as [`Plan::new`], except that ir2w keeps only its
+    /// update; its synthesis then leaves the face points' prediction to the caller, by
+    /// [`predictions`] of the updated coarse values (one pass over the faces for the
+    /// three axes, no stored rows: less memory and time on large levels).
+    pub fn for_synthesis(level: &Level, w: Wavelet) -> Plan {
+        if w != Wavelet::Ir2w {
+            return Plan::new(level, w);
+        }
+        let rings = Rings::from_level(level);
+        let nb = Neighbours {
+            rings: &rings,
+            topo: &level.coarse,
+        };
+        Plan {
+            nv: level.nv,
+            nf: level.nf(),
+            wavelet: w,
+            predict: Rows::new(),
+            update: ir2w_update(level, &nb),
+            sym_own: Rows::new(),
+            sym_ring: Rows::new(),
+            one_pass: true,
+        }
+    }
+
+    /// Whether [`Plan::synthesise`] leaves the face points' prediction to the caller.
+    pub fn predicts_later(&self) -> bool {
+        self.one_pass
+    }
+
     /// IR2W's prediction rows, for the transforms that predict with them (sqrt2-lazy, ir2w).
     fn prediction(&self) -> Option<&Rows> {
-        matches!(self.wavelet, Wavelet::Sqrt2Lazy | Wavelet::Ir2w).then_some(&self.predict)
+        (!self.one_pass && matches!(self.wavelet, Wavelet::Sqrt2Lazy | Wavelet::Ir2w))
+            .then_some(&self.predict)
     }
 
     /// Analysis: fine values `x[..nv + nf]` to coarse values and face-point details.
@@ -271,7 +306,9 @@ impl Plan {
             Wavelet::Sqrt2Lazy => self.predict_faces(x, false),
             Wavelet::Ir2w => {
                 self.ir2w_vertices(x, false);
-                self.predict_faces(x, false);
+                if !self.one_pass {
+                    self.predict_faces(x, false);
+                }
             }
             Wavelet::Sqrt2Sym => {
                 self.sym_vertices(x, false);
