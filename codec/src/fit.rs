@@ -16,20 +16,26 @@ use crate::transform::round_div;
 /// Most extra bits of precision the control values may carry (SPEC.md 9.10).
 pub const MAX_EXTRA_BITS: u8 = 16;
 
-/// Boundary edges at coarse vertex `v`: their count and the sum of their other ends.
-fn boundary_ring(level: &Level, v: usize) -> (usize, [u32; 2]) {
-    let mut n = 0;
-    let mut ends = [0u32; 2];
-    for &e in level.v_edges(v) {
-        if level.is_boundary(e as usize) {
-            let [a, b] = level.edges[e as usize];
-            if n < 2 {
-                ends[n] = if a as usize == v { b } else { a };
-            }
-            n += 1;
+/// Which vertex rule of SPEC.md 9.10 coarse vertex `v` takes.
+enum VertexRule {
+    /// Exactly two boundary edges, to these vertices.
+    Boundary([u32; 2]),
+    /// No boundary edge, at least three edges and as many face corners.
+    Inside,
+    /// Anything else: the value is kept.
+    Kept,
+}
+
+fn vertex_rule(level: &Level, v: usize) -> VertexRule {
+    match level.boundary_edges(v) {
+        (2, be) => VertexRule::Boundary(be.map(|e| level.other_end(e, v))),
+        (0, _)
+            if level.v_edges(v).len() >= 3 && level.v_faces(v).len() == level.v_edges(v).len() =>
+        {
+            VertexRule::Inside
         }
+        _ => VertexRule::Kept,
     }
-    (n, ends)
 }
 
 /// One plain Catmull-Clark refinement in integers (SPEC.md 9.10): `x` holds the
@@ -60,37 +66,33 @@ pub fn subdivide(level: &Level, x: &mut Vec<i64>) {
             )
         };
     }
-    let moved: Vec<i64> = (0..nv).map(|v| vertex_rule(level, v, x)).collect();
+    let moved: Vec<i64> = (0..nv).map(|v| moved_vertex(level, v, x)).collect();
     x[..nv].copy_from_slice(&moved);
 }
 
 /// The vertex rule of [`subdivide`] for coarse vertex `v` (its neighbours still
 /// coarse, the face points already written).
-fn vertex_rule(level: &Level, v: usize, x: &[i64]) -> i64 {
-    let (nb, ends) = boundary_ring(level, v);
+fn moved_vertex(level: &Level, v: usize, x: &[i64]) -> i64 {
     let xv = x[v] as i128;
-    if nb == 2 {
-        return round_div(
-            x[ends[0] as usize] as i128 + 6 * xv + x[ends[1] as usize] as i128,
-            8,
-        );
+    match vertex_rule(level, v) {
+        VertexRule::Boundary([a, b]) => {
+            round_div(x[a as usize] as i128 + 6 * xv + x[b as usize] as i128, 8)
+        }
+        VertexRule::Kept => x[v],
+        VertexRule::Inside => {
+            let (nv, ne) = (level.nv, level.ne());
+            let edges = level.v_edges(v);
+            let n = edges.len() as i128;
+            let mut s = n * (n - 2) * xv;
+            for &e in edges {
+                s += x[level.other_end(e, v) as usize] as i128;
+            }
+            for &f in level.v_faces(v) {
+                s += x[nv + ne + f as usize] as i128;
+            }
+            round_div(s, n * n)
+        }
     }
-    let edges = level.v_edges(v);
-    let faces = level.v_faces(v);
-    let n = edges.len() as i128;
-    if nb != 0 || n < 3 || faces.len() != edges.len() {
-        return x[v];
-    }
-    let (nv, ne) = (level.nv, level.ne());
-    let mut s = n * (n - 2) * xv;
-    for &e in edges {
-        let [a, b] = level.edges[e as usize];
-        s += x[if a as usize == v { b } else { a } as usize] as i128;
-    }
-    for &f in faces {
-        s += x[nv + ne + f as usize] as i128;
-    }
-    round_div(s, n * n)
 }
 
 /// The same refinement in floating point, without rounding, as a linear map: the
@@ -104,39 +106,37 @@ fn rows(level: &Level) -> Vec<Vec<(u32, f64)>> {
         rows[nv + ne + f] = face.iter().map(|&v| (v, w)).collect();
     }
     for (e, &[a, b]) in level.edges.iter().enumerate() {
-        let mut r = vec![(a, 0.5), (b, 0.5)];
-        if !level.is_boundary(e) {
-            r = vec![(a, 0.25), (b, 0.25)];
+        rows[nv + e] = if level.is_boundary(e) {
+            vec![(a, 0.5), (b, 0.5)]
+        } else {
+            let mut r = vec![(a, 0.25), (b, 0.25)];
             for &f in &level.edge_faces[e] {
                 for &(c, w) in &rows[nv + ne + f as usize] {
                     r.push((c, 0.25 * w));
                 }
             }
-        }
-        rows[nv + e] = r;
+            r
+        };
     }
     for v in 0..nv {
-        let (nb, ends) = boundary_ring(level, v);
-        let edges = level.v_edges(v);
-        let faces = level.v_faces(v);
-        let n = edges.len() as f64;
-        rows[v] = if nb == 2 {
-            vec![(ends[0], 0.125), (v as u32, 0.75), (ends[1], 0.125)]
-        } else if nb != 0 || edges.len() < 3 || faces.len() != edges.len() {
-            vec![(v as u32, 1.0)]
-        } else {
-            let nn = n * n;
-            let mut r = vec![(v as u32, (n - 2.0) / n)];
-            for &e in edges {
-                let [a, b] = level.edges[e as usize];
-                r.push((if a as usize == v { b } else { a }, 1.0 / nn));
-            }
-            for &f in faces {
-                for &(c, w) in &rows[nv + ne + f as usize] {
-                    r.push((c, w / nn));
+        rows[v] = match vertex_rule(level, v) {
+            VertexRule::Boundary([a, b]) => vec![(a, 0.125), (v as u32, 0.75), (b, 0.125)],
+            VertexRule::Kept => vec![(v as u32, 1.0)],
+            VertexRule::Inside => {
+                let edges = level.v_edges(v);
+                let n = edges.len() as f64;
+                let nn = n * n;
+                let mut r = vec![(v as u32, (n - 2.0) / n)];
+                for &e in edges {
+                    r.push((level.other_end(e, v), 1.0 / nn));
                 }
+                for &f in level.v_faces(v) {
+                    for &(c, w) in &rows[nv + ne + f as usize] {
+                        r.push((c, w / nn));
+                    }
+                }
+                r
             }
-            r
         };
     }
     rows

@@ -329,22 +329,6 @@ impl Sample for f64 {
     }
 }
 
-/// Per level: which coarse vertices lie on a boundary curve, and their two boundary
-/// edges (SPEC.md 9.2).
-fn boundary_edges(level: &Level, v: usize) -> (usize, [u32; 2]) {
-    let mut n = 0;
-    let mut be = [0u32; 2];
-    for &e in level.v_edges(v) {
-        if level.is_boundary(e as usize) {
-            if n < 2 {
-                be[n] = e;
-            }
-            n += 1;
-        }
-    }
-    (n, be)
-}
-
 /// The s-lift update of old vertex `v` (SPEC.md 9.2).
 #[inline]
 fn v_update<T: Sample>(level: &Level, x: &[T], v: usize, s: Step) -> Option<T> {
@@ -354,7 +338,7 @@ fn v_update<T: Sample>(level: &Level, x: &[T], v: usize, s: Step) -> Option<T> {
     if edges.is_empty() {
         return None;
     }
-    let (nb, be) = boundary_edges(level, v);
+    let (nb, be) = level.boundary_edges(v);
     if nb > 0 {
         if nb != 2 {
             return None;
@@ -605,7 +589,7 @@ fn dyadic_sym<T: Sample>(level: &Level, x: &mut [T], forward: bool, skip: &[bool
     // Skipped vertices take no step: neither the interior ones nor the boundary rule.
     let two_boundary = |v: usize| {
         if live(v) {
-            boundary_edges(level, v)
+            level.boundary_edges(v)
         } else {
             (0, [0; 2])
         }

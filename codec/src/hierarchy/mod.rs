@@ -220,6 +220,33 @@ impl Level {
         self.edge_faces[e][1] == NONE
     }
 
+    /// Coarse vertex `v`'s boundary edges: their count and the first two (which coarse
+    /// vertices lie on a boundary curve, and where it goes; SPEC.md 9.2).
+    pub fn boundary_edges(&self, v: usize) -> (usize, [u32; 2]) {
+        let mut n = 0;
+        let mut be = [0u32; 2];
+        for &e in self.v_edges(v) {
+            if self.is_boundary(e as usize) {
+                if n < 2 {
+                    be[n] = e;
+                }
+                n += 1;
+            }
+        }
+        (n, be)
+    }
+
+    /// The end of edge `e` that is not coarse vertex `v`.
+    #[inline]
+    pub fn other_end(&self, e: u32, v: usize) -> u32 {
+        let [a, b] = self.edges[e as usize];
+        if a as usize == v {
+            b
+        } else {
+            a
+        }
+    }
+
     /// Coarse vertex `v`'s edges.
     #[inline]
     pub fn v_edges(&self, v: usize) -> &[u32] {
