@@ -201,13 +201,8 @@ fn code_hierarchy(
     if x.iter().flatten().any(|v| v.abs() > levels::MAX_LIFTED) {
         return None;
     }
-    let nb = canon.base.nv;
-    let mut base = Mesh::new();
-    base.positions = (0..nb).map(|i| [x[0][i], x[1][i], x[2][i]]).collect();
-    base.faces = canon.base.idx.clone();
-    base.face_starts = canon.base.starts.clone();
-    let base_bytes = flat::encode(&base, FORMAT_VERSION);
-    let mut act = vec![levels::UNKNOWN; nb];
+    let (mut header, base_bytes) = hierarchy_base(canon, &x, header);
+    let mut act = vec![levels::UNKNOWN; canon.base.nv];
     let level_bytes = canon
         .levels
         .iter()
@@ -225,6 +220,29 @@ fn code_hierarchy(
             )
         })
         .collect();
+    header.disc = if canon.poles.is_empty() {
+        DiscTransform::None
+    } else {
+        disc
+    };
+    header.transform = Transform::Wavelet(w);
+    Some(Payloads {
+        header,
+        base: base_bytes,
+        levels: level_bytes,
+        order: None,
+    })
+}
+
+/// The header and BASE payload of a hierarchy's coding: the base mesh with the values
+/// `x[k][..base vertices]` (SPEC.md 6), the header with the hierarchy's counts, family
+/// and poles (the transform is the caller's).
+fn hierarchy_base(canon: &Canonical, x: &[Vec<i64>; 3], header: &Header) -> (Header, Vec<u8>) {
+    let nb = canon.base.nv;
+    let mut base = Mesh::new();
+    base.positions = (0..nb).map(|i| [x[0][i], x[1][i], x[2][i]]).collect();
+    base.faces = canon.base.idx.clone();
+    base.face_starts = canon.base.starts.clone();
     let mut header = header.clone();
     header.base_vertices = nb as u64;
     header.base_faces = canon.base.nf() as u64;
@@ -238,18 +256,7 @@ fn code_hierarchy(
         Family::Cc
     };
     header.poles = canon.poles.clone();
-    header.disc = if canon.poles.is_empty() {
-        DiscTransform::None
-    } else {
-        disc
-    };
-    header.transform = Transform::Wavelet(w);
-    Some(Payloads {
-        header,
-        base: base_bytes,
-        levels: level_bytes,
-        order: None,
-    })
+    (header, flat::encode(&base, FORMAT_VERSION))
 }
 
 /// Mean [`fit::defect`] over the axes of the finest level above which `auto` does not
@@ -307,11 +314,7 @@ fn code_fit(
         if x.iter().flatten().any(|v| v.abs() > levels::MAX_LIFTED) {
             continue;
         }
-        let mut base = Mesh::new();
-        base.positions = (0..nb).map(|i| [x[0][i], x[1][i], x[2][i]]).collect();
-        base.faces = canon.base.idx.clone();
-        base.face_starts = canon.base.starts.clone();
-        let base_bytes = flat::encode(&base, FORMAT_VERSION);
+        let (mut h, base_bytes) = hierarchy_base(canon, &x, header);
         for l in &canon.levels {
             for xs in x.iter_mut() {
                 fit::subdivide(l, xs);
@@ -319,12 +322,6 @@ fn code_fit(
         }
         let mut level_bytes = vec![Vec::new(); canon.levels.len() - 1];
         level_bytes.push(fit::encode_residuals(&x, pos, b));
-        let mut h = header.clone();
-        h.base_vertices = nb as u64;
-        h.base_faces = canon.base.nf() as u64;
-        h.base_corners = canon.base.idx.len() as u64;
-        h.levels = canon.levels.len() as u8;
-        h.family = Family::Cc;
         h.transform = Transform::Fit { bits: b };
         let p = Payloads {
             header: h,
@@ -742,6 +739,31 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
     })
 }
 
+/// Refuses a refinement larger than the header's finest mesh, before it is built.
+fn check_refinement_size(h: &Header, fine_nv: usize, fine_faces: usize) -> Result<()> {
+    if fine_nv as u64 > h.vertices || fine_faces as u64 > h.faces {
+        return Err(Error::corrupt(
+            "HEAD",
+            "the base mesh refines to more than the header's counts",
+        ));
+    }
+    Ok(())
+}
+
+/// The finest refined topology must have the header's counts.
+fn check_finest_counts(h: &Header, topo: &Topo) -> Result<()> {
+    if topo.nv as u64 != h.vertices
+        || topo.nf() as u64 != h.faces
+        || topo.idx.len() as u64 != h.corners
+    {
+        return Err(Error::corrupt(
+            "HEAD",
+            "the refined mesh does not have the header's counts",
+        ));
+    }
+    Ok(())
+}
+
 /// Rebuilds levels 1..=`upto` from the base mesh (SPEC.md 8-10).
 fn synthesise_levels(
     c: &Container<'_>,
@@ -793,12 +815,7 @@ fn synthesise_levels(
         } else {
             (level.fine_nv(), level.fine_faces_with(&pole))
         };
-        if fine_nv as u64 > h.vertices || fine_faces as u64 > h.faces {
-            return Err(Error::corrupt(
-                "HEAD",
-                "the base mesh refines to more than the header's counts",
-            ));
-        }
+        check_refinement_size(h, fine_nv, fine_faces)?;
         if is_sqrt2 && !sqrt2::closed(&level) {
             return Err(Error::corrupt("BASE", "a sqrt(2) level with a boundary"));
         }
@@ -824,19 +841,23 @@ fn synthesise_levels(
             c.version,
             targets.as_deref(),
         )?;
-        if let Some(pr) = &predictions {
-            for (xs, pk) in x.iter_mut().zip(pr) {
-                sqrt2::apply_predictions(xs, level.nv, pk, false);
-            }
-        } else if let Some(plan) = plan {
-            for xs in x.iter_mut() {
-                plan.synthesise(xs);
-            }
-            if plan.predicts_later() {
-                let pr = sqrt2::predictions(&level, &x);
-                for (xs, pk) in x.iter_mut().zip(&pr) {
-                    sqrt2::apply_predictions(xs, level.nv, pk, false);
+        if is_sqrt2 {
+            if let Some(plan) = &plan {
+                for xs in x.iter_mut() {
+                    plan.synthesise(xs);
                 }
+            }
+            // sqrt2-lazy predicts from the coarse values as decoded, a decoder's ir2w
+            // plan from them after its update.
+            let pr = match predictions {
+                Some(pr) => Some(pr),
+                None if plan.as_ref().is_some_and(sqrt2::Plan::predicts_later) => {
+                    Some(sqrt2::predictions(&level, &x))
+                }
+                None => None,
+            };
+            for (xs, pk) in x.iter_mut().zip(pr.iter().flatten()) {
+                sqrt2::apply_predictions(xs, level.nv, pk, false);
             }
         } else {
             let (discs, owned) = discs::discs(&level, &h.poles, l as u32, h.disc);
@@ -861,15 +882,8 @@ fn synthesise_levels(
             }
         }
     }
-    if upto == h.levels
-        && (topo.nv as u64 != h.vertices
-            || topo.nf() as u64 != h.faces
-            || topo.idx.len() as u64 != h.corners)
-    {
-        return Err(Error::corrupt(
-            "HEAD",
-            "the refined mesh does not have the header's counts",
-        ));
+    if upto == h.levels {
+        check_finest_counts(h, &topo)?;
     }
     // A coarser level's values carry 1/gain of the geometry per level still above it.
     let gain: i64 = match w {
@@ -909,12 +923,7 @@ fn synthesise_fit(c: &Container<'_>, h: &Header, base: Mesh, bits: u8, upto: u8)
         std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect());
     for l in 0..upto as usize {
         let level = Level::new(&topo)?;
-        if level.fine_nv() as u64 > h.vertices || level.fine_faces_with(&[]) as u64 > h.faces {
-            return Err(Error::corrupt(
-                "HEAD",
-                "the base mesh refines to more than the header's counts",
-            ));
-        }
+        check_refinement_size(h, level.fine_nv(), level.fine_faces_with(&[]))?;
         if l + 1 < h.levels as usize && !c.sections[2 + l].payload.is_empty() {
             return Err(Error::corrupt(
                 "LEVL",
@@ -927,15 +936,7 @@ fn synthesise_fit(c: &Container<'_>, h: &Header, base: Mesh, bits: u8, upto: u8)
         topo = level.fine();
     }
     if upto == h.levels {
-        if topo.nv as u64 != h.vertices
-            || topo.nf() as u64 != h.faces
-            || topo.idx.len() as u64 != h.corners
-        {
-            return Err(Error::corrupt(
-                "HEAD",
-                "the refined mesh does not have the header's counts",
-            ));
-        }
+        check_finest_counts(h, &topo)?;
         let payload = c.sections[1 + upto as usize].payload;
         fit::decode_residuals(payload, &mut x, bits, MAX_COORD)?;
     } else {
