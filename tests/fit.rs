@@ -7,7 +7,7 @@ mod common;
 use std::path::Path;
 
 use proptest::prelude::*;
-use subwave::{DecodeOptions, EncodeOptions, Error, Limits, Mesh, Transform, TransformChoice};
+use subwave::{EncodeOptions, Error, Limits, Mesh, Transform, TransformChoice};
 use subwave_container::{ContainerWriter, SectionKind};
 use subwave_corpus::Rng;
 
@@ -100,14 +100,7 @@ fn coarser_levels_of_a_fit_are_its_rounded_refinements() {
     let (lo, hi) = bounds(&full);
     let mut prev_nv = 0;
     for k in 0..=enc.header.levels {
-        let dec = subwave::decode(
-            &enc.bytes,
-            &DecodeOptions {
-                max_level: Some(k),
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let dec = subwave::decode(&enc.bytes, &common::up_to(k)).unwrap();
         assert_eq!(dec.level, k);
         assert!(dec.mesh.vertex_count() > prev_nv);
         prev_nv = dec.mesh.vertex_count();
@@ -126,12 +119,8 @@ fn coarser_levels_of_a_fit_are_its_rounded_refinements() {
     // Cut off after level 1, level 1 still decodes; the finest does not.
     let c = subwave_container::Container::parse(&enc.bytes, &Limits::default()).unwrap();
     let cut = c.sections[3].offset as usize;
-    let opts = |k| DecodeOptions {
-        max_level: Some(k),
-        ..Default::default()
-    };
-    assert!(subwave::decode(&enc.bytes[..cut], &opts(1)).is_ok());
-    assert!(subwave::decode(&enc.bytes[..cut], &opts(3)).is_err());
+    assert!(subwave::decode(&enc.bytes[..cut], &common::up_to(1)).is_ok());
+    assert!(subwave::decode(&enc.bytes[..cut], &common::up_to(3)).is_err());
 }
 
 fn bounds(m: &Mesh) -> ([i64; 3], [i64; 3]) {

@@ -7,7 +7,7 @@ mod common;
 use std::path::Path;
 
 use proptest::prelude::*;
-use subwave::{DecodeOptions, EncodeOptions, Mesh, Quantization, TransformChoice, Wavelet};
+use subwave::{EncodeOptions, Mesh, Quantization, TransformChoice, Wavelet};
 use subwave_corpus::{PolyMesh, Rng};
 
 /// Encodes, with transform `w`, every shared-corpus mesh whose manifest topology is in
@@ -130,14 +130,7 @@ fn polar_levels_decode_coarser_meshes_with_their_fans() {
     let full = subwave::decode_slice(&enc.bytes).unwrap();
     assert_eq!(common::fingerprint(&full.mesh), common::fingerprint(&mesh));
     for k in 0..=3u8 {
-        let dec = subwave::decode(
-            &enc.bytes,
-            &DecodeOptions {
-                max_level: Some(k),
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let dec = subwave::decode(&enc.bytes, &common::up_to(k)).unwrap();
         // Two poles of valence 7 * 2^k, each with its fan; all other faces quads.
         let triangles = dec.mesh.iter_faces().filter(|f| f.len() == 3).count();
         assert_eq!(triangles, 2 * (7 << k), "level {k}");
@@ -180,10 +173,7 @@ fn coarser_levels_from_whole_and_cut_files() {
     let mut expected_faces = enc.header.base_faces as usize;
     let mut corners = enc.header.base_corners as usize;
     for k in 0..=4u8 {
-        let opts = DecodeOptions {
-            max_level: Some(k),
-            ..Default::default()
-        };
+        let opts = common::up_to(k);
         let whole = subwave::decode(&enc.bytes, &opts).unwrap();
         assert_eq!(whole.level, k);
         assert_eq!(whole.mesh.vertex_count(), expected_vertices, "level {k}");
@@ -203,11 +193,7 @@ fn coarser_levels_from_whole_and_cut_files() {
             // Without --max-level the cut file is an error.
             assert!(subwave::decode_slice(&enc.bytes[..cut]).is_err());
             // Asking for a level beyond the cut is an error too.
-            let deeper = DecodeOptions {
-                max_level: Some(k + 1),
-                ..Default::default()
-            };
-            assert!(subwave::decode(&enc.bytes[..cut], &deeper).is_err());
+            assert!(subwave::decode(&enc.bytes[..cut], &common::up_to(k + 1)).is_err());
         }
         // Next level's counts: V + E + F vertices, one quad per corner.
         // A closed mesh: every edge has two faces.
@@ -229,14 +215,7 @@ fn bicubic_coarse_levels_are_rescaled_to_the_geometry() {
         ..Default::default()
     };
     let enc = subwave::encode_to_vec(&mesh, &Quantization::Decimal { decimals: 6 }, &opts).unwrap();
-    let l2 = subwave::decode(
-        &enc.bytes,
-        &DecodeOptions {
-            max_level: Some(2),
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let l2 = subwave::decode(&enc.bytes, &common::up_to(2)).unwrap();
     let full = subwave::decode_slice(&enc.bytes).unwrap();
     // Level-2 control points lie near the surface: within 10 % of the extent of the
     // fine vertices they become.
@@ -402,14 +381,7 @@ fn sqrt2_coarser_levels_are_the_interpolated_vertices() {
     let all: std::collections::HashSet<[i64; 3]> = mesh.positions.iter().copied().collect();
     let mut last = 0;
     for k in 0..=5u8 {
-        let d = subwave::decode(
-            &enc.bytes,
-            &DecodeOptions {
-                max_level: Some(k),
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let d = subwave::decode(&enc.bytes, &common::up_to(k)).unwrap();
         assert!(d.mesh.vertex_count() > last);
         last = d.mesh.vertex_count();
         assert!(

@@ -70,3 +70,11 @@ pub fn to_mesh(p: &subwave_corpus::PolyMesh, scale: f64) -> Mesh {
     }
     m
 }
+
+/// Decoding options that stop at refinement level `level`.
+pub fn up_to(level: u8) -> subwave::DecodeOptions {
+    subwave::DecodeOptions {
+        max_level: Some(level),
+        ..Default::default()
+    }
+}
