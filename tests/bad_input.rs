@@ -428,6 +428,20 @@ fn polar_headers_that_do_not_fit_their_base_mesh_are_refused() {
         Err(Error::Unsupported(what)) => assert!(what.contains("disc transform code 9"), "{what}"),
         other => panic!("expected unsupported, got {other:?}"),
     }
+    // The lifted polar wavelet (codes 3 and 4) from version 10 on.
+    for code in [3u8, 4] {
+        *head.last_mut().unwrap() = code;
+        assert!(subwave::Header::read(&head, 0, &Limits::default(), 10).is_ok());
+        match subwave::Header::read(&head, 0, &Limits::default(), 9) {
+            Err(Error::Unsupported(what)) => {
+                assert!(
+                    what.contains(&format!("disc transform code {code}")),
+                    "{what}"
+                )
+            }
+            other => panic!("expected unsupported, got {other:?}"),
+        }
+    }
     // Before version 8 family 3 was reserved: the same header read as version 7.
     let bytes = polar_with_header(|_| {});
     let c = subwave_container::Container::parse(&bytes, &Limits::default()).unwrap();

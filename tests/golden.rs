@@ -81,6 +81,7 @@ fn frozen_containers_still_decode() {
         ("sphere_polar3.v8.swv", "sphere_polar3.obj"),
         ("sphere_polar3.disc.v8.swv", "sphere_polar3.obj"),
         ("subdivided_cc3.v9.swv", "subdivided_cc3.obj"),
+        ("sphere_polar3.lifted.v10.swv", "sphere_polar3.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);
@@ -93,7 +94,8 @@ fn frozen_containers_still_decode() {
         if !path.exists() && std::env::var_os("SUBWAVE_BLESS").is_some() {
             let m = subwave::load(&source, None).unwrap();
             // A ".flat." container is coded without levels (the flat path), a ".disc."
-            // one with the polar wavelet in its discs (radial first).
+            // one with the lazy polar wavelet in its discs (radial first), a ".lifted."
+            // one with the lifted polar wavelet (circular first).
             let enc = subwave::encode_to_vec(
                 &m.mesh,
                 &m.quantization,
@@ -101,9 +103,13 @@ fn frozen_containers_still_decode() {
                     keep_order: true,
                     source: m.source(),
                     max_levels: if swv.contains(".flat.") { 0 } else { 16 },
-                    disc: swv
-                        .contains(".disc.")
-                        .then_some(subwave::DiscTransform::LazyRadialFirst),
+                    disc: if swv.contains(".disc.") {
+                        Some(subwave::DiscTransform::LazyRadialFirst)
+                    } else if swv.contains(".lifted.") {
+                        Some(subwave::DiscTransform::LiftedCircularFirst)
+                    } else {
+                        None
+                    },
                     ..Default::default()
                 },
             )

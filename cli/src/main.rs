@@ -60,7 +60,8 @@ enum Command {
         levels: u8,
         /// Polar hierarchies: the poles' discs take auto (smallest file), none (the
         /// Catmull-Clark transform everywhere), lazy (the lazy polar wavelet, circular
-        /// analysis first) or lazy-radial (radial first).
+        /// analysis first), lazy-radial (radial first), lifted (the lifted polar
+        /// wavelet, circular first) or lifted-radial (radial first).
         #[arg(long, default_value = "auto", value_parser = parse_disc)]
         polar_disc: DiscArg,
     },
@@ -135,8 +136,10 @@ fn parse_disc(s: &str) -> Result<DiscArg, String> {
         "none" => Ok(DiscArg(Some(D::None))),
         "lazy" => Ok(DiscArg(Some(D::LazyCircularFirst))),
         "lazy-radial" => Ok(DiscArg(Some(D::LazyRadialFirst))),
+        "lifted" => Ok(DiscArg(Some(D::LiftedCircularFirst))),
+        "lifted-radial" => Ok(DiscArg(Some(D::LiftedRadialFirst))),
         _ => Err(format!(
-            "unknown polar disc transform '{s}'; use auto, none, lazy or lazy-radial"
+            "unknown polar disc transform '{s}'; use auto, none, lazy, lazy-radial, lifted or lifted-radial"
         )),
     }
 }

@@ -358,9 +358,11 @@ impl Header {
             }
             let at = r.offset();
             let code = r.u8("disc transform")?;
-            disc = DiscTransform::from_code(code).ok_or_else(|| {
-                Error::Unsupported(format!("disc transform code {code} (byte {at})"))
-            })?;
+            disc = DiscTransform::from_code(code)
+                .filter(|d| version >= d.since_version())
+                .ok_or_else(|| {
+                    Error::Unsupported(format!("disc transform code {code} (byte {at})"))
+                })?;
         }
         r.finish("the header")?;
         let h = Header {

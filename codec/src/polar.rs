@@ -37,6 +37,28 @@ pub fn gamma_fixed(n: usize) -> Vec<i64> {
     g
 }
 
+/// A weight times 2^16, rounded half away from zero: the lifting tables' fixed point.
+fn fixed(w: f64) -> i32 {
+    (w * ONE as f64).round() as i32
+}
+
+/// The circular lifting weights w_{-2..3} (Table 2) times 2^16: what the frozen table
+/// (`crate::discs::tables::LIFT_W`) holds.
+pub fn circular_weights_fixed() -> [i32; 6] {
+    circular_weights().map(fixed)
+}
+
+/// The radial lifting weights of valence `n` times 2^16: t (n + 2 entries) and s (three
+/// cases of eight), what the frozen tables (`crate::discs::tables::LIFT_T`, `LIFT_S`)
+/// hold.
+pub fn radial_weights_fixed(n: usize) -> (Vec<i32>, [[i32; 8]; 3]) {
+    let w = radial_weights(n);
+    (
+        w.t.iter().map(|&t| fixed(t)).collect(),
+        w.s.map(|row| row.map(fixed)),
+    )
+}
+
 /// A closed polar net: poles `a` and `b`, `k` rings of `n` vertices between them (ring
 /// 0 next to `a`), each spoke a path a - ring 0 - ... - ring k-1 - b. Values per axis.
 #[derive(Debug, Clone, PartialEq)]

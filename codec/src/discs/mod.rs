@@ -1,7 +1,9 @@
-//! Pole discs of polar levels and the integer lazy polar wavelet on them (SPEC.md 9.9):
-//! the refinement rules of polar subdivision (Zhao et al. 2009, eq. 2-6) inverted in
-//! integers, inside the image of each pole's base fan, joined to a Catmull-Clark
-//! transform outside it. [`crate::polar`] holds the floating-point reference.
+//! Pole discs of polar levels and the integer polar wavelets on them (SPEC.md 9.9): the
+//! refinement rules of polar subdivision (Zhao et al. 2009, eq. 2-6) inverted in
+//! integers (the lazy wavelet), optionally followed by the paper's local lifting (eq.
+//! 11-13, weights from the frozen tables), inside the image of each pole's base fan,
+//! joined to a Catmull-Clark transform outside it. [`crate::polar`] holds the
+//! floating-point reference.
 
 pub mod tables;
 
@@ -17,14 +19,20 @@ pub enum DiscTransform {
     LazyCircularFirst,
     /// The lazy polar wavelet, radial analysis first.
     LazyRadialFirst,
+    /// The lifted polar wavelet (eq. 11-13), circular analysis first.
+    LiftedCircularFirst,
+    /// The lifted polar wavelet, radial analysis first.
+    LiftedRadialFirst,
 }
 
 impl DiscTransform {
     /// Every choice, in code order.
-    pub const ALL: [DiscTransform; 3] = [
+    pub const ALL: [DiscTransform; 5] = [
         DiscTransform::None,
         DiscTransform::LazyCircularFirst,
         DiscTransform::LazyRadialFirst,
+        DiscTransform::LiftedCircularFirst,
+        DiscTransform::LiftedRadialFirst,
     ];
 
     /// The header code.
@@ -33,7 +41,34 @@ impl DiscTransform {
             DiscTransform::None => 0,
             DiscTransform::LazyCircularFirst => 1,
             DiscTransform::LazyRadialFirst => 2,
+            DiscTransform::LiftedCircularFirst => 3,
+            DiscTransform::LiftedRadialFirst => 4,
         }
+    }
+
+    /// The oldest format version with this code (SPEC.md 5).
+    pub fn since_version(self) -> u16 {
+        if self.lifted() {
+            10
+        } else {
+            8
+        }
+    }
+
+    /// Whether the radial analysis runs first.
+    pub fn radial_first(self) -> bool {
+        matches!(
+            self,
+            DiscTransform::LazyRadialFirst | DiscTransform::LiftedRadialFirst
+        )
+    }
+
+    /// Whether the analysis steps are lifted (eq. 11-13).
+    pub fn lifted(self) -> bool {
+        matches!(
+            self,
+            DiscTransform::LiftedCircularFirst | DiscTransform::LiftedRadialFirst
+        )
     }
 
     /// The transform of a header code.
@@ -47,6 +82,8 @@ impl DiscTransform {
             DiscTransform::None => "none",
             DiscTransform::LazyCircularFirst => "polar-lazy (circular first)",
             DiscTransform::LazyRadialFirst => "polar-lazy (radial first)",
+            DiscTransform::LiftedCircularFirst => "polar-lifted (circular first)",
+            DiscTransform::LiftedRadialFirst => "polar-lifted (radial first)",
         }
     }
 }
@@ -112,11 +149,7 @@ fn disc(level: &Level, p: u32, rings: usize, d: DiscTransform) -> Option<Disc> {
     // The fan, in rotation order: triangle j = (p, v_j, v_{j+1}).
     let fan = level.v_faces(p as usize);
     let n = fan.len();
-    let radial_valence = if d == DiscTransform::LazyRadialFirst {
-        2 * n
-    } else {
-        n
-    };
+    let radial_valence = if d.radial_first() { 2 * n } else { n };
     if n < 4 || radial_valence > MAX_VALENCE || level.v_edges(p as usize).len() != n {
         return None;
     }
@@ -216,9 +249,33 @@ fn half(a: i128) -> i64 {
     a.div_euclid(2) as i64
 }
 
+/// The circular lifting of one ring after its analysis (even positions coarse values,
+/// odd positions details): per coarse value m, `[sum_k w_k d_(m+2-k) / 2^16]` with w
+/// the frozen Table 2 weights (SPEC.md 9.9), subtracted in analysis, added in synthesis.
+fn circular_lift(x: &mut [i64], ring: &[u32], analysis: bool) {
+    let n = ring.len() / 2;
+    let d = |j: usize| x[ring[2 * (j % n) + 1] as usize] as i128;
+    let up: Vec<i64> = (0..n)
+        .map(|m| {
+            let acc = (0..6)
+                .map(|k| tables::LIFT_W[k] as i128 * d(m + 2 * n + 2 - k))
+                .sum::<i128>();
+            round_div(acc, 1 << 16)
+        })
+        .collect();
+    for (m, u) in up.into_iter().enumerate() {
+        let v = &mut x[ring[2 * m] as usize];
+        *v = if analysis {
+            v.wrapping_sub(u)
+        } else {
+            v.wrapping_add(u)
+        };
+    }
+}
+
 /// Circular analysis of one closed ring of 2n values (even positions old vertices, odd
-/// positions edge points; SPEC.md 9.9).
-fn circular_analysis(x: &mut [i64], ring: &[u32]) {
+/// positions edge points; SPEC.md 9.9), lifted or not.
+fn circular_analysis(x: &mut [i64], ring: &[u32], lifted: bool) {
     let m = ring.len();
     let at = |x: &[i64], i: usize| x[ring[i % m] as usize] as i128;
     let v: Vec<i64> = (0..m / 2)
@@ -236,10 +293,16 @@ fn circular_analysis(x: &mut [i64], ring: &[u32]) {
         let e = &mut x[ring[2 * j + 1] as usize];
         *e = e.wrapping_sub(r);
     }
+    if lifted {
+        circular_lift(x, ring, true);
+    }
 }
 
 /// The inverse of [`circular_analysis`].
-fn circular_synthesis(x: &mut [i64], ring: &[u32]) {
+fn circular_synthesis(x: &mut [i64], ring: &[u32], lifted: bool) {
+    if lifted {
+        circular_lift(x, ring, false);
+    }
     let m = ring.len();
     let n = m / 2;
     for j in 0..n {
@@ -291,8 +354,72 @@ fn gamma_prediction(x: &[i64], s: &Spokes<'_>, p: i64, ring1: usize, j: usize) -
     round_div(acc, 1 << 16)
 }
 
+/// The radial lifting after a radial analysis (SPEC.md 9.9): each coarse value of the
+/// disc other than the seam's (the pole, coarse rings 1..R-1) moves by `[U / 2^16]`, U
+/// the sum of the details times the frozen weights of Table 1 whose stencils reach it
+/// (t for the spoke points next to the pole, s for the others by their distance from
+/// it); subtracted in analysis, added in synthesis.
+fn radial_lift(x: &mut [i64], s: &Spokes<'_>, analysis: bool) {
+    let n = s.n();
+    let r = s.rings.len() / 2;
+    let t = tables::LIFT_T[n - tables::GAMMA_MIN];
+    let st = &tables::LIFT_S[n - tables::GAMMA_MIN];
+    // Slot 0 the pole, 1 + (i - 1) n + j coarse ring i (1 <= i < R) at spoke j.
+    let slot = |i: usize, j: usize| match i {
+        0 => Some(0),
+        i if i < r => Some(1 + (i - 1) * n + j % n),
+        _ => None,
+    };
+    let mut up = vec![0i128; 1 + (r - 1) * n];
+    for j in 0..n {
+        let e = x[s.at(1, j)] as i128;
+        up[0] += t[0] as i128 * e;
+        for m in 0..n {
+            if let Some(q) = slot(1, j + m) {
+                up[q] += t[1 + m] as i128 * e;
+            }
+        }
+        if let Some(q) = slot(2, j) {
+            up[q] += t[n + 1] as i128 * e;
+        }
+        for i in 2..=r {
+            let e = x[s.at(2 * i - 1, j)] as i128;
+            let w = &st[(i - 1).min(3) - 1];
+            let stencil = [
+                (i - 2, j),
+                (i - 1, j + n - 1),
+                (i - 1, j),
+                (i - 1, j + 1),
+                (i, j + 1),
+                (i, j),
+                (i, j + n - 1),
+                (i + 1, j),
+            ];
+            for (&wk, (ri, jj)) in w.iter().zip(stencil) {
+                if let Some(q) = slot(ri, jj).filter(|_| wk != 0) {
+                    up[q] += wk as i128 * e;
+                }
+            }
+        }
+    }
+    let mut apply = |at: usize, acc: i128| {
+        let u = round_div(acc, 1 << 16);
+        x[at] = if analysis {
+            x[at].wrapping_sub(u)
+        } else {
+            x[at].wrapping_add(u)
+        };
+    };
+    apply(s.pole, up[0]);
+    for i in 1..r {
+        for j in 0..n {
+            apply(s.at(2 * i, j), up[1 + (i - 1) * n + j]);
+        }
+    }
+}
+
 /// Radial analysis with the seam (the last fine ring) fixed.
-fn radial_analysis(x: &mut [i64], s: &Spokes<'_>) {
+fn radial_analysis(x: &mut [i64], s: &Spokes<'_>, lifted: bool) {
     let n = s.n();
     let r = s.rings.len() / 2; // coarse rings, the last one the seam
     let e = |x: &[i64], i: usize, j: usize| x[s.at(2 * i - 1, j)] as i128;
@@ -328,10 +455,16 @@ fn radial_analysis(x: &mut [i64], s: &Spokes<'_>) {
             x[at] = x[at].wrapping_sub(pred);
         }
     }
+    if lifted {
+        radial_lift(x, s, true);
+    }
 }
 
 /// The inverse of [`radial_analysis`].
-fn radial_synthesis(x: &mut [i64], s: &Spokes<'_>) {
+fn radial_synthesis(x: &mut [i64], s: &Spokes<'_>, lifted: bool) {
+    if lifted {
+        radial_lift(x, s, false);
+    }
     let n = s.n();
     let r = s.rings.len() / 2;
     let p = x[s.pole];
@@ -366,38 +499,34 @@ fn radial_synthesis(x: &mut [i64], s: &Spokes<'_>) {
 
 /// Analysis of one disc, in place (SPEC.md 9.9).
 pub fn analyse(disc: &Disc, d: DiscTransform, x: &mut [i64]) {
-    match d {
-        DiscTransform::None => {}
-        DiscTransform::LazyCircularFirst => {
-            for ring in &disc.rings {
-                circular_analysis(x, ring);
-            }
-            radial_analysis(x, &spokes(disc, 2));
+    let lifted = d.lifted();
+    if d == DiscTransform::None {
+    } else if d.radial_first() {
+        radial_analysis(x, &spokes(disc, 1), lifted);
+        for ring in disc.rings.iter().skip(1).step_by(2) {
+            circular_analysis(x, ring, lifted);
         }
-        DiscTransform::LazyRadialFirst => {
-            radial_analysis(x, &spokes(disc, 1));
-            for ring in disc.rings.iter().skip(1).step_by(2) {
-                circular_analysis(x, ring);
-            }
+    } else {
+        for ring in &disc.rings {
+            circular_analysis(x, ring, lifted);
         }
+        radial_analysis(x, &spokes(disc, 2), lifted);
     }
 }
 
 /// Synthesis of one disc, the exact inverse of [`analyse`].
 pub fn synthesise(disc: &Disc, d: DiscTransform, x: &mut [i64]) {
-    match d {
-        DiscTransform::None => {}
-        DiscTransform::LazyCircularFirst => {
-            radial_synthesis(x, &spokes(disc, 2));
-            for ring in disc.rings.iter().rev() {
-                circular_synthesis(x, ring);
-            }
+    let lifted = d.lifted();
+    if d == DiscTransform::None {
+    } else if d.radial_first() {
+        for ring in disc.rings.iter().skip(1).step_by(2) {
+            circular_synthesis(x, ring, lifted);
         }
-        DiscTransform::LazyRadialFirst => {
-            for ring in disc.rings.iter().skip(1).step_by(2) {
-                circular_synthesis(x, ring);
-            }
-            radial_synthesis(x, &spokes(disc, 1));
+        radial_synthesis(x, &spokes(disc, 1), lifted);
+    } else {
+        radial_synthesis(x, &spokes(disc, 2), lifted);
+        for ring in disc.rings.iter().rev() {
+            circular_synthesis(x, ring, lifted);
         }
     }
 }
@@ -416,7 +545,7 @@ mod tests {
     use crate::hierarchy::Topo;
 
     #[test]
-    fn the_frozen_gamma_table_is_the_reference_solvers() {
+    fn the_frozen_tables_are_the_reference_solvers() {
         for (i, row) in tables::GAMMA.iter().enumerate() {
             let n = i + tables::GAMMA_MIN;
             let want = crate::polar::gamma_fixed(n);
@@ -426,7 +555,11 @@ mod tests {
                 "n = {n}"
             );
             assert_eq!(want.iter().sum::<i64>(), 1 << 15);
+            let (t, s) = crate::polar::radial_weights_fixed(n);
+            assert_eq!(tables::LIFT_T[i], &t[..], "t, n = {n}");
+            assert_eq!(tables::LIFT_S[i], s, "s, n = {n}");
         }
+        assert_eq!(tables::LIFT_W, crate::polar::circular_weights_fixed());
     }
 
     /// A lat-long sphere with poles 0 and 1, refined `levels` times by the polar rule.
@@ -457,10 +590,7 @@ mod tests {
         let levels = sphere_levels(5, 6, 3);
         let mut s = 12345u64;
         for (index, level) in levels.iter().enumerate() {
-            for d in [
-                DiscTransform::LazyCircularFirst,
-                DiscTransform::LazyRadialFirst,
-            ] {
+            for d in DiscTransform::ALL.into_iter().skip(1) {
                 let (discs, owned) = discs(level, &[0, 1], index as u32, d);
                 assert_eq!(discs.len(), 2, "level {index}");
                 let rings = 1usize << index;
@@ -495,6 +625,52 @@ mod tests {
                     assert_eq!(x, x0, "level {index}, {d:?}, {bits} bits");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn lifting_keeps_noise_out_of_the_coarse_values() {
+        // The paper's stability property in kind, on the integer transforms: noise on a
+        // constant surface reaches a disc's coarse values (pole and inner rings) much
+        // weaker with lifting than without (the lazy wavelet's x2 and x8/5 amplify it).
+        let levels = sphere_levels(8, 8, 3);
+        let level = &levels[2];
+        let mut s = 99u64;
+        let x0: Vec<i64> = (0..level.fine_nv())
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                1_000_000 + (s % 2001) as i64 - 1000
+            })
+            .collect();
+        let rms = |d: DiscTransform| {
+            let (discs, _) = discs(level, &[0, 1], 2, d);
+            let mut x = x0.clone();
+            let (mut sum, mut count) = (0.0, 0.0);
+            for disc in &discs {
+                analyse(disc, d, &mut x);
+                let r = disc.rings.len() / 2;
+                let inner = (1..r).flat_map(|i| disc.rings[2 * i - 1].iter().step_by(2));
+                for &v in std::iter::once(&disc.pole).chain(inner) {
+                    sum += ((x[v as usize] - 1_000_000) as f64).powi(2);
+                    count += 1.0;
+                }
+            }
+            (sum / count).sqrt()
+        };
+        for (lazy, lifted) in [
+            (
+                DiscTransform::LazyCircularFirst,
+                DiscTransform::LiftedCircularFirst,
+            ),
+            (
+                DiscTransform::LazyRadialFirst,
+                DiscTransform::LiftedRadialFirst,
+            ),
+        ] {
+            let (a, b) = (rms(lazy), rms(lifted));
+            assert!(b < 0.6 * a, "{lazy:?} {a} vs {lifted:?} {b}");
         }
     }
 
