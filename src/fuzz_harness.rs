@@ -148,6 +148,11 @@ pub fn roundtrip_mesh(data: &[u8]) {
             _ => TransformChoice::Fixed(all[w - 2]),
         },
         max_levels: b.below(17) as u8,
+        value_map: match b.below(3) {
+            0 => None,
+            1 => Some(true),
+            _ => Some(false),
+        },
         ..Default::default()
     };
     let q = Quantization::Decimal { decimals: 0 };

@@ -30,7 +30,7 @@ pub use subwave_codec::io::{read_mesh, write_mesh, Format, RawMesh};
 pub use subwave_codec::{
     decode, encode, inspect, DecodeOptions, Decoded, DiscTransform, EncodeOptions, Encoded, Error,
     Family, FloatWidth, Header, Info, Limits, Mesh, Quantization, RawCoords, Result, SectionInfo,
-    Source, Transform, TransformChoice, Wavelet, FORMAT_VERSION, MAX_COORD,
+    Source, Transform, TransformChoice, ValueMap, Wavelet, FORMAT_VERSION, MAX_COORD,
 };
 
 /// A mesh file read and turned into integers.

@@ -82,6 +82,7 @@ fn frozen_containers_still_decode() {
         ("sphere_polar3.disc.v8.swv", "sphere_polar3.obj"),
         ("subdivided_cc3.v9.swv", "subdivided_cc3.obj"),
         ("sphere_polar3.lifted.v10.swv", "sphere_polar3.obj"),
+        ("terrain_grid33.vmap.v11.swv", "terrain_grid33.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);
@@ -95,7 +96,8 @@ fn frozen_containers_still_decode() {
             let m = subwave::load(&source, None).unwrap();
             // A ".flat." container is coded without levels (the flat path), a ".disc."
             // one with the lazy polar wavelet in its discs (radial first), a ".lifted."
-            // one with the lifted polar wavelet (circular first).
+            // one with the lifted polar wavelet (circular first), a ".vmap." one with
+            // every axis's value map.
             let enc = subwave::encode_to_vec(
                 &m.mesh,
                 &m.quantization,
@@ -110,6 +112,7 @@ fn frozen_containers_still_decode() {
                     } else {
                         None
                     },
+                    value_map: swv.contains(".vmap.").then_some(true),
                     ..Default::default()
                 },
             )

@@ -64,6 +64,10 @@ enum Command {
         /// wavelet, circular first) or lifted-radial (radial first).
         #[arg(long, default_value = "auto", value_parser = parse_disc)]
         polar_disc: DiscArg,
+        /// Per-axis value maps: auto (map the axes whose values are sparse in their
+        /// range when that makes the file smaller), on (map every axis) or off.
+        #[arg(long, default_value = "auto", value_parser = parse_value_map)]
+        value_map: ValueMapArg,
     },
     /// Decompress a .swv container into a mesh file.
     #[command(after_help = EXAMPLES)]
@@ -106,6 +110,9 @@ enum Command {
         /// Polar hierarchies' disc transform (as for compress).
         #[arg(long, default_value = "auto", value_parser = parse_disc)]
         polar_disc: DiscArg,
+        /// Per-axis value maps (as for compress).
+        #[arg(long, default_value = "auto", value_parser = parse_value_map)]
+        value_map: ValueMapArg,
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
@@ -140,6 +147,21 @@ fn parse_disc(s: &str) -> Result<DiscArg, String> {
         "lifted-radial" => Ok(DiscArg(Some(D::LiftedRadialFirst))),
         _ => Err(format!(
             "unknown polar disc transform '{s}'; use auto, none, lazy, lazy-radial, lifted or lifted-radial"
+        )),
+    }
+}
+
+/// `--value-map`: on, off, or none for auto.
+#[derive(Clone, Copy)]
+struct ValueMapArg(Option<bool>);
+
+fn parse_value_map(s: &str) -> Result<ValueMapArg, String> {
+    match s {
+        "auto" => Ok(ValueMapArg(None)),
+        "on" => Ok(ValueMapArg(Some(true))),
+        "off" => Ok(ValueMapArg(Some(false))),
+        _ => Err(format!(
+            "unknown value map choice '{s}'; use auto, on or off"
         )),
     }
 }
@@ -258,6 +280,7 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
             transform,
             levels,
             polar_disc,
+            value_map,
         } => {
             let progress = Progress::new();
             progress.stage("reading");
@@ -271,6 +294,7 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
                 transform: *transform,
                 max_levels: *levels,
                 disc: polar_disc.0,
+                value_map: value_map.0,
             };
             let enc = subwave::encode_to_vec(&loaded.mesh, &loaded.quantization, &opts)
                 .map_err(|e| fail(input, e))?;
@@ -334,12 +358,14 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
             transform,
             levels,
             polar_disc,
+            value_map,
             json,
         } => {
             let opts = EncodeOptions {
                 transform: *transform,
                 max_levels: *levels,
                 disc: polar_disc.0,
+                value_map: value_map.0,
                 ..Default::default()
             };
             verify(cli, input, *bits, &opts, *json)
@@ -391,6 +417,7 @@ fn print_info(info: &subwave::Info, as_json: bool) {
             },
             "quantization": quant_json(&h.quantization),
             "keep_order": h.has_order,
+            "value_map": h.has_value_map,
             "sections": info.sections.iter().map(|s| match s.mode {
                 Some(m) => json!({"kind": s.kind, "bytes": s.bytes, "mode": m}),
                 None => json!({"kind": s.kind, "bytes": s.bytes}),
@@ -426,6 +453,9 @@ fn print_info(info: &subwave::Info, as_json: bool) {
         t => println!("transform       {}", t.name()),
     }
     println!("quantisation    {}", h.quantization.describe());
+    if h.has_value_map {
+        println!("value map       yes: coordinates coded as ranks of their axis's values");
+    }
     println!(
         "vertex order    {}",
         if h.has_order {

@@ -139,6 +139,8 @@ pub struct Header {
     pub source: Source,
     /// Whether an ORDR section restores the input vertex order.
     pub has_order: bool,
+    /// A `VMAP` section follows the header (SPEC.md 3.1, version 11 on).
+    pub has_value_map: bool,
     /// Polar hierarchies (family 3): the base mesh's poles, increasing (SPEC.md 8.6);
     /// empty for every other family.
     pub poles: Vec<u32>,
@@ -148,6 +150,7 @@ pub struct Header {
 }
 
 const FLAG_ORDER: u64 = 1;
+const FLAG_VALUE_MAP: u64 = 2;
 /// The transform code of the subdivision fit (format 9 on).
 const FIT_CODE: u8 = 9;
 
@@ -194,7 +197,14 @@ impl Header {
             }
         }
         w.u8(self.source.code());
-        w.varint(if self.has_order { FLAG_ORDER } else { 0 });
+        w.varint(
+            if self.has_order { FLAG_ORDER } else { 0 }
+                | if self.has_value_map {
+                    FLAG_VALUE_MAP
+                } else {
+                    0
+                },
+        );
         if self.family == Family::Polar {
             w.varint(self.poles.len() as u64);
             let mut prev = 0u64;
@@ -328,7 +338,12 @@ impl Header {
         let source = Source::from_code(r.u8("source format")?);
         let at = r.offset();
         let flags = r.varint("flags")?;
-        if flags & !FLAG_ORDER != 0 {
+        let known = if version >= 11 {
+            FLAG_ORDER | FLAG_VALUE_MAP
+        } else {
+            FLAG_ORDER
+        };
+        if flags & !known != 0 {
             return Err(Error::Unsupported(format!(
                 "header flags {flags:#x} (byte {at})"
             )));
@@ -378,6 +393,7 @@ impl Header {
             quantization,
             source,
             has_order: flags & FLAG_ORDER != 0,
+            has_value_map: flags & FLAG_VALUE_MAP != 0,
             poles,
             disc,
         };

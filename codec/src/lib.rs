@@ -20,6 +20,7 @@ pub mod polar;
 pub mod quant;
 pub mod sqrt2;
 pub mod transform;
+pub mod vmap;
 
 pub use discs::DiscTransform;
 pub use error::{Error, Result};
@@ -28,6 +29,7 @@ pub use mesh::{Mesh, MAX_COORD};
 pub use quant::{FloatWidth, Quantization, RawCoords};
 pub use subwave_container::{Limits, FORMAT_VERSION};
 pub use transform::Wavelet;
+pub use vmap::ValueMap;
 
 use std::collections::HashMap;
 
@@ -60,6 +62,10 @@ pub struct EncodeOptions {
     /// Polar hierarchies: the transform of the poles' discs (SPEC.md 9.9); `None` tries
     /// each with the best Catmull-Clark transform and keeps the smallest.
     pub disc: Option<DiscTransform>,
+    /// Per-axis value maps (SPEC.md 3.1): `None` tries the sparse axes' map beside no
+    /// map and keeps the smaller container, `Some(true)` maps every axis, `Some(false)`
+    /// none.
+    pub value_map: Option<bool>,
 }
 
 impl Default for EncodeOptions {
@@ -70,6 +76,7 @@ impl Default for EncodeOptions {
             transform: TransformChoice::Auto,
             max_levels: 16,
             disc: None,
+            value_map: None,
         }
     }
 }
@@ -143,6 +150,7 @@ fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Header {
         quantization: *q,
         source: opts.source,
         has_order: opts.keep_order,
+        has_value_map: false,
         poles: Vec::new(),
         disc: DiscTransform::None,
     }
@@ -371,10 +379,44 @@ fn canonical_positions(mesh: &Mesh, canon: &Canonical) -> [Vec<i64>; 3] {
 }
 
 /// Encodes an integer mesh whose values map to the file's through `q`: as a
-/// Catmull-Clark hierarchy when one is found, else flat.
+/// Catmull-Clark, sqrt(2) or polar hierarchy when one is found, else flat; with the
+/// value map of `opts.value_map` (SPEC.md 3.1) when it makes the container smaller.
 pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Encoded> {
     mesh.validate()?;
-    let flat_h = flat_header(mesh, q, opts);
+    let map = match opts.value_map {
+        Some(false) => None,
+        Some(true) => ValueMap::every_axis(&mesh.positions),
+        None => ValueMap::candidate(&mesh.positions),
+    };
+    let Some(map) = map else {
+        return encode_with(mesh, q, opts, None);
+    };
+    let ranked = Mesh {
+        positions: map.ranks(&mesh.positions),
+        face_starts: mesh.face_starts.clone(),
+        faces: mesh.faces.clone(),
+    };
+    let mapped = encode_with(&ranked, q, opts, Some(&map))?;
+    if opts.value_map == Some(true) {
+        return Ok(mapped);
+    }
+    let plain = encode_with(mesh, q, opts, None)?;
+    Ok(if mapped.bytes.len() < plain.bytes.len() {
+        mapped
+    } else {
+        plain
+    })
+}
+
+/// [`encode`] with a given value map (`mesh` holding the ranks on its mapped axes).
+fn encode_with(
+    mesh: &Mesh,
+    q: &Quantization,
+    opts: &EncodeOptions,
+    vmap: Option<&ValueMap>,
+) -> Result<Encoded> {
+    let mut flat_h = flat_header(mesh, q, opts);
+    flat_h.has_value_map = vmap.is_some();
     let mut topo = Topo::new(mesh.vertex_count());
     topo.idx = mesh.faces.clone();
     topo.starts = mesh.face_starts.clone();
@@ -531,6 +573,9 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
         Ok(())
     };
     put(&mut w, SectionKind::HEADER, &header.write())?;
+    if let Some(m) = vmap {
+        put(&mut w, SectionKind::VALUE_MAP, &m.encode())?;
+    }
     put(&mut w, SectionKind::BASE, &payloads.base)?;
     for l in &payloads.levels {
         put(&mut w, SectionKind::LEVEL, l)?;
@@ -643,7 +688,11 @@ fn layout(c: &Container<'_>, limits: &Limits, whole: bool) -> Result<Header> {
         limits,
         c.version,
     )?;
-    let mut expected = vec![(SectionKind::BASE, "base mesh")];
+    let mut expected = Vec::new();
+    if h.has_value_map {
+        expected.push((SectionKind::VALUE_MAP, "value map"));
+    }
+    expected.push((SectionKind::BASE, "base mesh"));
     expected.extend((0..h.levels).map(|_| (SectionKind::LEVEL, "level")));
     if h.has_order {
         expected.push((SectionKind::ORDER, "vertex order"));
@@ -685,6 +734,20 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
         }
         .into());
     }
+    // The value map (SPEC.md 3.1); the other sections then sit where they do without one.
+    let mut c = c;
+    let vmap = if h.has_value_map {
+        if c.sections.len() < 2 {
+            return Err(subwave_container::Error::Truncated {
+                what: "the value map section (VMAP) is missing".into(),
+            }
+            .into());
+        }
+        let s = c.sections.remove(1);
+        Some(ValueMap::decode(s.payload, h.vertices)?)
+    } else {
+        None
+    };
     let level = opts.max_level.map_or(h.levels, |k| k.min(h.levels));
     // Sections needed: header, base, `level` levels.
     let needed = 2 + level as usize;
@@ -716,6 +779,9 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
         Transform::Fit { bits } => synthesise_fit(&c, &h, base, bits, level)?,
         Transform::None => return Err(Error::Unsupported("levels without a transform".into())),
     };
+    if let Some(m) = &vmap {
+        m.values(&mut mesh.positions, level == h.levels)?;
+    }
     let mut input_order = false;
     if h.has_order && level == h.levels {
         if let Some(s) = c.sections.get(2 + h.levels as usize) {

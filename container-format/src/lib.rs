@@ -29,7 +29,7 @@ use std::fmt;
 pub const MAGIC: [u8; 8] = [0x89, b'S', b'W', b'V', b'\r', b'\n', 0x1a, b'\n'];
 
 /// The format version this crate writes and the newest it reads.
-pub const FORMAT_VERSION: u16 = 10;
+pub const FORMAT_VERSION: u16 = 11;
 
 /// Bytes before the first section: magic, version, reserved.
 pub const PREAMBLE_LEN: usize = 12;
@@ -105,6 +105,8 @@ impl SectionKind {
     pub const HEADER: SectionKind = SectionKind(*b"HEAD");
     /// The base mesh: connectivity and positions.
     pub const BASE: SectionKind = SectionKind(*b"BASE");
+    /// Per-axis value maps (version 11 on).
+    pub const VALUE_MAP: SectionKind = SectionKind(*b"VMAP");
     /// One refinement level's coefficients.
     pub const LEVEL: SectionKind = SectionKind(*b"LEVL");
     /// The permutation back to the input's vertex order.
