@@ -83,6 +83,8 @@ fn frozen_containers_still_decode() {
         ("subdivided_cc3.v9.swv", "subdivided_cc3.obj"),
         ("sphere_polar3.lifted.v10.swv", "sphere_polar3.obj"),
         ("terrain_grid33.vmap.v11.swv", "terrain_grid33.obj"),
+        ("cube_cc4.v12.swv", "cube_cc4.obj"),
+        ("terrain_grid33.vmap.v12.swv", "terrain_grid33.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

@@ -19,9 +19,13 @@ const ONE: u32 = 1 << PRECISION;
 const INCREMENT: u32 = 24;
 /// Counts are halved when their sum passes this.
 const MAX_TOTAL: u32 = 1 << 16;
-/// The quantised table is rebuilt after 8, 16, 32, ... symbols, then every 512.
-const FIRST_PERIOD: u32 = 8;
+/// Format 12 on: the quantised table is rebuilt after 1, 2, 4, ... symbols, then every
+/// 512; formats 1 to 11 start at 8 (SPEC.md 4.2).
+const FIRST_PERIOD: u32 = 1;
+const LEGACY_FIRST_PERIOD: u32 = 8;
 const MAX_PERIOD: u32 = 512;
+/// First format whose models start with [`FIRST_PERIOD`].
+pub const FAST_START_VERSION: u16 = 12;
 
 /// An adaptive distribution over `0..n` (SPEC.md 4.2).
 #[derive(Debug, Clone)]
@@ -35,18 +39,46 @@ pub struct AdaptiveModel {
 }
 
 impl AdaptiveModel {
-    /// A model over `n` symbols (2 <= n <= 4096), all counts 1.
+    /// A model over `n` symbols (2 <= n <= 4096), all counts 1, as the current format
+    /// defines it.
     pub fn new(n: usize) -> Self {
+        Self::for_version(n, FAST_START_VERSION)
+    }
+
+    /// A model over `n` symbols as format `version` defines it: the first rebuild comes
+    /// after one symbol from format 12 on, after eight before.
+    pub fn for_version(n: usize, version: u16) -> Self {
         assert!((2..=4096).contains(&n), "alphabet size {n} out of range");
+        let first = if version >= FAST_START_VERSION {
+            FIRST_PERIOD
+        } else {
+            LEGACY_FIRST_PERIOD
+        };
         let mut m = AdaptiveModel {
             counts: vec![1; n],
             total: n as u32,
             cum: vec![0; n + 1],
-            until_rebuild: FIRST_PERIOD,
-            period: FIRST_PERIOD,
+            until_rebuild: first,
+            period: first,
         };
         m.rebuild();
         m
+    }
+
+    /// Keeps what the model has learnt as the prior of a new stretch of data (format 12
+    /// on, SPEC.md 4.2): counts are halved (rounding up) until their sum is at most
+    /// `max_total`, the table is rebuilt and the rebuild period starts again at 1.
+    pub fn reseed(&mut self, max_total: u32) {
+        while self.total > max_total {
+            self.total = 0;
+            for c in &mut self.counts {
+                *c = (*c + 1) >> 1;
+                self.total += *c;
+            }
+        }
+        self.rebuild();
+        self.period = FIRST_PERIOD;
+        self.until_rebuild = FIRST_PERIOD;
     }
 
     /// Alphabet size.
@@ -232,22 +264,40 @@ impl Default for IntModel {
 impl IntModel {
     /// A fresh model of the current format.
     pub fn new() -> Self {
-        IntModel(IntKind::Joint {
-            sym: AdaptiveModel::new(JOINT_SYMBOLS),
-            big: AdaptiveModel::new(INT_CLASSES),
-        })
+        Self::for_version(FAST_START_VERSION)
     }
 
     /// A fresh model as format `version` defines it.
     pub fn for_version(version: u16) -> Self {
+        let v = version;
         if version >= 4 {
-            Self::new()
+            IntModel(IntKind::Joint {
+                sym: AdaptiveModel::for_version(JOINT_SYMBOLS, v),
+                big: AdaptiveModel::for_version(INT_CLASSES, v),
+            })
         } else {
             IntModel(IntKind::Split {
-                class: AdaptiveModel::new(INT_CLASSES),
-                sign: AdaptiveModel::new(2),
-                top: (0..INT_CLASSES).map(|_| AdaptiveModel::new(2)).collect(),
+                class: AdaptiveModel::for_version(INT_CLASSES, v),
+                sign: AdaptiveModel::for_version(2, v),
+                top: (0..INT_CLASSES)
+                    .map(|_| AdaptiveModel::for_version(2, v))
+                    .collect(),
             })
+        }
+    }
+
+    /// [`AdaptiveModel::reseed`] on every model inside.
+    pub fn reseed(&mut self, max_total: u32) {
+        match &mut self.0 {
+            IntKind::Joint { sym, big } => {
+                sym.reseed(max_total);
+                big.reseed(max_total);
+            }
+            IntKind::Split { class, sign, top } => {
+                class.reseed(max_total);
+                sign.reseed(max_total);
+                top.iter_mut().for_each(|t| t.reseed(max_total));
+            }
         }
     }
 }
@@ -591,6 +641,60 @@ mod tests {
             assert_eq!(m.cum[40], ONE);
             assert!(m.cum.windows(2).all(|w| w[1] > w[0]));
         }
+    }
+
+    fn width(m: &AdaptiveModel, s: usize) -> u32 {
+        m.cum[s + 1] - m.cum[s]
+    }
+
+    #[test]
+    fn format_12_models_learn_from_the_first_symbol() {
+        let mut fast = AdaptiveModel::for_version(10, 12);
+        let mut slow = AdaptiveModel::for_version(10, 11);
+        let uniform = width(&fast, 3);
+        assert_eq!(uniform, width(&slow, 3));
+        fast.update(3);
+        slow.update(3);
+        // One symbol: the format-12 table has learnt it, the format-11 one not yet.
+        assert!(width(&fast, 3) > 4 * uniform, "{}", width(&fast, 3));
+        assert_eq!(width(&slow, 3), uniform);
+        for _ in 0..7 {
+            slow.update(3);
+        }
+        assert!(width(&slow, 3) > 4 * uniform);
+    }
+
+    #[test]
+    fn reseeding_scales_counts_down_and_keeps_the_shape() {
+        let mut m = AdaptiveModel::new(6);
+        for i in 0..5_000usize {
+            m.update(if i % 10 == 0 { 5 } else { 1 });
+        }
+        let before = (width(&m, 1), width(&m, 5));
+        m.reseed(1024);
+        assert!(m.total <= 1024 && m.total > 512, "{}", m.total);
+        assert_eq!(m.total, m.counts.iter().sum::<u32>());
+        assert_eq!(m.cum[6], ONE);
+        assert!(m.cum.windows(2).all(|w| w[1] > w[0]));
+        // Still mostly 1, then 5; the halving rounds small counts up, so close, not equal.
+        let after = (width(&m, 1), width(&m, 5));
+        assert!(
+            after.0.abs_diff(before.0) < ONE / 50,
+            "{before:?} {after:?}"
+        );
+        assert!(
+            after.1.abs_diff(before.1) < ONE / 50,
+            "{before:?} {after:?}"
+        );
+        // Adapts at once again: one symbol of 3 rebuilds the table.
+        let w3 = width(&m, 3);
+        m.update(3);
+        assert!(width(&m, 3) > w3);
+        // A fresh model is left as it is.
+        let mut fresh = AdaptiveModel::new(6);
+        let cum = fresh.cum.clone();
+        fresh.reseed(1024);
+        assert_eq!(fresh.cum, cum);
     }
 
     #[test]

@@ -167,12 +167,12 @@ impl ConnModels {
     fn new(version: u16) -> Self {
         ConnModels {
             degree: (0..DEGREE_SYMBOLS)
-                .map(|_| AdaptiveModel::new(DEGREE_SYMBOLS))
+                .map(|_| AdaptiveModel::for_version(DEGREE_SYMBOLS, version))
                 .collect(),
             big_degree: IntModel::for_version(version),
             corner: [
-                AdaptiveModel::new(CORNER_SYMBOLS),
-                AdaptiveModel::new(CORNER_SYMBOLS),
+                AdaptiveModel::for_version(CORNER_SYMBOLS, version),
+                AdaptiveModel::for_version(CORNER_SYMBOLS, version),
             ],
             distance: IntModel::for_version(version),
         }

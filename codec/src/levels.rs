@@ -35,7 +35,42 @@ fn prev_bin(c: usize) -> usize {
     }
 }
 
+#[derive(Clone)]
 struct Models(Vec<IntModel>);
+
+/// From format 12 a level's models start from the previous level's, counts halved
+/// until they sum to at most this (SPEC.md 10.2).
+const SEED_TOTAL: u32 = 1024;
+
+/// The detail models carried from level to level (SPEC.md 10.2): formats 1 to 11 start
+/// every level afresh, format 12 on starts each from what the previous level learnt.
+pub struct LevelModels {
+    version: u16,
+    last: Option<Models>,
+}
+
+impl LevelModels {
+    /// Models for a hierarchy's first level, as format `version` defines them.
+    pub fn new(version: u16) -> Self {
+        LevelModels {
+            version,
+            last: None,
+        }
+    }
+
+    fn start(&self) -> Models {
+        match &self.last {
+            Some(m) if self.version >= crate::coder::FAST_START_VERSION => {
+                let mut m = m.clone();
+                for im in &mut m.0 {
+                    im.reseed(SEED_TOTAL);
+                }
+                m
+            }
+            _ => Models::new(self.version),
+        }
+    }
+}
 
 impl Models {
     fn new(version: u16) -> Self {
@@ -259,29 +294,35 @@ pub fn encode(
     x: &[Vec<i64>; 3],
     coarse: &[Vec<i64>; 3],
     act: &mut Vec<u8>,
-    version: u16,
+    models: &mut LevelModels,
     targets: Option<&[[i64; 3]]>,
 ) -> Vec<u8> {
+    let version = models.version;
     if version < 3 {
-        return encode_mode(level, sqrt2, x, coarse, act, Mode::Plain, version)
+        let mut m = models.start();
+        let body = encode_mode(level, sqrt2, x, coarse, act, Mode::Plain, &mut m)
             .expect("plain details are in range");
+        models.last = Some(m);
+        return body;
     }
     let mut modes = vec![Mode::Plain, Mode::Framed];
     if let Some(t) = targets.filter(|_| version >= 7) {
         modes.push(Mode::Tangent(t));
     }
-    let mut best: Option<(u8, Vec<u8>, Vec<u8>)> = None;
+    let mut best: Option<(u8, Vec<u8>, Vec<u8>, Models)> = None;
     for mode in modes {
         let mut a = act.clone();
-        let Some(body) = encode_mode(level, sqrt2, x, coarse, &mut a, mode, version) else {
+        let mut m = models.start();
+        let Some(body) = encode_mode(level, sqrt2, x, coarse, &mut a, mode, &mut m) else {
             continue;
         };
         if best.as_ref().is_none_or(|b| body.len() < b.1.len()) {
-            best = Some((mode.byte(), body, a));
+            best = Some((mode.byte(), body, a, m));
         }
     }
-    let (mode, body, a) = best.expect("at least one mode");
+    let (mode, body, a, m) = best.expect("at least one mode");
     *act = a;
+    models.last = Some(m);
     let mut out = Vec::with_capacity(body.len() + 1);
     out.push(mode);
     out.extend_from_slice(&body);
@@ -328,11 +369,10 @@ fn encode_mode(
     coarse: &[Vec<i64>; 3],
     act: &mut Vec<u8>,
     mode: Mode<'_>,
-    version: u16,
+    m: &mut Models,
 ) -> Option<Vec<u8>> {
     let framed = mode.framed();
     let mut enc = Encoder::new();
-    let mut m = Models::new(version);
     let (nv, nd) = (level.nv, details(level, sqrt2));
     act.resize(nv + nd, 0);
     let normals = if framed {
@@ -354,7 +394,7 @@ fn encode_mode(
                 return None;
             }
         }
-        put(&mut enc, &mut m, class, nbr, d, fr);
+        put(&mut enc, m, class, nbr, d, fr);
         act[nv + i] = activity(d);
     }
     Some(enc.finish())
@@ -367,9 +407,10 @@ pub fn decode(
     sqrt2: bool,
     x: &mut [Vec<i64>; 3],
     act: &mut Vec<u8>,
-    version: u16,
+    models: &mut LevelModels,
     targets: Option<&[[i64; 3]]>,
 ) -> Result<()> {
+    let version = models.version;
     let (nv, nd) = (level.nv, details(level, sqrt2));
     // Density bound (SPEC.md 2.6), checked before the level's arrays are sized.
     if nd as u64 > 2048 * (payload.len() as u64 + 8) {
@@ -399,7 +440,7 @@ pub fn decode(
     };
     let framed = mode.framed();
     let mut dec = Decoder::new(payload, "LEVL")?;
-    let mut m = Models::new(version);
+    let mut m = models.start();
     act.resize(nv + nd, 0);
     let normals = if framed {
         face_normals(level, x)
@@ -431,5 +472,6 @@ pub fn decode(
         }
         act[nv + i] = activity(r);
     }
+    models.last = Some(m);
     Ok(())
 }

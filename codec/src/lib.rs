@@ -211,21 +211,14 @@ fn code_hierarchy(
     }
     let (mut header, base_bytes) = hierarchy_base(canon, &x, header);
     let mut act = vec![levels::UNKNOWN; canon.base.nv];
+    let mut models = levels::LevelModels::new(FORMAT_VERSION);
     let level_bytes = canon
         .levels
         .iter()
         .zip(&coarse)
         .zip(&targets)
         .map(|((l, c), t)| {
-            levels::encode(
-                l,
-                canon.sqrt2,
-                &x,
-                c,
-                &mut act,
-                FORMAT_VERSION,
-                t.as_deref(),
-            )
+            levels::encode(l, canon.sqrt2, &x, c, &mut act, &mut models, t.as_deref())
         })
         .collect();
     header.disc = if canon.poles.is_empty() {
@@ -329,7 +322,7 @@ fn code_fit(
             }
         }
         let mut level_bytes = vec![Vec::new(); canon.levels.len() - 1];
-        level_bytes.push(fit::encode_residuals(&x, pos, b));
+        level_bytes.push(fit::encode_residuals(&x, pos, b, FORMAT_VERSION));
         h.transform = Transform::Fit { bits: b };
         let p = Payloads {
             header: h,
@@ -744,7 +737,7 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
             .into());
         }
         let s = c.sections.remove(1);
-        Some(ValueMap::decode(s.payload, h.vertices)?)
+        Some(ValueMap::decode(s.payload, h.vertices, c.version)?)
     } else {
         None
     };
@@ -844,6 +837,7 @@ fn synthesise_levels(
     let mut x: [Vec<i64>; 3] =
         std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect());
     let mut act = vec![levels::UNKNOWN; topo.nv];
+    let mut models = levels::LevelModels::new(c.version);
     let is_sqrt2 = h.family == Family::Sqrt2;
     // Polar hierarchies: which vertices are poles (the same at every level, SPEC.md 8.6);
     // every face at a pole must be a triangle.
@@ -904,7 +898,7 @@ fn synthesise_levels(
             is_sqrt2,
             &mut x,
             &mut act,
-            c.version,
+            &mut models,
             targets.as_deref(),
         )?;
         if is_sqrt2 {
@@ -1004,7 +998,7 @@ fn synthesise_fit(c: &Container<'_>, h: &Header, base: Mesh, bits: u8, upto: u8)
     if upto == h.levels {
         check_finest_counts(h, &topo)?;
         let payload = c.sections[1 + upto as usize].payload;
-        fit::decode_residuals(payload, &mut x, bits, MAX_COORD)?;
+        fit::decode_residuals(payload, &mut x, bits, MAX_COORD, c.version)?;
     } else {
         // A coarser level: the control mesh's refinement, rounded to the grid.
         let half = (1i64 << bits) >> 1;

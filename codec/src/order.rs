@@ -67,9 +67,12 @@ impl Unused {
 }
 
 /// Codes a permutation `order[new] = old` of `0..order.len()` (SPEC.md 7.1).
-pub fn put_perm(e: &mut Encoder, order: &[u32]) {
+pub fn put_perm(e: &mut Encoder, order: &[u32], version: u16) {
     let n = order.len();
-    let mut run = [AdaptiveModel::new(2), AdaptiveModel::new(2)];
+    let mut run = [
+        AdaptiveModel::for_version(2, version),
+        AdaptiveModel::for_version(2, version),
+    ];
     let mut unused = Unused::new(n);
     let mut prev: i64 = -1;
     let mut prev_hit = 0usize;
@@ -86,8 +89,11 @@ pub fn put_perm(e: &mut Encoder, order: &[u32]) {
 }
 
 /// Decodes a permutation of `0..n` and checks it is one.
-pub fn get_perm(d: &mut Decoder, n: usize) -> Result<Vec<u32>> {
-    let mut run = [AdaptiveModel::new(2), AdaptiveModel::new(2)];
+pub fn get_perm(d: &mut Decoder, n: usize, version: u16) -> Result<Vec<u32>> {
+    let mut run = [
+        AdaptiveModel::for_version(2, version),
+        AdaptiveModel::for_version(2, version),
+    ];
     let mut unused = Unused::new(n);
     let mut used = vec![false; n];
     let mut out = Vec::with_capacity(n);
@@ -128,8 +134,8 @@ pub struct InputOrder {
 /// Codes the ORDR section of format 2 (SPEC.md 7).
 pub fn encode(o: &InputOrder, version: u16) -> Vec<u8> {
     let mut e = Encoder::new();
-    put_perm(&mut e, &o.vertices);
-    put_perm(&mut e, &o.faces);
+    put_perm(&mut e, &o.vertices, version);
+    put_perm(&mut e, &o.faces, version);
     let mut m = IntModel::for_version(version);
     for &r in &o.rotations {
         e.int(&mut m, r as i64);
@@ -140,8 +146,8 @@ pub fn encode(o: &InputOrder, version: u16) -> Vec<u8> {
 /// Decodes a format-2 ORDR section; `degrees[c]` is canonical face c's degree.
 pub fn decode(payload: &[u8], nv: usize, degrees: &[u32], version: u16) -> Result<InputOrder> {
     let mut d = Decoder::new(payload, SECTION)?;
-    let vertices = get_perm(&mut d, nv)?;
-    let faces = get_perm(&mut d, degrees.len())?;
+    let vertices = get_perm(&mut d, nv, version)?;
+    let faces = get_perm(&mut d, degrees.len(), version)?;
     let mut m = IntModel::for_version(version);
     let mut rotations = Vec::with_capacity(degrees.len());
     for &k in degrees {
@@ -161,7 +167,7 @@ pub fn decode(payload: &[u8], nv: usize, degrees: &[u32], version: u16) -> Resul
 /// Decodes a format-1 ORDR section: the vertex permutation alone.
 pub fn decode_v1(payload: &[u8], nv: usize) -> Result<Vec<u32>> {
     let mut d = Decoder::new(payload, SECTION)?;
-    get_perm(&mut d, nv)
+    get_perm(&mut d, nv, 1)
 }
 
 #[cfg(test)]

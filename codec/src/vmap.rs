@@ -110,7 +110,7 @@ impl ValueMap {
     /// Reads a VMAP payload of a mesh of `vertices` vertices, refusing (before
     /// allocating) more values than the mesh has or than the payload can hold
     /// (SPEC.md 2.6).
-    pub fn decode(payload: &[u8], vertices: u64) -> Result<ValueMap> {
+    pub fn decode(payload: &[u8], vertices: u64, version: u16) -> Result<ValueMap> {
         let mut d = Decoder::new(payload, SECTION)?;
         let mask = d.uniform(8)?;
         if mask == 0 {
@@ -122,8 +122,11 @@ impl ValueMap {
             if mask & (1 << k) == 0 {
                 continue;
             }
-            let (mut count, mut first, mut gaps) =
-                (IntModel::new(), IntModel::new(), IntModel::new());
+            let (mut count, mut first, mut gaps) = (
+                IntModel::for_version(version),
+                IntModel::for_version(version),
+                IntModel::for_version(version),
+            );
             let n = d.int(&mut count)?;
             if n < 0 || n as u64 >= vertices || n as u64 > 2048 * room {
                 return Err(Error::corrupt(
@@ -156,6 +159,7 @@ impl ValueMap {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use subwave_container::FORMAT_VERSION;
 
     #[test]
     fn a_sparse_axis_is_mapped_and_comes_back_exactly() {
@@ -169,7 +173,7 @@ mod tests {
         assert_eq!(m.axes[2].as_deref(), None, "a single value spans 1");
         let mut r = m.ranks(&pos);
         assert!(r.iter().all(|p| (0..10).contains(&p[1])));
-        let back = ValueMap::decode(&m.encode(), 50).unwrap();
+        let back = ValueMap::decode(&m.encode(), 50, FORMAT_VERSION).unwrap();
         assert_eq!(back, m);
         back.values(&mut r, true).unwrap();
         assert_eq!(r, pos);
@@ -186,7 +190,10 @@ mod tests {
         assert_eq!(ValueMap::candidate(&pos), None);
         let every = ValueMap::every_axis(&pos).unwrap();
         assert!(every.axes.iter().all(Option::is_some));
-        assert_eq!(ValueMap::decode(&every.encode(), 100).unwrap(), every);
+        assert_eq!(
+            ValueMap::decode(&every.encode(), 100, FORMAT_VERSION).unwrap(),
+            every
+        );
     }
 
     #[test]
@@ -195,9 +202,9 @@ mod tests {
             axes: [Some(vec![-5, 0, 9, MAX_COORD]), None, None],
         };
         let bytes = m.encode();
-        assert_eq!(ValueMap::decode(&bytes, 4).unwrap(), m);
+        assert_eq!(ValueMap::decode(&bytes, 4, FORMAT_VERSION).unwrap(), m);
         // More values than vertices.
-        assert!(ValueMap::decode(&bytes, 3).is_err());
+        assert!(ValueMap::decode(&bytes, 3, FORMAT_VERSION).is_err());
         // Values past the range, and out of order.
         for v in [vec![0, MAX_COORD + 1], vec![5, 3]] {
             let mut e = Encoder::new();
@@ -206,13 +213,16 @@ mod tests {
             e.int(&mut c, 1);
             e.int(&mut f, v[0]);
             e.int(&mut g, v[1] - v[0] - 1);
-            assert!(ValueMap::decode(&e.finish(), 10).is_err(), "{v:?}");
+            assert!(
+                ValueMap::decode(&e.finish(), 10, FORMAT_VERSION).is_err(),
+                "{v:?}"
+            );
         }
         // No axis; garbage; empty.
         let mut e = Encoder::new();
         e.uniform(0, 8);
-        assert!(ValueMap::decode(&e.finish(), 10).is_err());
-        assert!(ValueMap::decode(&[0xff; 7], 10).is_err());
-        let _ = ValueMap::decode(&[], 10);
+        assert!(ValueMap::decode(&e.finish(), 10, FORMAT_VERSION).is_err());
+        assert!(ValueMap::decode(&[0xff; 7], 10, FORMAT_VERSION).is_err());
+        let _ = ValueMap::decode(&[], 10, FORMAT_VERSION);
     }
 }
