@@ -85,6 +85,8 @@ fn frozen_containers_still_decode() {
         ("terrain_grid33.vmap.v11.swv", "terrain_grid33.obj"),
         ("cube_cc4.v12.swv", "cube_cc4.obj"),
         ("terrain_grid33.vmap.v12.swv", "terrain_grid33.obj"),
+        ("cube_cc4.interp4.v13.swv", "cube_cc4.obj"),
+        ("terrain_grid33.interp4.v13.swv", "terrain_grid33.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);
@@ -99,7 +101,7 @@ fn frozen_containers_still_decode() {
             // A ".flat." container is coded without levels (the flat path), a ".disc."
             // one with the lazy polar wavelet in its discs (radial first), a ".lifted."
             // one with the lifted polar wavelet (circular first), a ".vmap." one with
-            // every axis's value map.
+            // every axis's value map, an ".interp4." one with the interp4 transform.
             let enc = subwave::encode_to_vec(
                 &m.mesh,
                 &m.quantization,
@@ -115,7 +117,11 @@ fn frozen_containers_still_decode() {
                         None
                     },
                     value_map: swv.contains(".vmap.").then_some(true),
-                    ..Default::default()
+                    transform: if swv.contains(".interp4.") {
+                        subwave::TransformChoice::Fixed(subwave::Wavelet::Interp4)
+                    } else {
+                        Default::default()
+                    },
                 },
             )
             .unwrap();

@@ -230,6 +230,53 @@ fn bicubic_coarse_levels_are_rescaled_to_the_geometry() {
     }
 }
 
+#[test]
+fn interp4_codes_smooth_open_grids_smaller_than_lazy_and_is_new_in_version_13() {
+    // A smooth open surface (a cubic height field over a grid refined 3 times): the
+    // 4-point rule's details are zero wherever its stencil is complete, so interp4 codes
+    // it smaller than the lazy transform, and both decode exactly.
+    let mut p = subwave_corpus::open_grid(4, 4).refined(3);
+    for v in &mut p.positions {
+        let (x, y) = (v[0] * 3.7, v[1] * 4.1);
+        v[2] = x * x * x - 2.0 * x * y * y + 0.5 * y;
+    }
+    let mesh = common::to_mesh(&p, 1e4);
+    let q = Quantization::Decimal { decimals: 4 };
+    let code = |w| {
+        let opts = EncodeOptions {
+            transform: TransformChoice::Fixed(w),
+            ..Default::default()
+        };
+        let enc = subwave::encode_to_vec(&mesh, &q, &opts).unwrap();
+        let dec = subwave::decode_slice(&enc.bytes).unwrap();
+        assert_eq!(
+            common::fingerprint(&dec.mesh),
+            common::fingerprint(&mesh),
+            "{}",
+            w.name()
+        );
+        enc
+    };
+    let (lazy, interp4) = (code(Wavelet::Lazy), code(Wavelet::Interp4));
+    assert!(interp4.header.levels >= 3);
+    assert!(
+        interp4.bytes.len() < lazy.bytes.len(),
+        "interp4 {} B, lazy {} B",
+        interp4.bytes.len(),
+        lazy.bytes.len()
+    );
+    // Transform 10 did not exist before version 13.
+    let head = interp4.header.write();
+    let limits = subwave::Limits::default();
+    assert!(subwave::Header::read(&head, 0, &limits, 13).is_ok());
+    match subwave::Header::read(&head, 0, &limits, 12) {
+        Err(subwave::Error::Unsupported(what)) => {
+            assert!(what.contains("transform code 10"), "{what}")
+        }
+        other => panic!("expected unsupported, got {other:?}"),
+    }
+}
+
 fn random_hierarchy(seed: u64, base: usize, levels: u32, bits: u32) -> Mesh {
     let mut rng = Rng::new(seed);
     let b = match base {

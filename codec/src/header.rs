@@ -282,7 +282,7 @@ impl Header {
             }
             t => match Wavelet::from_code(t) {
                 // sqrt(2) transforms from format 6.
-                Some(w) if version >= 2 && (version >= 6 || !w.is_sqrt2()) => Transform::Wavelet(w),
+                Some(w) if version >= w.since() => Transform::Wavelet(w),
                 _ => {
                     return Err(Error::Unsupported(format!(
                         "transform code {t} (byte {at})"

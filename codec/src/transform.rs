@@ -6,7 +6,7 @@
 //! subtracted, in reverse order) undoes analysis exactly for any weights: boundary rules
 //! and rounding can cost compression, never losslessness.
 
-use crate::hierarchy::{flag, Level};
+use crate::hierarchy::{flag, Level, NONE};
 
 /// The wavelet transforms on Catmull-Clark hierarchies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -27,6 +27,10 @@ pub enum Wavelet {
     /// sqrt(2) levels: the interpolatory prediction of Wang & Ma 2009 (eq. 1) alone
     /// (SPEC.md 9.7).
     Sqrt2Lazy,
+    /// Prediction only, by the 4-point rule (-1, 9, 9, -1) / 16 along the mesh's lines
+    /// where the quads around are regular (Kobbelt's interpolatory quad scheme), the
+    /// lazy rules elsewhere; no update (SPEC.md 9.11).
+    Interp4,
     /// sqrt(2) levels: the interpolatory prediction and the twelve-neighbour update of
     /// Wang & Ma 2009 (eq. 9, 10) with frozen fixed-point weights (SPEC.md 9.7).
     Ir2w,
@@ -37,12 +41,13 @@ pub enum Wavelet {
 
 impl Wavelet {
     /// The Catmull-Clark transforms, in header-code order.
-    pub const ALL: [Wavelet; 5] = [
+    pub const ALL: [Wavelet; 6] = [
         Wavelet::Lazy,
         Wavelet::Bilinear,
         Wavelet::Bicubic,
         Wavelet::Biquintic,
         Wavelet::DyadicSym,
+        Wavelet::Interp4,
     ];
 
     /// The sqrt(2) transforms, in header-code order.
@@ -61,6 +66,7 @@ impl Wavelet {
             Wavelet::Bicubic => "bicubic",
             Wavelet::Biquintic => "biquintic",
             Wavelet::DyadicSym => "dyadic-sym",
+            Wavelet::Interp4 => "interp4",
             Wavelet::Sqrt2Lazy => "sqrt2-lazy",
             Wavelet::Ir2w => "ir2w",
             Wavelet::Sqrt2Sym => "sqrt2-sym",
@@ -78,6 +84,16 @@ impl Wavelet {
             Wavelet::Sqrt2Lazy => 6,
             Wavelet::Ir2w => 7,
             Wavelet::Sqrt2Sym => 8,
+            Wavelet::Interp4 => 10,
+        }
+    }
+
+    /// The first format version that has the transform.
+    pub fn since(self) -> u16 {
+        match self {
+            Wavelet::Sqrt2Lazy | Wavelet::Ir2w | Wavelet::Sqrt2Sym => 6,
+            Wavelet::Interp4 => 13,
+            _ => 2,
         }
     }
 
@@ -103,7 +119,11 @@ impl Wavelet {
     pub fn steps(self) -> &'static [Step] {
         use Kind::{S, W};
         match self {
-            Wavelet::DyadicSym | Wavelet::Sqrt2Lazy | Wavelet::Ir2w | Wavelet::Sqrt2Sym => &[],
+            Wavelet::DyadicSym
+            | Wavelet::Interp4
+            | Wavelet::Sqrt2Lazy
+            | Wavelet::Ir2w
+            | Wavelet::Sqrt2Sym => &[],
             Wavelet::Lazy => &[Step {
                 kind: W,
                 p: -1,
@@ -484,6 +504,9 @@ pub fn analyse_except<T: Sample>(level: &Level, w: Wavelet, x: &mut [T], skip: &
     if w == Wavelet::DyadicSym {
         return dyadic_sym(level, x, true, skip);
     }
+    if w == Wavelet::Interp4 {
+        return interp4(level, x, true, skip);
+    }
     for &s in w.steps() {
         step(level, x, s, true, skip);
     }
@@ -498,6 +521,9 @@ pub fn synthesise<T: Sample>(level: &Level, w: Wavelet, x: &mut [T]) {
 pub fn synthesise_except<T: Sample>(level: &Level, w: Wavelet, x: &mut [T], skip: &[bool]) {
     if w == Wavelet::DyadicSym {
         return dyadic_sym(level, x, false, skip);
+    }
+    if w == Wavelet::Interp4 {
+        return interp4(level, x, false, skip);
     }
     for &s in w.steps().iter().rev() {
         step(level, x, s, false, skip);
@@ -578,6 +604,146 @@ fn ds_step3<T: Sample>(level: &Level, x: &[T], v: usize) -> T {
         so,
         64 * ne * nf * no,
     )
+}
+
+/// The coarse vertex beyond coarse vertex `a` on the line of edge `e` (SPEC.md 9.11): on
+/// a boundary edge, the other end of `a`'s other boundary edge when `a` has three edges,
+/// two on the boundary (a regular boundary vertex; a corner turns);
+/// on an interior edge with two quads beside it, when `a` is interior with four edges,
+/// the other end of the one edge of `a` that is neither `e` nor beside `e` in those quads.
+fn beyond_vertex(level: &Level, e: usize, a: usize) -> Option<usize> {
+    let (nb, be) = level.boundary_edges(a);
+    if level.is_boundary(e) {
+        if nb != 2 || level.v_edges(a).len() != 3 {
+            return None;
+        }
+        let other = if be[0] as usize == e { be[1] } else { be[0] };
+        return Some(level.other_end(other, a) as usize);
+    }
+    let edges = level.v_edges(a);
+    if nb != 0 || edges.len() != 4 {
+        return None;
+    }
+    let mut side = [u32::MAX; 2];
+    for (k, &f) in level.edge_faces[e].iter().enumerate() {
+        let f = f as usize;
+        let c = level.coarse.face(f);
+        if c.len() != 4 {
+            return None;
+        }
+        let fe = level.f_edges(f);
+        let j = c.iter().position(|&v| v as usize == a)?;
+        let (next, prev) = (fe[j], fe[(j + 3) % 4]);
+        side[k] = if next as usize == e { prev } else { next };
+    }
+    let opp = edges
+        .iter()
+        .copied()
+        .find(|&x| x as usize != e && !side.contains(&x))?;
+    Some(level.other_end(opp, a) as usize)
+}
+
+/// The edge point beyond face `f`'s edge `e` (SPEC.md 9.11): the edge opposite `e` in the
+/// quad on `e`'s other side.
+fn beyond_edge(level: &Level, f: usize, e: u32) -> Option<usize> {
+    let [f1, f2] = level.edge_faces[e as usize];
+    if f2 == NONE {
+        return None;
+    }
+    let g = if f1 as usize == f { f2 } else { f1 } as usize;
+    let fe = level.f_edges(g);
+    if fe.len() != 4 {
+        return None;
+    }
+    let i = fe.iter().position(|&x| x == e)?;
+    Some(fe[(i + 2) % 4] as usize)
+}
+
+/// Edge point `e`'s prediction from the coarse values: `[(-x_a' + 9 x_a + 9 x_b - x_b') /
+/// 16]` with both beyond vertices, else `[(x_a + x_b) / 2]`.
+#[inline]
+fn interp4_edge<T: Sample>(level: &Level, x: &[T], e: usize) -> T {
+    let [a, b] = level.edges[e];
+    let (a, b) = (a as usize, b as usize);
+    match (beyond_vertex(level, e, a), beyond_vertex(level, e, b)) {
+        (Some(a2), Some(b2)) => {
+            let mut s = x[a].weighted(9);
+            s += x[b].weighted(9);
+            s += x[a2].weighted(-1);
+            s += x[b2].weighted(-1);
+            T::round(s, 16)
+        }
+        _ => {
+            let mut s = x[a].acc();
+            s += x[b].acc();
+            T::round(s, 2)
+        }
+    }
+}
+
+/// Face point `f`'s prediction from its coarse corners and the fine edge points: for a
+/// quad, the sum over its two pairs of opposite edges (m, m') of `-y + 9 m + 9 m' - y'`
+/// with both beyond edge points y, y', else `8 (m + m')`, over 32; for other faces the
+/// lazy rule `[(2 sum of edge points - sum of corners) / k]`.
+#[inline]
+fn interp4_face<T: Sample>(level: &Level, x: &[T], f: usize) -> T {
+    let e0 = level.nv;
+    let fe = level.f_edges(f);
+    if fe.len() == 4 {
+        let mut s = T::Acc::default();
+        for d in 0..2 {
+            let (m, m2) = (fe[d], fe[d + 2]);
+            match (beyond_edge(level, f, m), beyond_edge(level, f, m2)) {
+                (Some(y), Some(y2)) => {
+                    s += x[e0 + m as usize].weighted(9);
+                    s += x[e0 + m2 as usize].weighted(9);
+                    s += x[e0 + y].weighted(-1);
+                    s += x[e0 + y2].weighted(-1);
+                }
+                _ => {
+                    s += x[e0 + m as usize].weighted(8);
+                    s += x[e0 + m2 as usize].weighted(8);
+                }
+            }
+        }
+        return T::round(s, 32);
+    }
+    let mut s = T::Acc::default();
+    for &e in fe {
+        s += x[e0 + e as usize].weighted(2);
+    }
+    for &v in level.coarse.face(f) {
+        s += x[v as usize].weighted(-1);
+    }
+    T::round(s, fe.len() as i128)
+}
+
+/// The 4-point interpolating transform and its inverse (SPEC.md 9.11): details are the
+/// fine values less their predictions; analysis predicts the face points first (from the
+/// fine edge points), synthesis the edge points first.
+fn interp4<T: Sample>(level: &Level, x: &mut [T], forward: bool, skip: &[bool]) {
+    let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
+    let (e0, f0) = (nv, nv + ne);
+    let live = |i: usize| !flag(skip, i);
+    if forward {
+        for f in (0..nf).filter(|&f| live(f0 + f)) {
+            let p = interp4_face(level, x, f);
+            x[f0 + f] = x[f0 + f].minus(p);
+        }
+        for e in (0..ne).filter(|&e| live(e0 + e)) {
+            let p = interp4_edge(level, x, e);
+            x[e0 + e] = x[e0 + e].minus(p);
+        }
+    } else {
+        for e in (0..ne).filter(|&e| live(e0 + e)) {
+            let p = interp4_edge(level, x, e);
+            x[e0 + e] = x[e0 + e].plus(p);
+        }
+        for f in (0..nf).filter(|&f| live(f0 + f)) {
+            let p = interp4_face(level, x, f);
+            x[f0 + f] = x[f0 + f].plus(p);
+        }
+    }
 }
 
 /// The three-step 4-fold symmetric dyadic lifting and its inverse (SPEC.md 9.5).
@@ -682,7 +848,7 @@ mod tests {
             which in 0usize..3,
             seed in any::<u64>(),
             bits in 1u32..45,
-            w in 0usize..5,
+            w in 0usize..6,
         ) {
             let coarse = match which { 0 => grid(3), 1 => mixed(), _ => open_mixed() };
             let level = Level::new(&coarse).unwrap();
@@ -698,6 +864,63 @@ mod tests {
             synthesise(&level, wav, &mut x);
             prop_assert_eq!(x, orig);
         }
+    }
+
+    #[test]
+    fn interp4_reproduces_cubics_along_the_mesh_lines() {
+        // A 6 x 6 grid refined once: fine coordinates (u, v) in 0..=12; data a cubic in u
+        // plus a cubic in v. Where the 4-point rule applies its detail is exactly 0
+        // (the lazy rule's is not), elsewhere it is the lazy rule's; and it inverts.
+        let level = Level::new(&grid(6)).unwrap();
+        let (nv, ne) = (level.nv, level.ne());
+        let mut coords = vec![(0i64, 0i64); level.fine_nv()];
+        for (v, c) in coords.iter_mut().enumerate().take(nv) {
+            *c = (2 * (v as i64 % 7), 2 * (v as i64 / 7));
+        }
+        for (e, &[a, b]) in level.edges.iter().enumerate() {
+            let (pa, pb) = (coords[a as usize], coords[b as usize]);
+            coords[nv + e] = ((pa.0 + pb.0) / 2, (pa.1 + pb.1) / 2);
+        }
+        for f in 0..level.nf() {
+            let c = level.coarse.face(f);
+            let sx: i64 = c.iter().map(|&v| coords[v as usize].0).sum();
+            let sy: i64 = c.iter().map(|&v| coords[v as usize].1).sum();
+            coords[nv + ne + f] = (sx / 4, sy / 4);
+        }
+        let cubic = |t: i64| 7 * t * t * t - 40 * t * t + 3 * t + 11;
+        let x: Vec<i64> = coords
+            .iter()
+            .map(|&(u, v)| cubic(u) - 2 * cubic(v))
+            .collect();
+        let mut y = x.clone();
+        analyse(&level, Wavelet::Interp4, &mut y);
+        let mut lazy = x.clone();
+        analyse(&level, Wavelet::Lazy, &mut lazy);
+        let mut four_point = 0;
+        for e in 0..ne {
+            let [a, b] = level.edges[e];
+            let full = beyond_vertex(&level, e, a as usize).is_some()
+                && beyond_vertex(&level, e, b as usize).is_some();
+            if full {
+                four_point += 1;
+                assert_eq!(y[nv + e], 0, "edge {e}");
+                assert_ne!(lazy[nv + e], 0, "edge {e}");
+            } else {
+                // The linear rule: the lazy detail, up to the rounding direction.
+                assert!((y[nv + e] + lazy[nv + e]).abs() <= 1 || y[nv + e] == lazy[nv + e]);
+            }
+        }
+        // The inner 4 of the 6 edges of every line: 5 interior lines each way, 4 boundary.
+        assert_eq!(four_point, 2 * 5 * 4 + 4 * 4);
+        // Face points whose both directions are complete (the inner 4 x 4) are exact.
+        for f in 0..level.nf() {
+            let (u, v) = coords[nv + ne + f];
+            if (3..=9).contains(&u) && (3..=9).contains(&v) {
+                assert_eq!(y[nv + ne + f], 0, "face at {u},{v}");
+            }
+        }
+        synthesise(&level, Wavelet::Interp4, &mut y);
+        assert_eq!(y, x);
     }
 
     #[test]
