@@ -70,11 +70,7 @@ impl AdaptiveModel {
     /// `max_total`, the table is rebuilt and the rebuild period starts again at 1.
     pub fn reseed(&mut self, max_total: u32) {
         while self.total > max_total {
-            self.total = 0;
-            for c in &mut self.counts {
-                *c = (*c + 1) >> 1;
-                self.total += *c;
-            }
+            self.halve();
         }
         self.rebuild();
         self.period = FIRST_PERIOD;
@@ -112,17 +108,22 @@ impl AdaptiveModel {
         self.cum[self.counts.len()] = ONE;
     }
 
+    /// Every count becomes `(c + 1) >> 1`, the total their sum.
+    fn halve(&mut self) {
+        self.total = 0;
+        for c in &mut self.counts {
+            *c = (*c + 1) >> 1;
+            self.total += *c;
+        }
+    }
+
     /// Records one occurrence of `s`.
     #[inline]
     pub fn update(&mut self, s: usize) {
         self.counts[s] += INCREMENT;
         self.total += INCREMENT;
         if self.total > MAX_TOTAL {
-            self.total = 0;
-            for c in &mut self.counts {
-                *c = (*c + 1) >> 1;
-                self.total += *c;
-            }
+            self.halve();
         }
         self.until_rebuild -= 1;
         if self.until_rebuild == 0 {
@@ -269,18 +270,17 @@ impl IntModel {
 
     /// A fresh model as format `version` defines it.
     pub fn for_version(version: u16) -> Self {
-        let v = version;
         if version >= 4 {
             IntModel(IntKind::Joint {
-                sym: AdaptiveModel::for_version(JOINT_SYMBOLS, v),
-                big: AdaptiveModel::for_version(INT_CLASSES, v),
+                sym: AdaptiveModel::for_version(JOINT_SYMBOLS, version),
+                big: AdaptiveModel::for_version(INT_CLASSES, version),
             })
         } else {
             IntModel(IntKind::Split {
-                class: AdaptiveModel::for_version(INT_CLASSES, v),
-                sign: AdaptiveModel::for_version(2, v),
+                class: AdaptiveModel::for_version(INT_CLASSES, version),
+                sign: AdaptiveModel::for_version(2, version),
                 top: (0..INT_CLASSES)
-                    .map(|_| AdaptiveModel::for_version(2, v))
+                    .map(|_| AdaptiveModel::for_version(2, version))
                     .collect(),
             })
         }

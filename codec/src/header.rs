@@ -281,8 +281,8 @@ impl Header {
                 Transform::Fit { bits }
             }
             t => match Wavelet::from_code(t) {
-                // sqrt(2) transforms from format 6.
-                Some(w) if version >= w.since() => Transform::Wavelet(w),
+                // Each transform from the format version that introduced it.
+                Some(w) if version >= w.since_version() => Transform::Wavelet(w),
                 _ => {
                     return Err(Error::Unsupported(format!(
                         "transform code {t} (byte {at})"

@@ -39,10 +39,10 @@ fn prev_bin(c: usize) -> usize {
 struct Models(Vec<IntModel>);
 
 /// From format 12 a level's models start from the previous level's, counts halved
-/// until they sum to at most this (SPEC.md 10.2).
+/// until they sum to at most this (SPEC.md 10.1).
 const SEED_TOTAL: u32 = 1024;
 
-/// The detail models carried from level to level (SPEC.md 10.2): formats 1 to 11 start
+/// The detail models carried from level to level (SPEC.md 10.1): formats 1 to 11 start
 /// every level afresh, format 12 on starts each from what the previous level learnt.
 pub struct LevelModels {
     version: u16,
@@ -309,10 +309,11 @@ pub fn encode(
     if let Some(t) = targets.filter(|_| version >= 7) {
         modes.push(Mode::Tangent(t));
     }
+    let start = models.start();
     let mut best: Option<(u8, Vec<u8>, Vec<u8>, Models)> = None;
     for mode in modes {
         let mut a = act.clone();
-        let mut m = models.start();
+        let mut m = start.clone();
         let Some(body) = encode_mode(level, sqrt2, x, coarse, &mut a, mode, &mut m) else {
             continue;
         };

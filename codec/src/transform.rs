@@ -24,13 +24,13 @@ pub enum Wavelet {
     /// over neighbours written as (regular count) x (mean), the 1/j scaling expanded
     /// exactly (SPEC.md 9.5).
     DyadicSym,
-    /// sqrt(2) levels: the interpolatory prediction of Wang & Ma 2009 (eq. 1) alone
-    /// (SPEC.md 9.7).
-    Sqrt2Lazy,
     /// Prediction only, by the 4-point rule (-1, 9, 9, -1) / 16 along the mesh's lines
     /// where the quads around are regular (Kobbelt's interpolatory quad scheme), the
     /// lazy rules elsewhere; no update (SPEC.md 9.11).
     Interp4,
+    /// sqrt(2) levels: the interpolatory prediction of Wang & Ma 2009 (eq. 1) alone
+    /// (SPEC.md 9.7).
+    Sqrt2Lazy,
     /// sqrt(2) levels: the interpolatory prediction and the twelve-neighbour update of
     /// Wang & Ma 2009 (eq. 9, 10) with frozen fixed-point weights (SPEC.md 9.7).
     Ir2w,
@@ -89,7 +89,7 @@ impl Wavelet {
     }
 
     /// The first format version that has the transform.
-    pub fn since(self) -> u16 {
+    pub fn since_version(self) -> u16 {
         match self {
             Wavelet::Sqrt2Lazy | Wavelet::Ir2w | Wavelet::Sqrt2Sym => 6,
             Wavelet::Interp4 => 13,
