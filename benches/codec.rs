@@ -29,7 +29,7 @@ fn benches(c: &mut Criterion) {
     topo.idx = m.mesh.faces.clone();
     topo.starts = m.mesh.face_starts.clone();
     let rec = cc::recover(topo.nv, &topo, 16).unwrap();
-    let canon = canonicalise(&rec).unwrap();
+    let canon = canonicalise(&rec, true).unwrap();
     let x: Vec<i64> = canon
         .order
         .iter()

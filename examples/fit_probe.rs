@@ -16,7 +16,7 @@ fn main() {
     topo.idx = mesh.faces.clone();
     topo.starts = mesh.face_starts.clone();
     for rec in cc::recover_all(topo.nv, &topo, 16) {
-        let canon = canonicalise(&rec).expect("canonical");
+        let canon = canonicalise(&rec, true).expect("canonical");
         let nb = canon.base.nv;
         let y: Vec<Vec<i64>> = (0..3)
             .map(|k| {

@@ -25,7 +25,7 @@ fn main() {
     let recs = cc::recover_all(topo.nv, &topo, 16);
     println!("recover ({} alt)    {:8.1} ms", recs.len(), ms(t));
     let t = Instant::now();
-    let canon = canonicalise(&recs[0]).expect("canon");
+    let canon = canonicalise(&recs[0], true).expect("canon");
     println!("canonicalise       {:8.1} ms", ms(t));
     let x: Vec<i64> = canon
         .order

@@ -136,9 +136,19 @@ pub fn compare_up_to_order(
             ));
         }
     }
+    // The smallest rotation: a face with a repeated corner has several starting at its
+    // smallest vertex.
     let canon = |face: &[u32]| -> Vec<u32> {
-        let k = (0..face.len()).min_by_key(|&i| face[i]).unwrap_or(0);
-        face[k..].iter().chain(&face[..k]).copied().collect()
+        (0..face.len())
+            .map(|k| {
+                face[k..]
+                    .iter()
+                    .chain(&face[..k])
+                    .copied()
+                    .collect::<Vec<u32>>()
+            })
+            .min()
+            .unwrap_or_default()
     };
     let mut a: Vec<Vec<u32>> = original.iter_faces().map(canon).collect();
     let mut b: Vec<Vec<u32>> = decoded

@@ -87,6 +87,9 @@ fn frozen_containers_still_decode() {
         ("terrain_grid33.vmap.v12.swv", "terrain_grid33.obj"),
         ("cube_cc4.interp4.v13.swv", "cube_cc4.obj"),
         ("terrain_grid33.interp4.v13.swv", "terrain_grid33.obj"),
+        ("cube_cc4.v14.swv", "cube_cc4.obj"),
+        ("unstructured.v14.swv", "unstructured.obj"),
+        ("sphere_polar3.v14.swv", "sphere_polar3.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

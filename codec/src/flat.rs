@@ -1,10 +1,11 @@
 //! Zero-level coding: a mesh without subdivision structure, as connectivity plus
 //! predicted positions in one range-coded stream (SPEC.md 6).
 
-use std::collections::HashMap;
+use std::collections::{HashMap, VecDeque};
 
 use crate::coder::{class_of, AdaptiveModel, Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
+use crate::hierarchy::PairMap;
 use crate::mesh::Mesh;
 
 const SECTION: &str = "BASE";
@@ -112,13 +113,17 @@ pub fn face_order(mesh: &Mesh) -> Vec<u32> {
     order
 }
 
-/// Reorders faces: `order[new] = old` (corners and their order unchanged).
-pub fn permute_faces(mesh: &Mesh, order: &[u32]) -> Mesh {
+/// Reorders faces, `order[new] = old`, and starts new face `i` at its corner `rot[i]`.
+pub fn permute_faces_rotated(mesh: &Mesh, order: &[u32], rot: &[u32]) -> Mesh {
     let mut out = Mesh::new();
     out.positions = mesh.positions.clone();
     out.faces.reserve(mesh.corner_count());
-    for &f in order {
-        out.push_face(mesh.face(f as usize));
+    let mut buf = Vec::new();
+    for (&f, &r) in order.iter().zip(rot) {
+        let face = mesh.face(f as usize);
+        buf.clear();
+        buf.extend((0..face.len()).map(|i| face[(r as usize + i) % face.len()]));
+        out.push_face(&buf);
     }
     out
 }
@@ -339,31 +344,26 @@ fn predict(
 /// `version` defines it.
 pub fn encode(mesh: &Mesh, version: u16) -> Vec<u8> {
     let mut e = Encoder::new();
-    let mut m = ConnModels::new(version);
-    let mut mru = Mru::new();
-    let mut next_new = 0u32;
-    let mut prev_deg = 0usize;
-    for face in mesh.iter_faces() {
-        let d = face.len();
-        let sym = (d - 3).min(DEGREE_SYMBOLS - 1);
-        e.symbol(&mut m.degree[prev_deg], sym);
-        if sym == DEGREE_SYMBOLS - 1 {
-            e.int(&mut m.big_degree, (d - 3 - (DEGREE_SYMBOLS - 1)) as i64);
-        }
-        prev_deg = sym;
-        for (c, &v) in face.iter().enumerate() {
-            let model = &mut m.corner[(c > 0) as usize];
-            let at = mru.find(v);
-            if v == next_new {
-                e.symbol(model, 0);
-                next_new += 1;
-            } else if let Some(i) = at {
-                e.symbol(model, 1 + i);
-            } else {
-                e.symbol(model, ESCAPE);
-                e.int(&mut m.distance, (next_new - 1 - v) as i64);
+    if version >= GATES_VERSION {
+        encode_gated(&mut e, mesh, version);
+    } else {
+        let mut m = ConnModels::new(version);
+        let mut mru = Mru::new();
+        let mut next_new = 0u32;
+        let mut prev_deg = 0usize;
+        for face in mesh.iter_faces() {
+            let d = face.len();
+            let sym = degree_symbol(d);
+            e.symbol(&mut m.degree[prev_deg], sym);
+            if sym == DEGREE_SYMBOLS - 1 {
+                e.int(&mut m.big_degree, (d - 3 - (DEGREE_SYMBOLS - 1)) as i64);
             }
-            mru.touch(v, at);
+            prev_deg = sym;
+            for (c, &v) in face.iter().enumerate() {
+                let at = mru.find(v);
+                put_named(&mut e, &mut m, (c > 0) as usize, v, at, &mut next_new);
+                mru.touch(v, at);
+            }
         }
     }
     encode_positions(&mut e, mesh, version);
@@ -409,69 +409,7 @@ pub fn decode(
         ));
     }
     let mut d = Decoder::new(payload, SECTION)?;
-    let mut m = ConnModels::new(version);
-    let mut mru = Mru::new();
-    let mut next_new = 0u64;
-    let mut prev_deg = 0usize;
-    let mut mesh = Mesh::new();
-    // Grow with what is decoded rather than trusting the counts up front.
-    mesh.face_starts.reserve(faces.min(1 << 16) as usize);
-    mesh.faces.reserve(corners.min(1 << 18) as usize);
-    for _ in 0..faces {
-        let sym = d.symbol(&mut m.degree[prev_deg])?;
-        let mut deg = sym as u64 + 3;
-        if sym == DEGREE_SYMBOLS - 1 {
-            let extra = d.int(&mut m.big_degree)?;
-            if extra < 0 {
-                return Err(Error::corrupt(SECTION, "negative face degree"));
-            }
-            deg = deg.saturating_add(extra as u64);
-        }
-        prev_deg = sym;
-        if (mesh.faces.len() as u64).saturating_add(deg) > corners {
-            return Err(Error::corrupt(
-                SECTION,
-                "faces have more corners than the header says",
-            ));
-        }
-        for c in 0..deg {
-            let s = d.symbol(&mut m.corner[(c > 0) as usize])?;
-            let (v, at) = if s == 0 {
-                if next_new >= vertices {
-                    return Err(Error::corrupt(
-                        SECTION,
-                        "more vertices than the header says",
-                    ));
-                }
-                next_new += 1;
-                ((next_new - 1) as u32, None)
-            } else if s <= MRU {
-                if s > mru.len {
-                    return Err(Error::corrupt(
-                        SECTION,
-                        "reference to an empty history slot",
-                    ));
-                }
-                (mru.items[s - 1], Some(s - 1))
-            } else {
-                let dist = d.int(&mut m.distance)?;
-                if dist < 0 || dist as u64 >= next_new {
-                    return Err(Error::corrupt(SECTION, "vertex reference out of range"));
-                }
-                ((next_new - 1 - dist as u64) as u32, None)
-            };
-            let at = if s == ESCAPE { mru.find(v) } else { at };
-            mru.touch(v, at);
-            mesh.faces.push(v);
-        }
-        mesh.face_starts.push(mesh.faces.len() as u32);
-    }
-    if mesh.faces.len() as u64 != corners {
-        return Err(Error::corrupt(
-            SECTION,
-            "faces have fewer corners than the header says",
-        ));
-    }
+    let mut mesh = decode_faces(&mut d, vertices, faces, corners, version)?;
     mesh.positions = decode_positions(&mut d, &mesh, vertices as usize, max_abs, version)?;
     Ok(mesh)
 }
@@ -517,4 +455,569 @@ fn first_uses_n(topo: &Mesh, n: usize) -> Vec<(u32, u32)> {
         }
     }
     first
+}
+
+/// Format 14 on: connectivity by gates (SPEC.md 6.2). Faces attach to an open half-edge
+/// of the faces decoded so far, taken first in, first out; their further corners are
+/// mostly a new vertex or a vertex of the border next to them.
+pub const GATES_VERSION: u16 = 14;
+/// Border vertices a gated corner can name (SPEC.md 6.2).
+const CANDIDATES: usize = 4;
+/// Gated corner symbols: 0 = next new vertex, 1..=4 = candidate, 5 = named as a fresh corner.
+const GATED_SYMBOLS: usize = CANDIDATES + 2;
+const NAMED: usize = CANDIDATES + 1;
+/// How many of a vertex's most recent half-edges a candidate search reads.
+const SCAN: usize = 32;
+/// Gate operations: attach a face across the gate, drop the gate (a border), or code a
+/// face without a gate.
+const OP_ATTACH: usize = 0;
+const OP_DROP: usize = 1;
+const OP_FRESH: usize = 2;
+const NIL: u32 = u32::MAX;
+
+/// The decoder's (and the encoder's) record of the faces coded so far: their directed
+/// half-edges, each vertex's incoming and outgoing ones (most recent first), and the
+/// queue of gates.
+struct Gates {
+    present: PairMap,
+    into: Vec<u32>,
+    from: Vec<u32>,
+    /// Linked list cells: (other vertex, next cell).
+    cells: Vec<(u32, u32)>,
+    queue: VecDeque<(u32, u32, u8)>,
+}
+
+impl Gates {
+    fn new() -> Self {
+        Gates {
+            present: PairMap::with_capacity(64),
+            into: Vec::new(),
+            from: Vec::new(),
+            cells: Vec::new(),
+            queue: VecDeque::new(),
+        }
+    }
+
+    fn has(&self, a: u32, b: u32) -> bool {
+        self.present.get(a, b).is_some()
+    }
+
+    /// Half-edge a -> b is coded and its twin is not.
+    fn open(&self, a: u32, b: u32) -> bool {
+        self.has(a, b) && !self.has(b, a)
+    }
+
+    fn grow(&mut self, v: u32) {
+        let n = v as usize + 1;
+        if self.into.len() < n {
+            self.into.resize(n, NIL);
+            self.from.resize(n, NIL);
+        }
+    }
+
+    /// Records a coded face (every corner a known vertex) whose degree symbol is `deg`.
+    fn add(&mut self, face: &[u32], deg: u8) {
+        let k = face.len();
+        for i in 0..k {
+            let (a, b) = (face[i], face[(i + 1) % k]);
+            self.grow(a.max(b));
+            self.present.insert(a, b, 0);
+            let c = self.cells.len() as u32;
+            self.cells.push((a, self.into[b as usize]));
+            self.into[b as usize] = c;
+            self.cells.push((b, self.from[a as usize]));
+            self.from[a as usize] = c + 1;
+            self.queue.push_back((a, b, deg));
+        }
+    }
+
+    /// The first gate in the queue that is still open, dropping closed ones.
+    fn gate(&mut self) -> Option<(u32, u32, u8)> {
+        while let Some(&(a, b, d)) = self.queue.front() {
+            if self.has(b, a) {
+                self.queue.pop_front();
+            } else {
+                return Some((a, b, d));
+            }
+        }
+        None
+    }
+
+    /// Candidates for the corner after `prev` of a face attached at gate vertex `v`
+    /// (the face's first corner): vertices x with x -> prev open, most recent first, then
+    /// on the last corner vertices y with v -> y open; each once, at most [`CANDIDATES`].
+    fn candidates(&self, prev: u32, v: u32, last: bool) -> ([u32; CANDIDATES], usize) {
+        let mut out = [NIL; CANDIDATES];
+        let mut n = 0;
+        let mut push = |x: u32, out: &mut [u32; CANDIDATES]| {
+            if n < CANDIDATES && !out[..n].contains(&x) {
+                out[n] = x;
+                n += 1;
+            }
+        };
+        let mut walk = |head: &[u32], at: u32, incoming: bool, out: &mut [u32; CANDIDATES]| {
+            let mut c = head.get(at as usize).copied().unwrap_or(NIL);
+            let mut seen = 0;
+            while c != NIL && seen < SCAN {
+                let (x, next) = self.cells[c as usize];
+                let open = if incoming {
+                    self.open(x, at)
+                } else {
+                    self.open(at, x)
+                };
+                if open {
+                    push(x, out);
+                }
+                c = next;
+                seen += 1;
+            }
+        };
+        walk(&self.into, prev, true, &mut out);
+        if last {
+            walk(&self.from, v, false, &mut out);
+        }
+        let n = out.iter().position(|&x| x == NIL).unwrap_or(CANDIDATES);
+        (out, n)
+    }
+}
+
+/// Encoder only: the order in which the gates visit the faces (SPEC.md 6.2, informative):
+/// from the first face not yet visited, each open gate in turn takes the first unvisited
+/// face that has the gate's twin, rotated to start at the twin. Returns `order[new] =
+/// old` and each face's rotation (the corner it now starts at).
+pub fn gate_order(starts: &[u32], idx: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    let nf = starts.len() - 1;
+    let face = |f: usize| &idx[starts[f] as usize..starts[f + 1] as usize];
+    // Directed half-edge -> first face (and corner) listing it, then a chain of others.
+    let mut first = PairMap::with_capacity(idx.len());
+    let mut more: Vec<(u32, u32, u32)> = Vec::new(); // (face, corner, next)
+    for f in (0..nf).rev() {
+        let fc = face(f);
+        let k = fc.len();
+        for i in 0..k {
+            let (a, b) = (fc[i], fc[(i + 1) % k]);
+            let c = more.len() as u32;
+            let (head, fresh) = first.get_or_insert(a, b, || c);
+            more.push((f as u32, i as u32, if fresh { NIL } else { head }));
+            if !fresh {
+                first.insert(a, b, c);
+            }
+        }
+    }
+    let mut coded = vec![false; nf];
+    let mut gates = Gates::new();
+    let mut order = Vec::with_capacity(nf);
+    let mut rot = Vec::with_capacity(nf);
+    let mut root = 0;
+    let mut buf: Vec<u32> = Vec::new();
+    while order.len() < nf {
+        let mut pick = None;
+        while let Some((u, v, _)) = gates.gate() {
+            let mut c = first.get(v, u).unwrap_or(NIL);
+            while c != NIL {
+                let (f, i, next) = more[c as usize];
+                if !coded[f as usize] {
+                    pick = Some((f as usize, i as usize));
+                    break;
+                }
+                c = next;
+            }
+            if pick.is_some() {
+                break;
+            }
+            gates.queue.pop_front();
+        }
+        let (f, r) = match pick {
+            Some(p) => p,
+            None => {
+                while coded[root] {
+                    root += 1;
+                }
+                (root, 0)
+            }
+        };
+        coded[f] = true;
+        order.push(f as u32);
+        rot.push(r as u32);
+        let fc = face(f);
+        buf.clear();
+        buf.extend((0..fc.len()).map(|i| fc[(r + i) % fc.len()]));
+        gates.add(&buf, degree_symbol(buf.len()) as u8);
+    }
+    (order, rot)
+}
+
+fn degree_symbol(d: usize) -> usize {
+    (d - 3).min(DEGREE_SYMBOLS - 1)
+}
+
+/// The models of gated connectivity (format 14 on).
+struct GatedModels {
+    op: AdaptiveModel,
+    /// Degree of a gated face; context: the degree symbol of the gate's face.
+    degree: Vec<AdaptiveModel>,
+    /// Context: last corner or not, times the number of candidates (0, 1, 2 or more).
+    corner: Vec<AdaptiveModel>,
+}
+
+impl GatedModels {
+    fn new(version: u16) -> Self {
+        GatedModels {
+            op: AdaptiveModel::for_version(3, version),
+            degree: (0..DEGREE_SYMBOLS)
+                .map(|_| AdaptiveModel::for_version(DEGREE_SYMBOLS, version))
+                .collect(),
+            corner: (0..6)
+                .map(|_| AdaptiveModel::for_version(GATED_SYMBOLS, version))
+                .collect(),
+        }
+    }
+}
+
+/// A corner named as in formats 1 to 13: the next new vertex, a recently used one, or
+/// a distance back from the next new one.
+fn put_named(
+    e: &mut Encoder,
+    m: &mut ConnModels,
+    model: usize,
+    v: u32,
+    at: Option<usize>,
+    next_new: &mut u32,
+) {
+    let model = &mut m.corner[model];
+    if v == *next_new {
+        e.symbol(model, 0);
+        *next_new += 1;
+    } else if let Some(i) = at {
+        e.symbol(model, 1 + i);
+    } else {
+        e.symbol(model, ESCAPE);
+        e.int(&mut m.distance, (*next_new - 1 - v) as i64);
+    }
+}
+
+fn encode_gated(e: &mut Encoder, mesh: &Mesh, version: u16) {
+    let mut m = ConnModels::new(version);
+    let mut g = GatedModels::new(version);
+    let mut all = PairMap::with_capacity(mesh.corner_count());
+    for face in mesh.iter_faces() {
+        let k = face.len();
+        for i in 0..k {
+            all.insert(face[i], face[(i + 1) % k], 0);
+        }
+    }
+    let mut gates = Gates::new();
+    let mut mru = Mru::new();
+    let mut next_new = 0u32;
+    let mut prev_deg = 0usize;
+    for face in mesh.iter_faces() {
+        let d = face.len();
+        let sym = degree_symbol(d);
+        let mut gated = None;
+        while let Some((u, v, gd)) = gates.gate() {
+            if face[0] == v && face[1] == u {
+                e.symbol(&mut g.op, OP_ATTACH);
+                gated = Some(gd);
+                break;
+            }
+            if all.get(v, u).is_none() {
+                e.symbol(&mut g.op, OP_DROP);
+                gates.queue.pop_front();
+                continue;
+            }
+            e.symbol(&mut g.op, OP_FRESH);
+            break;
+        }
+        match gated {
+            Some(gd) => e.symbol(&mut g.degree[gd as usize], sym),
+            None => e.symbol(&mut m.degree[prev_deg], sym),
+        }
+        if sym == DEGREE_SYMBOLS - 1 {
+            e.int(&mut m.big_degree, (d - 3 - (DEGREE_SYMBOLS - 1)) as i64);
+        }
+        prev_deg = sym;
+        for (c, &v) in face.iter().enumerate() {
+            let at = mru.find(v);
+            match (gated, c) {
+                (Some(_), 0 | 1) => {}
+                (Some(_), _) => {
+                    let last = c == d - 1;
+                    let (cands, n) = gates.candidates(face[c - 1], face[0], last);
+                    let ctx = last as usize * 3 + n.min(2);
+                    if v == next_new {
+                        e.symbol(&mut g.corner[ctx], 0);
+                        next_new += 1;
+                    } else if let Some(i) = cands[..n].iter().position(|&x| x == v) {
+                        e.symbol(&mut g.corner[ctx], 1 + i);
+                    } else {
+                        e.symbol(&mut g.corner[ctx], NAMED);
+                        put_named(e, &mut m, 1, v, at, &mut next_new);
+                    }
+                }
+                (None, _) => put_named(e, &mut m, (c > 0) as usize, v, at, &mut next_new),
+            }
+            mru.touch(v, at);
+        }
+        gates.add(face, sym as u8);
+    }
+}
+
+/// Reads a corner named as in formats 1 to 13 (see [`put_named`]); returns the vertex and
+/// its place in the recent list.
+fn get_named(
+    d: &mut Decoder,
+    m: &mut ConnModels,
+    model: usize,
+    mru: &Mru,
+    next_new: &mut u64,
+    vertices: u64,
+) -> Result<(u32, Option<usize>)> {
+    let s = d.symbol(&mut m.corner[model])?;
+    if s == 0 {
+        new_vertex(next_new, vertices)
+    } else if s <= MRU {
+        if s > mru.len {
+            return Err(Error::corrupt(
+                SECTION,
+                "reference to an empty history slot",
+            ));
+        }
+        Ok((mru.items[s - 1], Some(s - 1)))
+    } else {
+        let dist = d.int(&mut m.distance)?;
+        if dist < 0 || dist as u64 >= *next_new {
+            return Err(Error::corrupt(SECTION, "vertex reference out of range"));
+        }
+        let v = (*next_new - 1 - dist as u64) as u32;
+        Ok((v, mru.find(v)))
+    }
+}
+
+fn new_vertex(next_new: &mut u64, vertices: u64) -> Result<(u32, Option<usize>)> {
+    if *next_new >= vertices {
+        return Err(Error::corrupt(
+            SECTION,
+            "more vertices than the header says",
+        ));
+    }
+    *next_new += 1;
+    Ok(((*next_new - 1) as u32, None))
+}
+
+/// Decodes the connectivity (SPEC.md 6.2) of `faces` faces with `corners` corners over
+/// `vertices` vertices.
+fn decode_faces(
+    d: &mut Decoder,
+    vertices: u64,
+    faces: u64,
+    corners: u64,
+    version: u16,
+) -> Result<Mesh> {
+    let mut m = ConnModels::new(version);
+    let mut g = (version >= GATES_VERSION).then(|| (GatedModels::new(version), Gates::new()));
+    let mut mru = Mru::new();
+    let mut next_new = 0u64;
+    let mut prev_deg = 0usize;
+    let mut mesh = Mesh::new();
+    // Grow with what is decoded rather than trusting the counts up front.
+    mesh.face_starts.reserve(faces.min(1 << 16) as usize);
+    mesh.faces.reserve(corners.min(1 << 18) as usize);
+    let mut face: Vec<u32> = Vec::new();
+    for _ in 0..faces {
+        let mut gated = None;
+        if let Some((gm, gates)) = g.as_mut() {
+            while let Some((u, v, gd)) = gates.gate() {
+                match d.symbol(&mut gm.op)? {
+                    OP_ATTACH => {
+                        gated = Some((u, v, gd));
+                        break;
+                    }
+                    OP_DROP => {
+                        gates.queue.pop_front();
+                    }
+                    _ => break,
+                }
+            }
+        }
+        let sym = match (gated, g.as_mut()) {
+            (Some((_, _, gd)), Some((gm, _))) => d.symbol(&mut gm.degree[gd as usize])?,
+            _ => d.symbol(&mut m.degree[prev_deg])?,
+        };
+        let mut deg = sym as u64 + 3;
+        if sym == DEGREE_SYMBOLS - 1 {
+            let extra = d.int(&mut m.big_degree)?;
+            if extra < 0 {
+                return Err(Error::corrupt(SECTION, "negative face degree"));
+            }
+            deg = deg.saturating_add(extra as u64);
+        }
+        prev_deg = sym;
+        if (mesh.faces.len() as u64).saturating_add(deg) > corners {
+            return Err(Error::corrupt(
+                SECTION,
+                "faces have more corners than the header says",
+            ));
+        }
+        face.clear();
+        for c in 0..deg as usize {
+            let (v, at) = match (gated, g.as_mut()) {
+                (Some((u, v, _)), Some(_)) if c < 2 => {
+                    let x = if c == 0 { v } else { u };
+                    (x, mru.find(x))
+                }
+                (Some(_), Some((gm, gates))) => {
+                    let last = c as u64 == deg - 1;
+                    let (cands, n) = gates.candidates(face[c - 1], face[0], last);
+                    let ctx = last as usize * 3 + n.min(2);
+                    match d.symbol(&mut gm.corner[ctx])? {
+                        0 => new_vertex(&mut next_new, vertices)?,
+                        NAMED => get_named(d, &mut m, 1, &mru, &mut next_new, vertices)?,
+                        s if s <= n => (cands[s - 1], mru.find(cands[s - 1])),
+                        _ => {
+                            return Err(Error::corrupt(
+                                SECTION,
+                                "reference to a missing border vertex",
+                            ))
+                        }
+                    }
+                }
+                _ => get_named(d, &mut m, (c > 0) as usize, &mru, &mut next_new, vertices)?,
+            };
+            mru.touch(v, at);
+            face.push(v);
+        }
+        if let Some((_, gates)) = g.as_mut() {
+            gates.add(&face, sym as u8);
+        }
+        mesh.faces.extend_from_slice(&face);
+        mesh.face_starts.push(mesh.faces.len() as u32);
+    }
+    if mesh.faces.len() as u64 != corners {
+        return Err(Error::corrupt(
+            SECTION,
+            "faces have fewer corners than the header says",
+        ));
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An n x n grid of quads (with every third one split into two triangles when
+    /// `mixed`), positions on a gentle bump, vertices in row order.
+    fn grid(n: u32, mixed: bool) -> Mesh {
+        let mut m = Mesh::new();
+        for y in 0..=n as i64 {
+            for x in 0..=n as i64 {
+                m.positions.push([x * 100, y * 100, (x * y) % 7]);
+            }
+        }
+        let id = |x: u32, y: u32| y * (n + 1) + x;
+        for y in 0..n {
+            for x in 0..n {
+                let (a, b, c, d) = (id(x, y), id(x + 1, y), id(x + 1, y + 1), id(x, y + 1));
+                if mixed && (x + y) % 3 == 0 {
+                    m.push_face(&[a, b, c]);
+                    m.push_face(&[a, c, d]);
+                } else {
+                    m.push_face(&[a, b, c, d]);
+                }
+            }
+        }
+        m
+    }
+
+    /// Canonical order as the encoder prepares a flat mesh: faces as `forder` / `rot`
+    /// say, vertices by first use.
+    fn prepared(mesh: &Mesh, forder: &[u32], rot: &[u32]) -> Mesh {
+        let by_faces = permute_faces_rotated(mesh, forder, rot);
+        let order = canonical_order(&by_faces);
+        permute(&by_faces, &order)
+    }
+
+    fn round_trip(mesh: &Mesh, version: u16) -> usize {
+        let bytes = encode(mesh, version);
+        let back = decode(
+            &bytes,
+            mesh.vertex_count() as u64,
+            mesh.face_count() as u64,
+            mesh.corner_count() as u64,
+            1 << 40,
+            version,
+        )
+        .expect("own output decodes");
+        assert_eq!(&back, mesh, "version {version} round trip differs");
+        bytes.len()
+    }
+
+    #[test]
+    fn gates_code_a_regular_mesh_in_a_fraction_of_the_bytes() {
+        for mixed in [false, true] {
+            let mesh = grid(24, mixed);
+            let (forder, rot) = gate_order(&mesh.face_starts, &mesh.faces);
+            let gated = prepared(&mesh, &forder, &rot);
+            // Connectivity alone: the same faces with every position zero.
+            let mut topo = gated.clone();
+            topo.positions.iter_mut().for_each(|p| *p = [0; 3]);
+            let named = round_trip(&topo, GATES_VERSION - 1);
+            let with_gates = round_trip(&topo, GATES_VERSION);
+            assert!(
+                with_gates * 3 < named,
+                "mixed {mixed}: gates {with_gates} B, named corners {named} B"
+            );
+            // Positions too, both ways.
+            round_trip(&gated, GATES_VERSION);
+            round_trip(&gated, GATES_VERSION - 1);
+        }
+    }
+
+    #[test]
+    fn any_face_order_and_odd_faces_round_trip_with_gates() {
+        let mut mesh = grid(6, true);
+        // Faces reversed, rotated, one with a repeated corner, one flipped, a duplicate.
+        let nf = mesh.face_count() as u32;
+        let forder: Vec<u32> = (0..nf).rev().collect();
+        let rot: Vec<u32> = (0..nf).map(|f| f % 3).collect();
+        mesh = permute_faces_rotated(&mesh, &forder, &rot);
+        mesh.push_face(&[3, 3, 9]);
+        mesh.push_face(&[10, 9, 2]);
+        mesh.push_face(&[0, 1, 8, 7]);
+        mesh.push_face(&[0, 1, 8, 7]);
+        let order = canonical_order(&mesh);
+        let mesh = permute(&mesh, &order);
+        round_trip(&mesh, GATES_VERSION);
+        // And in the gates' own order.
+        let (forder, rot) = gate_order(&mesh.face_starts, &mesh.faces);
+        round_trip(&prepared(&mesh, &forder, &rot), GATES_VERSION);
+    }
+
+    #[test]
+    fn gate_order_visits_every_face_once_and_keeps_each_face() {
+        let mesh = grid(9, true);
+        let (forder, rot) = gate_order(&mesh.face_starts, &mesh.faces);
+        let mut seen = forder.clone();
+        seen.sort_unstable();
+        assert_eq!(seen, (0..mesh.face_count() as u32).collect::<Vec<_>>());
+        let out = permute_faces_rotated(&mesh, &forder, &rot);
+        for (i, &f) in forder.iter().enumerate() {
+            let (a, b) = (mesh.face(f as usize), out.face(i));
+            let r = rot[i] as usize;
+            assert!(r < a.len());
+            assert!((0..a.len()).all(|k| b[k] == a[(k + r) % a.len()]));
+        }
+        // After the first face, every face of this connected mesh attaches to a gate:
+        // its first two corners are a coded half-edge, reversed.
+        let mut half = std::collections::HashSet::new();
+        for i in 0..out.face_count() {
+            let f = out.face(i);
+            if i > 0 {
+                assert!(half.contains(&(f[1], f[0])), "face {i} is not gated");
+            }
+            for k in 0..f.len() {
+                half.insert((f[k], f[(k + 1) % f.len()]));
+            }
+        }
+    }
 }

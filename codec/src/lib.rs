@@ -424,19 +424,23 @@ fn encode_with(
         };
         let fit_only = opts.transform == TransformChoice::Fit;
         let max = opts.max_levels as usize;
+        // The base mesh's faces in the order of the connectivity coder's gates, unless
+        // the input's order is kept: then as recovered, which makes the order cheap.
+        let gates = !opts.keep_order;
         // Per family: its candidate hierarchies, the transform that compares them, and
         // the family's other transforms (tried on the better candidate with `auto`).
         let mut families: Vec<(Vec<Canonical>, Wavelet, &[Wavelet])> = Vec::new();
         if want_cc {
             let mut canons = Vec::new();
             for rec in hierarchy::cc::recover_all(mesh.vertex_count(), &topo, max) {
-                canons.push(hierarchy::canonicalise(&rec)?);
+                canons.push(hierarchy::canonicalise(&rec, gates)?);
             }
             // Polar levels take the Catmull-Clark transforms (SPEC.md 8.6).
             canons.extend(hierarchy::polar::recover_all(
                 mesh.vertex_count(),
                 &topo,
                 max,
+                gates,
             ));
             // The subdivision fit, on each candidate whose finest level is near a
             // subdivision (every candidate when asked for by name).
@@ -461,7 +465,7 @@ fn encode_with(
         }
         if want_sqrt2 {
             let canons: Vec<Canonical> = sqrt2::recover::recover(&topo, max)
-                .and_then(|rec| sqrt2::recover::canonicalise(&rec, &topo).ok())
+                .and_then(|rec| sqrt2::recover::canonicalise(&rec, &topo, gates).ok())
                 .into_iter()
                 .collect();
             families.push((canons, Wavelet::Sqrt2Lazy, &Wavelet::SQRT2));
@@ -522,29 +526,31 @@ fn encode_with(
     let (payloads, order) = match (best, chosen) {
         (Some(p), Some(canon)) => (p, canon.order),
         _ => {
-            // Faces in the input's order or breadth-first, whichever codes smaller (with
-            // the ORDR section when the order is kept); vertices in order of first use
-            // (SPEC.md 6.1).
+            // Faces as the connectivity coder's gates visit them (rotated to start at
+            // their gate); when the order is kept, also in the input's order and
+            // breadth-first, whichever codes smaller with the ORDR section. Vertices in
+            // order of first use (SPEC.md 6.1).
             let mut best_flat: Option<(Payloads, Vec<u32>)> = None;
-            for forder in [
-                (0..mesh.face_count() as u32).collect::<Vec<u32>>(),
-                flat::face_order(mesh),
-            ] {
-                let by_faces = flat::permute_faces(mesh, &forder);
+            let nf = mesh.face_count();
+            let mut candidates = vec![flat::gate_order(&mesh.face_starts, &mesh.faces)];
+            if opts.keep_order {
+                candidates.push(((0..nf as u32).collect(), vec![0; nf]));
+                candidates.push((flat::face_order(mesh), vec![0; nf]));
+            }
+            for (forder, rot) in candidates {
+                let by_faces = flat::permute_faces_rotated(mesh, &forder, &rot);
                 let order = flat::canonical_order(&by_faces);
                 let p = Payloads {
                     header: flat_h.clone(),
                     base: flat::encode(&flat::permute(&by_faces, &order), FORMAT_VERSION),
                     levels: Vec::new(),
-                    order: opts
-                        .keep_order
-                        .then(|| order_section(&order, forder, vec![0; mesh.face_count()])),
+                    order: opts.keep_order.then(|| order_section(&order, forder, rot)),
                 };
                 if best_flat.as_ref().is_none_or(|b| p.size() < b.0.size()) {
                     best_flat = Some((p, order));
                 }
             }
-            best_flat.expect("two candidates")
+            best_flat.expect("at least one candidate")
         }
     };
     let header = payloads.header.clone();

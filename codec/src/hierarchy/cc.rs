@@ -541,7 +541,7 @@ mod tests {
                     .collect::<std::collections::BTreeSet<_>>()
                     .len();
                 assert_eq!(rec.base.nf() + used, base.nf() + base.nv);
-                let canon = canonicalise(&rec).unwrap();
+                let canon = canonicalise(&rec, true).unwrap();
                 assert_eq!(
                     face_set(&canon.fine, Some(&canon.order)),
                     face_set(&input, None)
@@ -592,7 +592,7 @@ mod tests {
         }
         let rec = recover(u.nv, &u, 16).unwrap();
         assert_eq!(rec.levels(), 1);
-        let canon = canonicalise(&rec).unwrap();
+        let canon = canonicalise(&rec, true).unwrap();
         assert_eq!(
             face_set(&canon.fine, Some(&canon.order)),
             face_set(&u, None)

@@ -455,7 +455,27 @@ pub struct Canonical {
 /// walking the base faces, then the input's vertices that no face at any level uses
 /// (`finer` lists the vertices that appear at finer levels). Returns `order[c]` = input
 /// number of canonical vertex `c`, and the base faces renumbered.
-pub(crate) fn base_numbering(base_in: &Topo, finer: impl Iterator<Item = u32>) -> (Vec<u32>, Topo) {
+pub(crate) fn base_numbering(
+    base_in: &Topo,
+    finer: impl Iterator<Item = u32>,
+    gates: bool,
+) -> (Vec<u32>, Topo) {
+    // With `gates`, faces in the order the connectivity coder's gates visit them
+    // (SPEC.md 6.2); else as recovered (which keeps a file's own order cheap to record).
+    let (forder, rot) = if gates {
+        crate::flat::gate_order(&base_in.starts, &base_in.idx)
+    } else {
+        ((0..base_in.nf() as u32).collect(), vec![0; base_in.nf()])
+    };
+    let mut visited = Topo::new(base_in.nv);
+    let mut buf = Vec::new();
+    for (&f, &r) in forder.iter().zip(&rot) {
+        let face = base_in.face(f as usize);
+        buf.clear();
+        buf.extend((0..face.len()).map(|i| face[(r as usize + i) % face.len()]));
+        visited.push(&buf);
+    }
+    let base_in = &visited;
     let n = base_in.nv;
     let mut order: Vec<u32> = Vec::new();
     let mut seen = vec![false; n];
@@ -505,13 +525,13 @@ pub(crate) fn push_face_points(
 
 /// Canonicalises a recovered hierarchy (SPEC.md 8.2). `all_vertices` is the input's
 /// vertex count: vertices no face uses are kept in the base mesh.
-pub fn canonicalise(rec: &Recovered) -> Result<Canonical> {
+pub fn canonicalise(rec: &Recovered, gates: bool) -> Result<Canonical> {
     let finer = (0..rec.levels()).flat_map(|l| {
         rec.edge_points[l]
             .values()
             .chain(rec.face_points[l].values())
     });
-    let (mut order, base) = base_numbering(&rec.base, finer);
+    let (mut order, base) = base_numbering(&rec.base, finer, gates);
     let mut is_pole = vec![false; rec.base.nv];
     for &p in &rec.poles {
         is_pole[p as usize] = true;

@@ -19,14 +19,15 @@ use super::{canonicalise, Canonical, FaceIndex, PairMap, Recovered, Topo};
 /// `< nv`), canonicalised and checked against `topo`; `None` if the mesh has no pole or
 /// no polar level.
 pub fn recover(nv: usize, topo: &Topo, max_levels: usize) -> Option<Canonical> {
-    recover_all(nv, topo, max_levels).into_iter().next()
+    recover_all(nv, topo, max_levels, true).into_iter().next()
 }
 
 /// Like [`recover`], also returning the equally deep alternatives where every component
 /// that ties takes its second, third or fourth coarsening (a regular polar grid coarsens
 /// in several ways; which codes smaller depends on the geometry). At most [`KEEP`]
 /// results, preferred first.
-pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Canonical> {
+/// `gates` as [`super::canonicalise`] takes it.
+pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize, gates: bool) -> Vec<Canonical> {
     let recs = recover_raw(nv, topo, max_levels);
     if recs.is_empty() {
         return Vec::new();
@@ -34,7 +35,7 @@ pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Canonical> 
     let index = FaceIndex::new(topo);
     recs.into_iter()
         .filter_map(|rec| {
-            let canon = canonicalise(&rec).ok()?;
+            let canon = canonicalise(&rec, gates).ok()?;
             index.check(&canon.fine, &canon.order, topo).ok()?;
             Some(canon)
         })

@@ -229,9 +229,9 @@ pub fn recover(topo: &Topo, max_levels: usize) -> Option<Recovered> {
 
 /// Canonicalises a recovered sqrt(2) hierarchy (SPEC.md 8.5) and checks that its finest
 /// level is `input`'s faces (each once, up to corner rotation).
-pub fn canonicalise(rec: &Recovered, input: &Topo) -> Result<Canonical> {
+pub fn canonicalise(rec: &Recovered, input: &Topo, gates: bool) -> Result<Canonical> {
     let finer = rec.face_points.iter().flat_map(|m| m.values());
-    let (mut order, base) = base_numbering(&rec.base, finer);
+    let (mut order, base) = base_numbering(&rec.base, finer, gates);
     let mut levels = Vec::with_capacity(rec.levels());
     let mut cur = base.clone();
     for l in 0..rec.levels() {
@@ -293,7 +293,7 @@ mod tests {
                 "the dual base has 8 vertices and 10 faces"
             );
             assert_eq!(used(&rec.base), 8);
-            let canon = canonicalise(&rec, &s).unwrap();
+            let canon = canonicalise(&rec, &s, true).unwrap();
             assert_eq!(canon.levels.len(), depth);
         }
     }
