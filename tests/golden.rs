@@ -90,6 +90,9 @@ fn frozen_containers_still_decode() {
         ("cube_cc4.v14.swv", "cube_cc4.obj"),
         ("unstructured.v14.swv", "unstructured.obj"),
         ("sphere_polar3.v14.swv", "sphere_polar3.obj"),
+        ("cube_cc4.v15.swv", "cube_cc4.obj"),
+        ("prism_sqrt2_5.v15.swv", "prism_sqrt2_5.obj"),
+        ("terrain_grid33.interp4.v15.swv", "terrain_grid33.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

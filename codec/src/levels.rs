@@ -36,7 +36,18 @@ fn prev_bin(c: usize) -> usize {
 }
 
 #[derive(Clone)]
-struct Models(Vec<IntModel>);
+struct Models {
+    m: Vec<IntModel>,
+    bins: usize,
+    per_slot: bool,
+}
+
+/// From format 15 every component has its own neighbour context: the magnitudes of the
+/// same component at the coarse neighbours and at the level's earlier details
+/// (SPEC.md 10.1).
+pub const SLOT_CONTEXT_VERSION: u16 = 15;
+/// Neighbour bins of format 15: 15 magnitude bins and one for no neighbour.
+const SLOT_BINS: usize = 7;
 
 /// From format 12 a level's models start from the previous level's, counts halved
 /// until they sum to at most this (SPEC.md 10.1).
@@ -47,6 +58,9 @@ const SEED_TOTAL: u32 = 1024;
 pub struct LevelModels {
     version: u16,
     last: Option<Models>,
+    /// Format 15: per vertex, the magnitude classes of its coded components (base
+    /// vertices `UNKNOWN`).
+    mags: Vec<[u8; 3]>,
 }
 
 impl LevelModels {
@@ -55,6 +69,7 @@ impl LevelModels {
         LevelModels {
             version,
             last: None,
+            mags: Vec::new(),
         }
     }
 
@@ -62,7 +77,7 @@ impl LevelModels {
         match &self.last {
             Some(m) if self.version >= crate::coder::FAST_START_VERSION => {
                 let mut m = m.clone();
-                for im in &mut m.0 {
+                for im in &mut m.m {
                     im.reseed(SEED_TOTAL);
                 }
                 m
@@ -74,16 +89,20 @@ impl LevelModels {
 
 impl Models {
     fn new(version: u16) -> Self {
-        Models(
-            (0..2 * 3 * 3 * NBR_BINS)
+        let per_slot = version >= SLOT_CONTEXT_VERSION;
+        let bins = if per_slot { SLOT_BINS } else { NBR_BINS };
+        Models {
+            m: (0..2 * 3 * 3 * bins)
                 .map(|_| IntModel::for_version(version))
                 .collect(),
-        )
+            bins,
+            per_slot,
+        }
     }
 
     fn get(&mut self, class: usize, axis: usize, prev: usize, nbr: usize) -> &mut IntModel {
         let p = if axis == 0 { 0 } else { prev_bin(prev) };
-        &mut self.0[((class * 3 + axis) * 3 + p) * NBR_BINS + nbr]
+        &mut self.m[((class * 3 + axis) * 3 + p) * self.bins + nbr]
     }
 }
 
@@ -115,6 +134,56 @@ fn corner_context(level: &Level, act: &[u8], f: usize) -> usize {
         n += 1;
     }
     nbr_bin(s, n, unknown)
+}
+
+/// Format 15: the neighbour bin of each component of detail `i` (SPEC.md 10.1) from the
+/// per-component magnitudes `mags`: the coarse neighbours (an edge's ends, a face's
+/// edge points, a sqrt(2) face's corners) count twice, an edge's earlier edges at its
+/// ends once; the bin is the weighted mean magnitude, doubled and rounded, at most 14,
+/// or 15 with no neighbour.
+fn slot_bins(level: &Level, mags: &[[u8; 3]], sqrt2: bool, i: usize) -> [usize; 3] {
+    let nv = level.nv;
+    let mut sum = [0u32; 3];
+    let mut w = 0u32;
+    let mut add = |m: [u8; 3], weight: u32| {
+        if m[0] != UNKNOWN {
+            for k in 0..3 {
+                sum[k] += weight * m[k] as u32;
+            }
+            w += weight;
+        }
+    };
+    if sqrt2 {
+        for &v in level.coarse.face(i) {
+            add(mags[v as usize], 2);
+        }
+    } else if i < level.ne() {
+        let [a, b] = level.edges[i];
+        add(mags[a as usize], 2);
+        add(mags[b as usize], 2);
+        for v in [a, b] {
+            for &e in level.v_edges(v as usize) {
+                if (e as usize) < i {
+                    add(mags[nv + e as usize], 1);
+                }
+            }
+        }
+    } else {
+        for &e in level.f_edges(i - level.ne()) {
+            add(mags[nv + e as usize], 2);
+        }
+    }
+    if w == 0 {
+        return [SLOT_BINS - 1; 3];
+    }
+    sum.map(|s| match (s + w / 2) / w {
+        0 => 0,
+        1..=2 => 1,
+        3..=4 => 2,
+        5..=6 => 3,
+        7..=9 => 4,
+        _ => 5,
+    })
 }
 
 /// The details of a level, in coding order: `(count, first fine index)`; Catmull-Clark
@@ -238,40 +307,47 @@ fn predict(dk: i64, n: [i64; 3], k: usize, j: usize) -> i64 {
     crate::transform::round_div(num, den)
 }
 
+/// Codes detail `d` (components in the order of frame `fr`, each with its neighbour bin
+/// `nbr[slot]`); returns the magnitude classes of the coded values.
 fn put(
     enc: &mut Encoder,
     m: &mut Models,
     class: usize,
-    nbr: usize,
+    nbr: [usize; 3],
     d: [i64; 3],
     fr: Option<(usize, [i64; 3])>,
-) {
+) -> [u8; 3] {
     let (order, n) = plan(fr);
     let mut prev = 0;
+    let mut mags = [0u8; 3];
     for (slot, &axis) in order.iter().enumerate() {
         let pred = match (slot, n) {
             (1 | 2, Some(n)) => predict(d[order[0]], n, order[0], axis),
             _ => 0,
         };
         let v = d[axis] - pred;
-        enc.int(m.get(class, slot, prev, nbr), v);
+        enc.int(m.get(class, slot, prev, nbr[slot]), v);
         prev = class_of(v);
+        mags[slot] = prev as u8;
     }
+    mags
 }
 
 fn get(
     dec: &mut Decoder,
     m: &mut Models,
     class: usize,
-    nbr: usize,
+    nbr: [usize; 3],
     fr: Option<(usize, [i64; 3])>,
-) -> Result<[i64; 3]> {
+) -> Result<([i64; 3], [u8; 3])> {
     let (order, n) = plan(fr);
     let mut d = [0i64; 3];
     let mut prev = 0;
+    let mut mags = [0u8; 3];
     for (slot, &axis) in order.iter().enumerate() {
-        let v = dec.int(m.get(class, slot, prev, nbr))?;
+        let v = dec.int(m.get(class, slot, prev, nbr[slot]))?;
         prev = class_of(v);
+        mags[slot] = prev as u8;
         let pred = match (slot, n) {
             (1 | 2, Some(n)) => predict(d[order[0]], n, order[0], axis),
             _ => 0,
@@ -279,7 +355,7 @@ fn get(
         let x = v.checked_add(pred).filter(|x| x.abs() <= MAX_LIFTED);
         d[axis] = x.ok_or_else(|| Error::corrupt("LEVL", "detail out of range"))?;
     }
-    Ok(d)
+    Ok((d, mags))
 }
 
 /// Codes the details `x[k][nv..]` of one level (a sqrt(2) step when `sqrt2`). `coarse`
@@ -300,8 +376,10 @@ pub fn encode(
     let version = models.version;
     if version < 3 {
         let mut m = models.start();
-        let body = encode_mode(level, sqrt2, x, coarse, act, Mode::Plain, &mut m)
+        let mut mags = std::mem::take(&mut models.mags);
+        let body = encode_mode(level, sqrt2, x, coarse, act, &mut mags, Mode::Plain, &mut m)
             .expect("plain details are in range");
+        models.mags = mags;
         models.last = Some(m);
         return body;
     }
@@ -310,19 +388,41 @@ pub fn encode(
         modes.push(Mode::Tangent(t));
     }
     let start = models.start();
-    let mut best: Option<(u8, Vec<u8>, Vec<u8>, Models)> = None;
+    // The smallest mode's payload, with the activities, magnitudes and models it leaves.
+    struct Tried {
+        mode: u8,
+        body: Vec<u8>,
+        act: Vec<u8>,
+        mags: Vec<[u8; 3]>,
+        models: Models,
+    }
+    let mut best: Option<Tried> = None;
     for mode in modes {
         let mut a = act.clone();
+        let mut mg = models.mags.clone();
         let mut m = start.clone();
-        let Some(body) = encode_mode(level, sqrt2, x, coarse, &mut a, mode, &mut m) else {
+        let Some(body) = encode_mode(level, sqrt2, x, coarse, &mut a, &mut mg, mode, &mut m) else {
             continue;
         };
-        if best.as_ref().is_none_or(|b| body.len() < b.1.len()) {
-            best = Some((mode.byte(), body, a, m));
+        if best.as_ref().is_none_or(|b| body.len() < b.body.len()) {
+            best = Some(Tried {
+                mode: mode.byte(),
+                body,
+                act: a,
+                mags: mg,
+                models: m,
+            });
         }
     }
-    let (mode, body, a, m) = best.expect("at least one mode");
+    let Tried {
+        mode,
+        body,
+        act: a,
+        mags,
+        models: m,
+    } = best.expect("at least one mode");
     *act = a;
+    models.mags = mags;
     models.last = Some(m);
     let mut out = Vec::with_capacity(body.len() + 1);
     out.push(mode);
@@ -363,19 +463,24 @@ impl Mode<'_> {
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn encode_mode(
     level: &Level,
     sqrt2: bool,
     x: &[Vec<i64>; 3],
     coarse: &[Vec<i64>; 3],
     act: &mut Vec<u8>,
+    mags: &mut Vec<[u8; 3]>,
     mode: Mode<'_>,
     m: &mut Models,
 ) -> Option<Vec<u8>> {
     let framed = mode.framed();
+    let per_slot = m.per_slot;
     let mut enc = Encoder::new();
     let (nv, nd) = (level.nv, details(level, sqrt2));
     act.resize(nv + nd, 0);
+    mags.resize(nv, [UNKNOWN; 3]);
+    mags.resize(nv + nd, [0; 3]);
     let normals = if framed {
         face_normals(level, coarse)
     } else {
@@ -395,7 +500,12 @@ fn encode_mode(
                 return None;
             }
         }
-        put(&mut enc, m, class, nbr, d, fr);
+        let bins = if per_slot {
+            slot_bins(level, mags, sqrt2, i)
+        } else {
+            [nbr; 3]
+        };
+        mags[nv + i] = put(&mut enc, m, class, bins, d, fr);
         act[nv + i] = activity(d);
     }
     Some(enc.finish())
@@ -442,7 +552,11 @@ pub fn decode(
     let framed = mode.framed();
     let mut dec = Decoder::new(payload, "LEVL")?;
     let mut m = models.start();
+    let per_slot = m.per_slot;
     act.resize(nv + nd, 0);
+    let mags = &mut models.mags;
+    mags.resize(nv, [UNKNOWN; 3]);
+    mags.resize(nv + nd, [0; 3]);
     let normals = if framed {
         face_normals(level, x)
     } else {
@@ -458,7 +572,13 @@ pub fn decode(
         } else {
             None
         };
-        let r = get(&mut dec, &mut m, class, nbr, fr)?;
+        let bins = if per_slot {
+            slot_bins(level, mags, sqrt2, i)
+        } else {
+            [nbr; 3]
+        };
+        let (r, mg) = get(&mut dec, &mut m, class, bins, fr)?;
+        mags[nv + i] = mg;
         let mut d = r;
         if let Some(c) = mode.offset(i, fr) {
             for k in 0..3 {
@@ -475,4 +595,106 @@ pub fn decode(
     }
     models.last = Some(m);
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hierarchy::fixtures::{prism_with_triangles, pseudo};
+
+    fn refined(times: usize) -> Level {
+        let mut t = prism_with_triangles();
+        for _ in 0..times {
+            t = Level::new(&t).unwrap().fine();
+        }
+        Level::new(&t).unwrap()
+    }
+
+    #[test]
+    fn slot_bins_weigh_ends_twice_and_earlier_edge_points_once() {
+        let level = refined(1);
+        let (nv, ne) = (level.nv, level.ne());
+        let mut mags = vec![[UNKNOWN; 3]; nv + ne];
+        // No magnitudes anywhere yet: the "no neighbour" bin.
+        assert_eq!(slot_bins(&level, &mags, false, 0), [6; 3]);
+        for m in &mut mags[..nv] {
+            *m = [2, 0, 9];
+        }
+        for m in &mut mags[nv..] {
+            *m = [4, 4, 4];
+        }
+        let bin = |m: u32| match m {
+            0 => 0,
+            1..=2 => 1,
+            3..=4 => 2,
+            5..=6 => 3,
+            7..=9 => 4,
+            _ => 5,
+        };
+        for e in 0..ne {
+            let [a, b] = level.edges[e];
+            // Earlier edges at either end, counted by brute force.
+            let c = (0..e)
+                .filter(|&f| {
+                    let [x, y] = level.edges[f];
+                    [x, y].iter().any(|&v| v == a || v == b)
+                })
+                .count() as u32;
+            let w = 4 + c;
+            let want = [2u32, 0, 9].map(|m| bin((4 * m + 4 * c + w / 2) / w));
+            assert_eq!(
+                slot_bins(&level, &mags, false, e),
+                want.map(|b| b as usize),
+                "edge {e}"
+            );
+        }
+        // A face point: its edge points only.
+        assert_eq!(slot_bins(&level, &mags, false, ne), [2; 3]);
+    }
+
+    /// Details whose large component changes from one half of the level to the other:
+    /// per-component neighbourhoods (format 15) tell the halves apart, one activity per
+    /// detail (format 14) does not.
+    #[test]
+    fn per_slot_contexts_follow_which_component_is_large() {
+        let level = refined(3);
+        let (nv, nd) = (level.nv, level.ne() + level.nf());
+        let noise: Vec<i64> = pseudo(7, 3 * nd, 16);
+        // Coarse values zero: no normal frame, the components stay x, y, z.
+        let mut x: [Vec<i64>; 3] = std::array::from_fn(|_| vec![0; nv]);
+        // The halves: details of (edges beside) the first or the second half of the
+        // coarse faces, which lie together as they descend from the base faces in order.
+        let (ne, nf) = (level.ne(), level.nf());
+        for i in 0..nd {
+            let f = if i < ne {
+                level.edge_faces[i][0] as usize
+            } else {
+                i - ne
+            };
+            let big = if f < nf / 2 { 0 } else { 1 };
+            for k in 0..3 {
+                let v = noise[3 * i + k];
+                x[k].push(if k == big { v >> 2 } else { v >> 13 });
+            }
+        }
+        let coarse: [Vec<i64>; 3] = std::array::from_fn(|k| x[k][..nv].to_vec());
+        let mut sizes = Vec::new();
+        for version in [14u16, 15] {
+            let mut act = vec![UNKNOWN; nv];
+            let mut models = LevelModels::new(version);
+            let bytes = encode(&level, false, &x, &coarse, &mut act, &mut models, None);
+            let mut y = coarse.clone();
+            let mut act = vec![UNKNOWN; nv];
+            let mut models = LevelModels::new(version);
+            decode(&bytes, &level, false, &mut y, &mut act, &mut models, None).unwrap();
+            assert_eq!(y, x, "version {version} round trip");
+            sizes.push(bytes.len());
+        }
+        assert!(
+            sizes[1] * 100 < sizes[0] * 97,
+            "format 15 {} B, format 14 {} B",
+            sizes[1],
+            sizes[0]
+        );
+    }
 }
