@@ -1,7 +1,7 @@
 //! Zero-level coding: a mesh without subdivision structure, as connectivity plus
 //! predicted positions in one range-coded stream (SPEC.md 6).
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::HashMap;
 
 use crate::coder::{class_of, AdaptiveModel, Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
@@ -475,27 +475,41 @@ const OP_DROP: usize = 1;
 const OP_FRESH: usize = 2;
 const NIL: u32 = u32::MAX;
 
-/// The decoder's (and the encoder's) record of the faces coded so far: their directed
-/// half-edges, each vertex's incoming and outgoing ones (most recent first), and the
-/// queue of gates.
+/// The decoder's (and the encoder's) record of the faces coded so far: the faces
+/// themselves (the queue of gates is a cursor over their half-edges in the order
+/// recorded), their directed half-edges, and each vertex's incoming and outgoing ones
+/// (most recent first).
 struct Gates {
+    /// The recorded faces, as a mesh's `faces` and `face_starts`.
+    corners: Vec<u32>,
+    starts: Vec<u32>,
+    /// The queue's head: a face and one of its corners (the half-edge from it).
+    head_face: usize,
+    head: usize,
     present: PairMap,
     into: Vec<u32>,
     from: Vec<u32>,
     /// Linked list cells: (other vertex, next cell).
     cells: Vec<(u32, u32)>,
-    queue: VecDeque<(u32, u32, u8)>,
 }
 
 impl Gates {
     fn new() -> Self {
         Gates {
+            corners: Vec::new(),
+            starts: vec![0],
+            head_face: 0,
+            head: 0,
             present: PairMap::with_capacity(64),
             into: Vec::new(),
             from: Vec::new(),
             cells: Vec::new(),
-            queue: VecDeque::new(),
         }
+    }
+
+    /// Removes the queue's first gate.
+    fn pop(&mut self) {
+        self.head += 1;
     }
 
     fn has(&self, a: u32, b: u32) -> bool {
@@ -515,8 +529,9 @@ impl Gates {
         }
     }
 
-    /// Records a coded face (every corner a known vertex) whose degree symbol is `deg`.
-    fn add(&mut self, face: &[u32], deg: u8) {
+    /// Records a coded face (every corner a known vertex); its half-edges join the
+    /// queue.
+    fn add(&mut self, face: &[u32]) {
         let k = face.len();
         for i in 0..k {
             let (a, b) = (face[i], face[(i + 1) % k]);
@@ -527,17 +542,28 @@ impl Gates {
             self.into[b as usize] = c;
             self.cells.push((b, self.from[a as usize]));
             self.from[a as usize] = c + 1;
-            self.queue.push_back((a, b, deg));
         }
+        self.corners.extend_from_slice(face);
+        self.starts.push(self.corners.len() as u32);
     }
 
-    /// The first gate in the queue that is still open, dropping closed ones.
+    /// The first gate in the queue that is still open, dropping closed ones, with the
+    /// degree symbol of its face.
     fn gate(&mut self) -> Option<(u32, u32, u8)> {
-        while let Some(&(a, b, d)) = self.queue.front() {
+        while self.head < self.corners.len() {
+            while self.head >= self.starts[self.head_face + 1] as usize {
+                self.head_face += 1;
+            }
+            let (s, e) = (
+                self.starts[self.head_face] as usize,
+                self.starts[self.head_face + 1] as usize,
+            );
+            let a = self.corners[self.head];
+            let b = self.corners[if self.head + 1 < e { self.head + 1 } else { s }];
             if self.has(b, a) {
-                self.queue.pop_front();
+                self.head += 1;
             } else {
-                return Some((a, b, d));
+                return Some((a, b, degree_symbol(e - s) as u8));
             }
         }
         None
@@ -625,7 +651,7 @@ pub fn gate_order(starts: &[u32], idx: &[u32]) -> (Vec<u32>, Vec<u32>) {
             if pick.is_some() {
                 break;
             }
-            gates.queue.pop_front();
+            gates.pop();
         }
         let (f, r) = match pick {
             Some(p) => p,
@@ -642,7 +668,7 @@ pub fn gate_order(starts: &[u32], idx: &[u32]) -> (Vec<u32>, Vec<u32>) {
         let fc = face(f);
         buf.clear();
         buf.extend((0..fc.len()).map(|i| fc[(r + i) % fc.len()]));
-        gates.add(&buf, degree_symbol(buf.len()) as u8);
+        gates.add(&buf);
     }
     (order, rot)
 }
@@ -722,7 +748,7 @@ fn encode_gated(e: &mut Encoder, mesh: &Mesh, version: u16) {
             }
             if all.get(v, u).is_none() {
                 e.symbol(&mut g.op, OP_DROP);
-                gates.queue.pop_front();
+                gates.pop();
                 continue;
             }
             e.symbol(&mut g.op, OP_FRESH);
@@ -758,7 +784,7 @@ fn encode_gated(e: &mut Encoder, mesh: &Mesh, version: u16) {
             }
             mru.touch(v, at);
         }
-        gates.add(face, sym as u8);
+        gates.add(face);
     }
 }
 
@@ -820,9 +846,13 @@ fn decode_faces(
     let mut prev_deg = 0usize;
     let mut mesh = Mesh::new();
     // Grow with what is decoded rather than trusting the counts up front.
-    mesh.face_starts.reserve(faces.min(1 << 16) as usize);
-    mesh.faces.reserve(corners.min(1 << 18) as usize);
+    if g.is_none() {
+        mesh.face_starts.reserve(faces.min(1 << 16) as usize);
+        mesh.faces.reserve(corners.min(1 << 18) as usize);
+    }
     let mut face: Vec<u32> = Vec::new();
+    // Corners decoded so far, face by face.
+    let mut total = 0u64;
     for _ in 0..faces {
         let mut gated = None;
         if let Some((gm, gates)) = g.as_mut() {
@@ -833,7 +863,7 @@ fn decode_faces(
                         break;
                     }
                     OP_DROP => {
-                        gates.queue.pop_front();
+                        gates.pop();
                     }
                     _ => break,
                 }
@@ -852,7 +882,8 @@ fn decode_faces(
             deg = deg.saturating_add(extra as u64);
         }
         prev_deg = sym;
-        if (mesh.faces.len() as u64).saturating_add(deg) > corners {
+        total = total.saturating_add(deg);
+        if total > corners {
             return Err(Error::corrupt(
                 SECTION,
                 "faces have more corners than the header says",
@@ -886,11 +917,18 @@ fn decode_faces(
             mru.touch(v, at);
             face.push(v);
         }
-        if let Some((_, gates)) = g.as_mut() {
-            gates.add(&face, sym as u8);
+        // With gates the faces are kept in the gates' record (taken over below).
+        match g.as_mut() {
+            Some((_, gates)) => gates.add(&face),
+            None => {
+                mesh.faces.extend_from_slice(&face);
+                mesh.face_starts.push(mesh.faces.len() as u32);
+            }
         }
-        mesh.faces.extend_from_slice(&face);
-        mesh.face_starts.push(mesh.faces.len() as u32);
+    }
+    if let Some((_, gates)) = g {
+        mesh.faces = gates.corners;
+        mesh.face_starts = gates.starts;
     }
     if mesh.faces.len() as u64 != corners {
         return Err(Error::corrupt(
