@@ -209,6 +209,30 @@ fn slot(level: &Level, act: &[u8], sqrt2: bool, i: usize) -> (usize, usize, usiz
     }
 }
 
+/// Detail `i`'s class, the neighbour bins of its three coded values (format 15 on: each
+/// its own, [`slot_bins`]; before: one for all, [`slot`]) and its detail number for
+/// [`frame`].
+fn contexts(
+    level: &Level,
+    act: &[u8],
+    mags: &[[u8; 3]],
+    sqrt2: bool,
+    per_slot: bool,
+    i: usize,
+) -> (usize, [usize; 3], usize) {
+    if per_slot {
+        let ne = level.ne();
+        let (class, fd) = match (sqrt2, i < ne) {
+            (true, _) => (1, ne + i),
+            (false, edge) => (!edge as usize, i),
+        };
+        (class, slot_bins(level, mags, sqrt2, i), fd)
+    } else {
+        let (class, nbr, fd) = slot(level, act, sqrt2, i);
+        (class, [nbr; 3], fd)
+    }
+}
+
 fn activity(d: [i64; 3]) -> u8 {
     d.iter().map(|&v| class_of(v)).max().unwrap_or(0) as u8
 }
@@ -487,7 +511,7 @@ fn encode_mode(
         Vec::new()
     };
     for i in 0..nd {
-        let (class, nbr, fd) = slot(level, act, sqrt2, i);
+        let (class, bins, fd) = contexts(level, act, mags, sqrt2, per_slot, i);
         let mut d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
         let fr = if framed {
             frame(level, &normals, fd)
@@ -500,11 +524,6 @@ fn encode_mode(
                 return None;
             }
         }
-        let bins = if per_slot {
-            slot_bins(level, mags, sqrt2, i)
-        } else {
-            [nbr; 3]
-        };
         mags[nv + i] = put(&mut enc, m, class, bins, d, fr);
         act[nv + i] = activity(d);
     }
@@ -566,16 +585,11 @@ pub fn decode(
         xs.resize(nv + nd, 0);
     }
     for i in 0..nd {
-        let (class, nbr, fd) = slot(level, act, sqrt2, i);
+        let (class, bins, fd) = contexts(level, act, mags, sqrt2, per_slot, i);
         let fr = if framed {
             frame(level, &normals, fd)
         } else {
             None
-        };
-        let bins = if per_slot {
-            slot_bins(level, mags, sqrt2, i)
-        } else {
-            [nbr; 3]
         };
         let (r, mg) = get(&mut dec, &mut m, class, bins, fr)?;
         mags[nv + i] = mg;
