@@ -93,6 +93,9 @@ fn frozen_containers_still_decode() {
         ("cube_cc4.v15.swv", "cube_cc4.obj"),
         ("prism_sqrt2_5.v15.swv", "prism_sqrt2_5.obj"),
         ("terrain_grid33.interp4.v15.swv", "terrain_grid33.obj"),
+        ("cube_cc4.v16.swv", "cube_cc4.obj"),
+        ("sphere_polar3.v16.swv", "sphere_polar3.obj"),
+        ("prism_sqrt2_5.v16.swv", "prism_sqrt2_5.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

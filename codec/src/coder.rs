@@ -286,6 +286,18 @@ impl IntModel {
         }
     }
 
+    /// Updates the model as if `v` had been coded with it (joint models only; the
+    /// escaped class model learns the class).
+    pub fn observe(&mut self, v: i64) {
+        if let IntKind::Joint { sym, big } = &mut self.0 {
+            let (s, c) = joint_symbol(v);
+            sym.update(s);
+            if s == ESCAPE_SYMBOL {
+                big.update(c);
+            }
+        }
+    }
+
     /// [`AdaptiveModel::reseed`] on every model inside.
     pub fn reseed(&mut self, max_total: u32) {
         match &mut self.0 {
@@ -300,6 +312,21 @@ impl IntModel {
             }
         }
     }
+}
+
+/// The joint symbol of `v` (SPEC.md 4.4) and its magnitude class.
+fn joint_symbol(v: i64) -> (usize, usize) {
+    let c = class_of(v);
+    let neg = (v < 0) as usize;
+    let s = match c {
+        0 => 0,
+        1 => 1 + neg,
+        c if c <= JOINT_MAX_CLASS => {
+            3 + (c - 2) * 4 + neg * 2 + ((v.unsigned_abs() >> (c - 2)) & 1) as usize
+        }
+        _ => ESCAPE_SYMBOL,
+    };
+    (s, c)
 }
 
 /// `2^k` equally likely values, `1 <= k <= 16`, by shifts.
@@ -414,14 +441,7 @@ impl Encoder {
         let a = v.unsigned_abs();
         match &mut m.0 {
             IntKind::Joint { sym, big } => {
-                let s = match c {
-                    0 => 0,
-                    1 => 1 + neg,
-                    c if c <= JOINT_MAX_CLASS => {
-                        3 + (c - 2) * 4 + neg * 2 + ((a >> (c - 2)) & 1) as usize
-                    }
-                    _ => ESCAPE_SYMBOL,
-                };
+                let (s, _) = joint_symbol(v);
                 self.symbol(sym, s);
                 if s == ESCAPE_SYMBOL {
                     // Class, sign, then every bit below the leading one raw.

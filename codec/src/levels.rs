@@ -39,8 +39,15 @@ fn prev_bin(c: usize) -> usize {
 struct Models {
     m: Vec<IntModel>,
     bins: usize,
-    per_slot: bool,
+    /// Format 16: per class and slot, a model of every value coded there; a context
+    /// model starts from it (reseeded) at its first use.
+    parents: Vec<IntModel>,
+    used: Vec<bool>,
 }
+
+/// Format 16 on: context models start from their class and slot's shared model.
+pub const SHARED_START_VERSION: u16 = 16;
+const SHARED_SEED: u32 = 256;
 
 /// From format 15 every component has its own neighbour context: the magnitudes of the
 /// same component at the coarse neighbours and at the level's earlier details
@@ -77,7 +84,7 @@ impl LevelModels {
         match &self.last {
             Some(m) if self.version >= crate::coder::FAST_START_VERSION => {
                 let mut m = m.clone();
-                for im in &mut m.m {
+                for im in m.m.iter_mut().chain(&mut m.parents) {
                     im.reseed(SEED_TOTAL);
                 }
                 m
@@ -89,20 +96,43 @@ impl LevelModels {
 
 impl Models {
     fn new(version: u16) -> Self {
-        let per_slot = version >= SLOT_CONTEXT_VERSION;
-        let bins = if per_slot { SLOT_BINS } else { NBR_BINS };
+        let bins = if version >= SLOT_CONTEXT_VERSION {
+            SLOT_BINS
+        } else {
+            NBR_BINS
+        };
+        let shared = version >= SHARED_START_VERSION;
         Models {
             m: (0..2 * 3 * 3 * bins)
                 .map(|_| IntModel::for_version(version))
                 .collect(),
             bins,
-            per_slot,
+            parents: if shared {
+                (0..6).map(|_| IntModel::for_version(version)).collect()
+            } else {
+                Vec::new()
+            },
+            used: vec![!shared; 2 * 3 * 3 * bins],
         }
     }
 
     fn get(&mut self, class: usize, axis: usize, prev: usize, nbr: usize) -> &mut IntModel {
         let p = if axis == 0 { 0 } else { prev_bin(prev) };
-        &mut self.m[((class * 3 + axis) * 3 + p) * self.bins + nbr]
+        let i = ((class * 3 + axis) * 3 + p) * self.bins + nbr;
+        if !self.used[i] {
+            self.used[i] = true;
+            let mut m = self.parents[class * 3 + axis].clone();
+            m.reseed(SHARED_SEED);
+            self.m[i] = m;
+        }
+        &mut self.m[i]
+    }
+
+    /// Format 16: the shared model of `class` and `slot` learns `v`.
+    fn observe(&mut self, class: usize, slot: usize, v: i64) {
+        if let Some(p) = self.parents.get_mut(class * 3 + slot) {
+            p.observe(v);
+        }
     }
 }
 
@@ -217,10 +247,10 @@ fn contexts(
     act: &[u8],
     mags: &[[u8; 3]],
     sqrt2: bool,
-    per_slot: bool,
+    bins: usize,
     i: usize,
 ) -> (usize, [usize; 3], usize) {
-    if per_slot {
+    if bins == SLOT_BINS {
         let ne = level.ne();
         let (class, fd) = match (sqrt2, i < ne) {
             (true, _) => (1, ne + i),
@@ -351,6 +381,7 @@ fn put(
         };
         let v = d[axis] - pred;
         enc.int(m.get(class, slot, prev, nbr[slot]), v);
+        m.observe(class, slot, v);
         prev = class_of(v);
         mags[slot] = prev as u8;
     }
@@ -370,6 +401,7 @@ fn get(
     let mut mags = [0u8; 3];
     for (slot, &axis) in order.iter().enumerate() {
         let v = dec.int(m.get(class, slot, prev, nbr[slot]))?;
+        m.observe(class, slot, v);
         prev = class_of(v);
         mags[slot] = prev as u8;
         let pred = match (slot, n) {
@@ -499,7 +531,6 @@ fn encode_mode(
     m: &mut Models,
 ) -> Option<Vec<u8>> {
     let framed = mode.framed();
-    let per_slot = m.per_slot;
     let mut enc = Encoder::new();
     let (nv, nd) = (level.nv, details(level, sqrt2));
     act.resize(nv + nd, 0);
@@ -511,7 +542,7 @@ fn encode_mode(
         Vec::new()
     };
     for i in 0..nd {
-        let (class, bins, fd) = contexts(level, act, mags, sqrt2, per_slot, i);
+        let (class, bins, fd) = contexts(level, act, mags, sqrt2, m.bins, i);
         let mut d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
         let fr = if framed {
             frame(level, &normals, fd)
@@ -571,7 +602,6 @@ pub fn decode(
     let framed = mode.framed();
     let mut dec = Decoder::new(payload, "LEVL")?;
     let mut m = models.start();
-    let per_slot = m.per_slot;
     act.resize(nv + nd, 0);
     let mags = &mut models.mags;
     mags.resize(nv, [UNKNOWN; 3]);
@@ -585,7 +615,7 @@ pub fn decode(
         xs.resize(nv + nd, 0);
     }
     for i in 0..nd {
-        let (class, bins, fd) = contexts(level, act, mags, sqrt2, per_slot, i);
+        let (class, bins, fd) = contexts(level, act, mags, sqrt2, m.bins, i);
         let fr = if framed {
             frame(level, &normals, fd)
         } else {
@@ -664,6 +694,52 @@ mod tests {
         }
         // A face point: its edge points only.
         assert_eq!(slot_bins(&level, &mags, false, ne), [2; 3]);
+    }
+
+    /// Format 16: a context model's first use starts from what its class and component
+    /// learnt in other contexts; format 15's starts uniform.
+    #[test]
+    fn unused_contexts_start_from_their_shared_model() {
+        // Bytes to code two values of 3 in every context of class 0 after the class's
+        // three components saw 200 values of 3 each.
+        let cost = |version: u16| {
+            let mut m = Models::new(version);
+            for slot in 0..3 {
+                for _ in 0..200 {
+                    m.observe(0, slot, 3);
+                }
+            }
+            let mut enc = Encoder::new();
+            for slot in 0..3 {
+                for prev in [0, 3, 7] {
+                    for nbr in 0..SLOT_BINS {
+                        for _ in 0..2 {
+                            enc.int(m.get(0, slot, prev, nbr), 3);
+                            m.observe(0, slot, 3);
+                        }
+                    }
+                }
+            }
+            enc.finish().len()
+        };
+        let (shared, fresh) = (cost(16), cost(15));
+        assert!(
+            shared * 4 < fresh,
+            "format 16 {shared} B, format 15 {fresh} B"
+        );
+        // Other classes and components learn nothing from it.
+        let mut m = Models::new(16);
+        for _ in 0..200 {
+            m.observe(0, 0, 3);
+        }
+        let mut a = Encoder::new();
+        let mut b = Encoder::new();
+        let mut fresh = Models::new(16);
+        for _ in 0..50 {
+            a.int(m.get(1, 2, 0, 3), 3);
+            b.int(fresh.get(1, 2, 0, 3), 3);
+        }
+        assert_eq!(a.finish(), b.finish());
     }
 
     /// Details whose large component changes from one half of the level to the other:
