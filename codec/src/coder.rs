@@ -108,6 +108,18 @@ impl AdaptiveModel {
         self.cum[self.counts.len()] = ONE;
     }
 
+    /// Adds one occurrence of `s` to the counts (halving them past the bound) without
+    /// the table: for a model that is only ever read through [`AdaptiveModel::reseed`],
+    /// which rebuilds it, this is the same as [`AdaptiveModel::update`].
+    #[inline]
+    fn count(&mut self, s: usize) {
+        self.counts[s] += INCREMENT;
+        self.total += INCREMENT;
+        if self.total > MAX_TOTAL {
+            self.halve();
+        }
+    }
+
     /// Every count becomes `(c + 1) >> 1`, the total their sum.
     fn halve(&mut self) {
         self.total = 0;
@@ -120,11 +132,7 @@ impl AdaptiveModel {
     /// Records one occurrence of `s`.
     #[inline]
     pub fn update(&mut self, s: usize) {
-        self.counts[s] += INCREMENT;
-        self.total += INCREMENT;
-        if self.total > MAX_TOTAL {
-            self.halve();
-        }
+        self.count(s);
         self.until_rebuild -= 1;
         if self.until_rebuild == 0 {
             self.rebuild();
@@ -286,14 +294,15 @@ impl IntModel {
         }
     }
 
-    /// Updates the model as if `v` had been coded with it (joint models only; the
-    /// escaped class model learns the class).
+    /// Counts `v` as if it had been coded with the model (joint models only; the escaped
+    /// class model counts the class), without rebuilding the tables: for a model read
+    /// only through [`IntModel::reseed`] (format 16's shared models, SPEC.md 10.1).
     pub fn observe(&mut self, v: i64) {
         if let IntKind::Joint { sym, big } = &mut self.0 {
             let (s, c) = joint_symbol(v);
-            sym.update(s);
+            sym.count(s);
             if s == ESCAPE_SYMBOL {
-                big.update(c);
+                big.count(c);
             }
         }
     }

@@ -267,8 +267,12 @@ fn activity(d: [i64; 3]) -> u8 {
     d.iter().map(|&v| class_of(v)).max().unwrap_or(0) as u8
 }
 
-/// Newell's normal of coarse face `f`, in 128-bit integers.
+/// Newell's normal of coarse face `f`, in 128-bit integers (computed in 64 bits when
+/// every product and sum fits, as they do for coordinates below about 2^30).
 fn face_normal(level: &Level, coarse: &[Vec<i64>; 3], f: usize) -> [i128; 3] {
+    if let Some(n) = face_normal_64(level, coarse, f) {
+        return n.map(|v| v as i128);
+    }
     let c = level.coarse.face(f);
     let k = c.len();
     let mut n = [0i128; 3];
@@ -289,6 +293,24 @@ fn face_normal(level: &Level, coarse: &[Vec<i64>; 3], f: usize) -> [i128; 3] {
         n[2] += (px - qx) * (py + qy);
     }
     n
+}
+
+/// [`face_normal`] in 64-bit integers, or `None` if a product or sum would overflow.
+fn face_normal_64(level: &Level, coarse: &[Vec<i64>; 3], f: usize) -> Option<[i64; 3]> {
+    let c = level.coarse.face(f);
+    let k = c.len();
+    let mut n = [0i64; 3];
+    // |values| <= 2^52, so their sums and differences fit; the products may not.
+    let term = |d: i64, s: i64, acc: i64| acc.checked_add(d.checked_mul(s)?);
+    for i in 0..k {
+        let (a, b) = (c[i] as usize, c[(i + 1) % k] as usize);
+        let (px, py, pz) = (coarse[0][a], coarse[1][a], coarse[2][a]);
+        let (qx, qy, qz) = (coarse[0][b], coarse[1][b], coarse[2][b]);
+        n[0] = term(py - qy, pz + qz, n[0])?;
+        n[1] = term(pz - qz, px + qx, n[1])?;
+        n[2] = term(px - qx, py + qy, n[2])?;
+    }
+    Some(n)
 }
 
 /// Every coarse face's normal, once per level.
@@ -652,6 +674,36 @@ mod tests {
             t = Level::new(&t).unwrap().fine();
         }
         Level::new(&t).unwrap()
+    }
+
+    /// Newell's normal in 64 bits where it fits, else in 128: the same integers.
+    #[test]
+    fn face_normals_agree_with_128_bit_arithmetic() {
+        let level = refined(1);
+        for (seed, bits) in [(1u64, 20u32), (2, 34), (3, 53)] {
+            let x: [Vec<i64>; 3] = std::array::from_fn(|k| pseudo(seed + k as u64, level.nv, bits));
+            let mut wide = 0;
+            for f in 0..level.nf() {
+                let c = level.coarse.face(f);
+                let k = c.len();
+                let mut n = [0i128; 3];
+                for i in 0..k {
+                    let (a, b) = (c[i] as usize, c[(i + 1) % k] as usize);
+                    let p = |d: usize, v: usize| x[d][v] as i128;
+                    n[0] += (p(1, a) - p(1, b)) * (p(2, a) + p(2, b));
+                    n[1] += (p(2, a) - p(2, b)) * (p(0, a) + p(0, b));
+                    n[2] += (p(0, a) - p(0, b)) * (p(1, a) + p(1, b));
+                }
+                assert_eq!(face_normal(&level, &x, f), n, "face {f}, {bits}-bit values");
+                wide += face_normal_64(&level, &x, f).is_none() as usize;
+            }
+            // Small values never need 128 bits; 53-bit ones always do.
+            match bits {
+                20 => assert_eq!(wide, 0),
+                53 => assert_eq!(wide, level.nf()),
+                _ => {}
+            }
+        }
     }
 
     #[test]
