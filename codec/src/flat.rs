@@ -399,7 +399,13 @@ pub fn decode(
 ) -> Result<Mesh> {
     // Density bounds (SPEC.md 2.6): no conforming stream carries more per byte.
     let room = payload.len() as u64 + 8;
-    if vertices > 2048 * room || faces > 4096 * room || corners > 16384 * room {
+    // Gated faces (format 14 on) can cost less than named ones (SPEC.md 2.6).
+    let (per_face, per_corner) = if version >= GATES_VERSION {
+        (32768, 131072)
+    } else {
+        (4096, 16384)
+    };
+    if vertices > 2048 * room || faces > per_face * room || corners > per_corner * room {
         return Err(Error::corrupt(
             SECTION,
             format!(
@@ -1029,6 +1035,26 @@ mod tests {
         // And in the gates' own order.
         let (forder, rot) = gate_order(&mesh.face_starts, &mesh.faces);
         round_trip(&prepared(&mesh, &forder, &rot), GATES_VERSION);
+    }
+
+    /// Gated faces can cost less than named ones, so format 14 admits more faces per
+    /// byte before refusing a section as too dense (SPEC.md 2.6).
+    #[test]
+    fn density_bounds_follow_the_version() {
+        let payload = [0u8; 8];
+        let faces = 4096 * 16 + 1; // over 4096 (n + 8), under 32768 (n + 8)
+        let decode_as = |version| {
+            decode(&payload, 3, faces, 3 * faces, 1 << 40, version)
+                .expect_err("no mesh in 8 zero bytes")
+                .to_string()
+        };
+        assert!(decode_as(13).contains("cannot hold"), "{}", decode_as(13));
+        assert!(!decode_as(14).contains("cannot hold"), "{}", decode_as(14));
+        let too_many = 32768 * 16 + 1;
+        assert!(decode(&payload, 3, too_many, 3 * too_many, 1 << 40, 14)
+            .expect_err("too dense")
+            .to_string()
+            .contains("cannot hold"));
     }
 
     #[test]
