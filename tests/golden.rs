@@ -96,6 +96,9 @@ fn frozen_containers_still_decode() {
         ("cube_cc4.v16.swv", "cube_cc4.obj"),
         ("sphere_polar3.v16.swv", "sphere_polar3.obj"),
         ("prism_sqrt2_5.v16.swv", "prism_sqrt2_5.obj"),
+        ("cube_cc4.v17.swv", "cube_cc4.obj"),
+        ("sphere_polar3.v17.swv", "sphere_polar3.obj"),
+        ("mixed_cc2.v17.swv", "mixed_cc2.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

@@ -383,6 +383,256 @@ fn predict(dk: i64, n: [i64; 3], k: usize, j: usize) -> i64 {
     crate::transform::round_div(num, den)
 }
 
+/// From format 17 a level may code its details in an orthonormal frame: the coarse
+/// normal, a tangent along the detail's coarse edge (or face diagonal) and their cross
+/// product, reached by exact integer rotations (SPEC.md 10.5).
+pub const ROTATED_VERSION: u16 = 17;
+
+/// Fixed-point bits of the rotations' lifting factors.
+const ROT_BITS: u32 = 30;
+
+/// `[p y / 2^30]`, rounded half up.
+#[inline]
+fn mul_q(p: i64, y: i64) -> i64 {
+    ((p as i128 * y as i128 + (1 << (ROT_BITS - 1))) >> ROT_BITS) as i64
+}
+
+/// Floor of the square root of `v`.
+fn isqrt(v: u64) -> u64 {
+    if v < 2 {
+        return v;
+    }
+    // Newton's iteration from a power of two above the root decreases to the floor.
+    let mut x = 1u64 << (64 - v.leading_zeros()).div_ceil(2);
+    loop {
+        let y = (x + v / x) >> 1;
+        if y >= x {
+            return x;
+        }
+        x = y;
+    }
+}
+
+/// One plane rotation of components `i` and `j` as three lifting steps (SPEC.md 10.5),
+/// after negating both when `flip`: exactly invertible on integers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Givens {
+    i: usize,
+    j: usize,
+    flip: bool,
+    p: i64,
+    u: i64,
+}
+
+impl Givens {
+    /// The rotation that turns `(a, b)` (components `i`, `j`) onto the positive `i` axis,
+    /// and the length it leaves there.
+    fn towards(i: usize, j: usize, a: i64, b: i64) -> (Givens, i64) {
+        let flip = a < 0;
+        let (a, b) = if flip { (-a, -b) } else { (a, b) };
+        // |a|, |b| < 2^26 (24-bit normals and tangents, rotated), so the squares fit.
+        let r = isqrt((a * a + b * b) as u64) as i64;
+        let g = if r == 0 {
+            Givens {
+                i,
+                j,
+                flip,
+                p: 0,
+                u: 0,
+            }
+        } else {
+            // cos = a / r, sin = -b / r; p = (cos - 1) / sin = b / (r + a), u = sin.
+            let one = 1i128 << ROT_BITS;
+            Givens {
+                i,
+                j,
+                flip,
+                p: crate::transform::round_div(b as i128 * one, (r + a) as i128),
+                u: crate::transform::round_div(-(b as i128) * one, r as i128),
+            }
+        };
+        (g, r)
+    }
+
+    fn forward(&self, v: &mut [i64; 3]) {
+        let (i, j) = (self.i, self.j);
+        if self.flip {
+            v[i] = -v[i];
+            v[j] = -v[j];
+        }
+        v[i] += mul_q(self.p, v[j]);
+        v[j] += mul_q(self.u, v[i]);
+        v[i] += mul_q(self.p, v[j]);
+    }
+
+    fn inverse(&self, v: &mut [i64; 3]) {
+        let (i, j) = (self.i, self.j);
+        v[i] -= mul_q(self.p, v[j]);
+        v[j] -= mul_q(self.u, v[i]);
+        v[i] -= mul_q(self.p, v[j]);
+        if self.flip {
+            v[i] = -v[i];
+            v[j] = -v[j];
+        }
+    }
+}
+
+/// `v` shifted so that its largest magnitude has 24 bits (unchanged when zero).
+fn to_24_bits(v: [i128; 3]) -> [i64; 3] {
+    let big = v.iter().map(|x| x.unsigned_abs()).max().unwrap_or(0);
+    if big == 0 {
+        return [0; 3];
+    }
+    let bits = 128 - big.leading_zeros() as i32;
+    let shift = bits - 24;
+    if shift >= 0 {
+        v.map(|x| (x >> shift) as i64)
+    } else {
+        v.map(|x| (x << -shift) as i64)
+    }
+}
+
+/// The rotation of a detail into its orthonormal frame (SPEC.md 10.5): normal `n` onto
+/// the first component, then the tangent reference `t` onto the second.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Rotation([Givens; 3]);
+
+impl Rotation {
+    fn new(n: [i64; 3], t: [i128; 3]) -> Rotation {
+        let (g0, r1) = Givens::towards(0, 1, n[0], n[1]);
+        let (g1, _) = Givens::towards(0, 2, r1, n[2]);
+        let mut t = to_24_bits(t);
+        g0.forward(&mut t);
+        g1.forward(&mut t);
+        let (g2, _) = Givens::towards(1, 2, t[1], t[2]);
+        Rotation([g0, g1, g2])
+    }
+
+    fn forward(&self, mut v: [i64; 3]) -> [i64; 3] {
+        self.0.iter().for_each(|g| g.forward(&mut v));
+        v
+    }
+
+    fn inverse(&self, mut v: [i64; 3]) -> [i64; 3] {
+        self.0.iter().rev().for_each(|g| g.inverse(&mut v));
+        v
+    }
+}
+
+/// The tangent reference of detail `fd` (SPEC.md 10.5): an edge point's coarse edge,
+/// from its first end to its second; a face point's diagonal from its face's first
+/// corner to its third (to the second for a triangle).
+fn tangent_ref(level: &Level, coarse: &[Vec<i64>; 3], fd: usize) -> [i128; 3] {
+    let (a, b) = if fd < level.ne() {
+        let [a, b] = level.edges[fd];
+        (a, b)
+    } else {
+        let c = level.coarse.face(fd - level.ne());
+        (c[0], if c.len() >= 4 { c[2] } else { c[1] })
+    };
+    std::array::from_fn(|k| coarse[k][b as usize] as i128 - coarse[k][a as usize] as i128)
+}
+
+/// Format 17's along-edge offset (SPEC.md 10.5): sixteen times the offset of the mean of
+/// an interior edge's two coarse face centroids from the edge's midpoint, rounded; `None`
+/// for a boundary edge or a component above 2^52.
+fn edge_offset(level: &Level, coarse: &[Vec<i64>; 3], e: usize) -> Option<[i64; 3]> {
+    let [f1, f2] = level.edge_faces[e];
+    if f1 == crate::hierarchy::NONE || f2 == crate::hierarchy::NONE {
+        return None;
+    }
+    let (c1, c2) = (
+        level.coarse.face(f1 as usize),
+        level.coarse.face(f2 as usize),
+    );
+    let (k1, k2) = (c1.len() as i128, c2.len() as i128);
+    let [a, b] = level.edges[e];
+    let mut out = [0i64; 3];
+    for (k, o) in out.iter_mut().enumerate() {
+        let x = &coarse[k];
+        let sum = |c: &[u32]| c.iter().map(|&v| x[v as usize] as i128).sum::<i128>();
+        let ends = x[a as usize] as i128 + x[b as usize] as i128;
+        let num = 16 * (k2 * sum(c1) + k1 * sum(c2) - k1 * k2 * ends);
+        let v = crate::transform::round_div(num, 2 * k1 * k2);
+        if v.abs() > 1 << 52 {
+            return None;
+        }
+        *o = v;
+    }
+    Some(out)
+}
+
+/// A detail's rotation into its frame (SPEC.md 10.5) and, for an interior edge point,
+/// its rotated edge offset (see [`edge_offset`]).
+#[derive(Clone, Copy)]
+struct RotFrame {
+    rot: Rotation,
+    offset: Option<[i64; 3]>,
+}
+
+impl RotFrame {
+    /// The frame of detail `fd` with coarse normal `n`.
+    fn new(level: &Level, coarse: &[Vec<i64>; 3], sqrt2: bool, fd: usize, n: [i64; 3]) -> Self {
+        let rot = Rotation::new(n, tangent_ref(level, coarse, fd));
+        let offset = if !sqrt2 && fd < level.ne() {
+            edge_offset(level, coarse, fd).map(|v| rot.forward(v))
+        } else {
+            None
+        };
+        RotFrame { rot, offset }
+    }
+
+    /// What mode `mode` subtracts from the rotated values: eighths `(a, b)` of the
+    /// offset's tangential values with [`Mode::Shifted`], else nothing.
+    fn pred(&self, mode: Mode<'_>) -> [i64; 3] {
+        match (mode, self.offset) {
+            (Mode::Shifted(a, b), Some(w)) => [
+                0,
+                crate::transform::round_div(a as i128 * w[1] as i128, 128),
+                crate::transform::round_div(b as i128 * w[2] as i128, 128),
+            ],
+            _ => [0; 3],
+        }
+    }
+}
+
+/// Every detail's [`RotFrame`] (`None` where the coarse normal is zero), computed once
+/// per level for all the encoder's rotated modes.
+fn rot_frames(level: &Level, coarse: &[Vec<i64>; 3], sqrt2: bool) -> Vec<Option<RotFrame>> {
+    let normals = face_normals(level, coarse);
+    let ne = if sqrt2 { level.ne() } else { 0 };
+    (0..details(level, sqrt2))
+        .map(|i| {
+            let fd = ne + i;
+            frame(level, &normals, fd).map(|(_, n)| RotFrame::new(level, coarse, sqrt2, fd, n))
+        })
+        .collect()
+}
+
+/// The encoder's choice of format 17's shift weights for a level (not normative): for
+/// each tangential value the eighth in 0..=8 whose residuals have the fewest bits.
+fn shift_weights(level: &Level, x: &[Vec<i64>; 3], frames: &[Option<RotFrame>]) -> (u8, u8) {
+    let mut cost = [[0u64; 9]; 2];
+    for (i, f) in frames.iter().enumerate() {
+        let Some(RotFrame {
+            rot,
+            offset: Some(w),
+        }) = f
+        else {
+            continue;
+        };
+        let d = rot.forward([x[0][level.nv + i], x[1][level.nv + i], x[2][level.nv + i]]);
+        for (slot, c) in cost.iter_mut().enumerate() {
+            for (q, cq) in c.iter_mut().enumerate() {
+                let p = crate::transform::round_div(q as i128 * w[slot + 1] as i128, 128);
+                *cq += class_of(d[slot + 1].saturating_sub(p)) as u64;
+            }
+        }
+    }
+    let best = |c: &[u64; 9]| (0..9).min_by_key(|&q| (c[q], q)).unwrap_or(0) as u8;
+    (best(&cost[0]), best(&cost[1]))
+}
+
 /// Codes detail `d` (components in the order of frame `fr`, each with its neighbour bin
 /// `nbr[slot]`); returns the magnitude classes of the coded values.
 fn put(
@@ -455,8 +705,18 @@ pub fn encode(
     if version < 3 {
         let mut m = models.start();
         let mut mags = std::mem::take(&mut models.mags);
-        let body = encode_mode(level, sqrt2, x, coarse, act, &mut mags, Mode::Plain, &mut m)
-            .expect("plain details are in range");
+        let body = encode_mode(
+            level,
+            sqrt2,
+            x,
+            coarse,
+            &[],
+            act,
+            &mut mags,
+            Mode::Plain,
+            &mut m,
+        )
+        .expect("plain details are in range");
         models.mags = mags;
         models.last = Some(m);
         return body;
@@ -465,10 +725,21 @@ pub fn encode(
     if let Some(t) = targets.filter(|_| version >= 7) {
         modes.push(Mode::Tangent(t));
     }
+    let frames = if version >= ROTATED_VERSION {
+        modes.push(Mode::Rotated);
+        let frames = rot_frames(level, coarse, sqrt2);
+        match shift_weights(level, x, &frames) {
+            (0, 0) => {}
+            (a, b) => modes.push(Mode::Shifted(a, b)),
+        }
+        frames
+    } else {
+        Vec::new()
+    };
     let start = models.start();
     // The smallest mode's payload, with the activities, magnitudes and models it leaves.
     struct Tried {
-        mode: u8,
+        mode: Vec<u8>,
         body: Vec<u8>,
         act: Vec<u8>,
         mags: Vec<[u8; 3]>,
@@ -479,12 +750,17 @@ pub fn encode(
         let mut a = act.clone();
         let mut mg = models.mags.clone();
         let mut m = start.clone();
-        let Some(body) = encode_mode(level, sqrt2, x, coarse, &mut a, &mut mg, mode, &mut m) else {
+        let Some(body) = encode_mode(
+            level, sqrt2, x, coarse, &frames, &mut a, &mut mg, mode, &mut m,
+        ) else {
             continue;
         };
-        if best.as_ref().is_none_or(|b| body.len() < b.body.len()) {
+        if best
+            .as_ref()
+            .is_none_or(|b| body.len() + mode.bytes().len() < b.body.len() + b.mode.len())
+        {
             best = Some(Tried {
-                mode: mode.byte(),
+                mode: mode.bytes(),
                 body,
                 act: a,
                 mags: mg,
@@ -502,8 +778,8 @@ pub fn encode(
     *act = a;
     models.mags = mags;
     models.last = Some(m);
-    let mut out = Vec::with_capacity(body.len() + 1);
-    out.push(mode);
+    let mut out = Vec::with_capacity(body.len() + 2);
+    out.extend_from_slice(&mode);
     out.extend_from_slice(&body);
     out
 }
@@ -517,14 +793,30 @@ enum Mode<'a> {
     Framed,
     /// In the normal's frame, less each detail's target's tangential part.
     Tangent(&'a [[i64; 3]]),
+    /// Rotated into the orthonormal frame of the normal and the coarse edge or face
+    /// diagonal (format 17 on).
+    Rotated,
+    /// Rotated, and an interior edge point's tangential values less eighths `(a, b)` of
+    /// its faces' offset (format 17 on).
+    Shifted(u8, u8),
 }
 
 impl Mode<'_> {
+    /// The level's mode bytes: the mode, and format 17's shift weights.
+    fn bytes(self) -> Vec<u8> {
+        match self {
+            Mode::Shifted(a, b) => vec![5, a << 4 | b],
+            _ => vec![self.byte()],
+        }
+    }
+
     fn byte(self) -> u8 {
         match self {
             Mode::Plain => 0,
             Mode::Framed => 1,
             Mode::Tangent(_) => 2,
+            Mode::Rotated => 4,
+            Mode::Shifted(..) => 5,
         }
     }
 
@@ -547,6 +839,7 @@ fn encode_mode(
     sqrt2: bool,
     x: &[Vec<i64>; 3],
     coarse: &[Vec<i64>; 3],
+    frames: &[Option<RotFrame>],
     act: &mut Vec<u8>,
     mags: &mut Vec<[u8; 3]>,
     mode: Mode<'_>,
@@ -577,6 +870,21 @@ fn encode_mode(
                 return None;
             }
         }
+        let fr = match (mode, fr) {
+            (Mode::Rotated | Mode::Shifted(..), Some(_)) => {
+                let f = frames[i].as_ref()?;
+                let (r, pred) = (f.rot.forward(d), f.pred(mode));
+                if r.iter().any(|v| v.abs() > MAX_LIFTED) {
+                    return None;
+                }
+                d = std::array::from_fn(|k| r[k] - pred[k]);
+                if d.iter().any(|v| v.abs() > MAX_LIFTED) {
+                    return None;
+                }
+                None
+            }
+            _ => fr,
+        };
         mags[nv + i] = put(&mut enc, m, class, bins, d, fr);
         act[nv + i] = activity(d);
     }
@@ -615,6 +923,13 @@ pub fn decode(
                     ))
                 }
             },
+            Some((4, rest)) if version >= ROTATED_VERSION => (Mode::Rotated, rest),
+            Some((5, rest)) if version >= ROTATED_VERSION => match rest.split_first() {
+                Some((&w, rest)) if w >> 4 <= 8 && w & 15 <= 8 => {
+                    (Mode::Shifted(w >> 4, w & 15), rest)
+                }
+                _ => return Err(Error::corrupt("LEVL", "bad shift weights")),
+            },
             Some((m, _)) => return Err(Error::corrupt("LEVL", format!("unknown level mode {m}"))),
             None => return Err(Error::corrupt("LEVL", "empty level section")),
         }
@@ -643,9 +958,35 @@ pub fn decode(
         } else {
             None
         };
-        let (r, mg) = get(&mut dec, &mut m, class, bins, fr)?;
+        let rotation = match (mode, fr) {
+            (Mode::Rotated | Mode::Shifted(..), Some((_, n))) => {
+                let f = RotFrame::new(level, x, sqrt2, fd, n);
+                Some((f.rot, f.pred(mode)))
+            }
+            _ => None,
+        };
+        let (r, mg) = get(
+            &mut dec,
+            &mut m,
+            class,
+            bins,
+            fr.filter(|_| rotation.is_none()),
+        )?;
         mags[nv + i] = mg;
         let mut d = r;
+        if let Some((rot, pred)) = rotation {
+            let mut v = r;
+            for k in 0..3 {
+                v[k] = r[k]
+                    .checked_add(pred[k])
+                    .filter(|v| v.abs() <= MAX_LIFTED)
+                    .ok_or_else(|| Error::corrupt("LEVL", "detail out of range"))?;
+            }
+            d = rot.inverse(v);
+            if d.iter().any(|v| v.abs() > MAX_LIFTED) {
+                return Err(Error::corrupt("LEVL", "detail out of range"));
+            }
+        }
         if let Some(c) = mode.offset(i, fr) {
             for k in 0..3 {
                 d[k] = r[k]
@@ -838,5 +1179,227 @@ mod tests {
             sizes[1],
             sizes[0]
         );
+    }
+
+    #[test]
+    fn isqrt_is_the_floor_of_the_square_root() {
+        for v in (0u64..5000).chain([u32::MAX as u64, (1 << 51) - 1, 1 << 51, 1 << 52]) {
+            let r = isqrt(v);
+            assert!(r * r <= v && (r + 1) * (r + 1) > v, "isqrt({v}) = {r}");
+        }
+    }
+
+    /// Rotations are exact on integers, take the normal onto the first component and the
+    /// tangent reference's tangential part onto the second.
+    #[test]
+    fn rotations_are_exact_and_align_the_frame() {
+        let raw = pseudo(11, 600, 24);
+        let big = pseudo(12, 600, 52);
+        let mut cases: Vec<([i64; 3], [i128; 3])> = (0..100)
+            .map(|c| {
+                let n = [raw[6 * c], raw[6 * c + 1], raw[6 * c + 2]];
+                let t = [raw[6 * c + 3], raw[6 * c + 4], raw[6 * c + 5]].map(|v| v as i128 >> 5);
+                (n, t)
+            })
+            .collect();
+        let k = (1 << 23) + 5;
+        for n in [
+            [0, 0, k],
+            [0, 0, -k],
+            [k, 0, 0],
+            [-k, 0, 0],
+            [0, -k, 0],
+            [3, -4, 0],
+        ] {
+            for t in [
+                [1i128, 2, 3],
+                [0, 0, 0],
+                [n[0] as i128, n[1] as i128, n[2] as i128],
+            ] {
+                cases.push((n, t));
+            }
+        }
+        for (c, &(n, t)) in cases.iter().enumerate() {
+            let rot = Rotation::new(n, t);
+            for j in 0..6 {
+                let v = [
+                    big[(c * 6 + j) % 600],
+                    big[(c * 7 + j) % 600],
+                    raw[(c + j) % 600],
+                ];
+                let v = v.map(|x| x.clamp(-MAX_LIFTED, MAX_LIFTED));
+                assert_eq!(rot.inverse(rot.forward(v)), v, "case {c}: {n:?} {t:?}");
+            }
+            // The normal, scaled to 2^40, lands on the first axis.
+            let nf = n.map(|v| v as f64);
+            let len = nf.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let s = (1u64 << 40) as f64 / len;
+            let r = rot.forward(nf.map(|v| (v * s).round() as i64));
+            assert!((r[0] as f64 - (1u64 << 40) as f64).abs() < 1e-5 * (1u64 << 40) as f64);
+            assert!(r[1].abs().max(r[2].abs()) < 1 << 22, "case {c}: {r:?}");
+            // The tangent's part across the normal lands on the positive second axis.
+            let tf = t.map(|v| v as f64);
+            let tn = (0..3).map(|k| tf[k] * nf[k]).sum::<f64>() / (len * len);
+            let tp: Vec<f64> = (0..3).map(|k| tf[k] - tn * nf[k]).collect();
+            let tl = tp.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if tl > 1e-3 * len.max(1.0) && tl > 4.0 {
+                let s = (1u64 << 40) as f64 / tl;
+                let r = rot.forward(std::array::from_fn(|k| (tp[k] * s).round() as i64));
+                assert!(
+                    r[1] > 0 && r[0].abs().max(r[2].abs()) < 1 << 22,
+                    "case {c}: {r:?}"
+                );
+            }
+        }
+    }
+
+    /// A level whose coarse values lie on a noisy surface, and details of `bits` bits.
+    fn rotated_fixture(bits: u32) -> (Level, [Vec<i64>; 3], [Vec<i64>; 3]) {
+        let level = refined(2);
+        let (nv, nd) = (level.nv, level.ne() + level.nf());
+        let coarse: [Vec<i64>; 3] = std::array::from_fn(|k| pseudo(20 + k as u64, nv, 20));
+        let noise = pseudo(30, 3 * nd, bits);
+        let mut x = coarse.clone();
+        for i in 0..nd {
+            for k in 0..3 {
+                x[k].push(noise[3 * i + k]);
+            }
+        }
+        (level, coarse, x)
+    }
+
+    fn code_in_mode(
+        level: &Level,
+        coarse: &[Vec<i64>; 3],
+        x: &[Vec<i64>; 3],
+        mode: Mode<'_>,
+    ) -> usize {
+        let nv = level.nv;
+        let frames = rot_frames(level, coarse, false);
+        let mut act = vec![UNKNOWN; nv];
+        let mut mags = Vec::new();
+        let mut m = Models::new(ROTATED_VERSION);
+        let body = encode_mode(
+            level, false, x, coarse, &frames, &mut act, &mut mags, mode, &mut m,
+        )
+        .expect("in range");
+        let mut payload = mode.bytes();
+        payload.extend_from_slice(&body);
+        let mut y = coarse.clone();
+        let mut act = vec![UNKNOWN; nv];
+        let mut models = LevelModels::new(ROTATED_VERSION);
+        decode(&payload, level, false, &mut y, &mut act, &mut models, None).unwrap();
+        assert_eq!(&y, x, "round trip");
+        payload.len()
+    }
+
+    #[test]
+    fn rotated_modes_round_trip() {
+        let (level, coarse, x) = rotated_fixture(14);
+        for mode in [
+            Mode::Rotated,
+            Mode::Shifted(4, 4),
+            Mode::Shifted(8, 0),
+            Mode::Shifted(3, 7),
+        ] {
+            code_in_mode(&level, &coarse, &x, mode);
+        }
+        // Extreme details: the rotated values stay in range or the mode is refused.
+        let (level, coarse, mut x) = rotated_fixture(14);
+        for (i, v) in x[0].iter_mut().enumerate().skip(level.nv) {
+            *v = if i % 2 == 0 { MAX_LIFTED } else { -MAX_LIFTED };
+        }
+        let frames = rot_frames(&level, &coarse, false);
+        let mut m = Models::new(ROTATED_VERSION);
+        let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
+        let r = encode_mode(
+            &level,
+            false,
+            &x,
+            &coarse,
+            &frames,
+            &mut act,
+            &mut mags,
+            Mode::Rotated,
+            &mut m,
+        );
+        if r.is_some() {
+            code_in_mode(&level, &coarse, &x, Mode::Rotated);
+        }
+    }
+
+    /// Edge points displaced by half their faces' offset from the midpoint (Catmull-Clark's
+    /// edge rule, tangentially) code at least 30 % smaller with the shifted mode, whose
+    /// weights the encoder finds.
+    #[test]
+    fn shifted_mode_predicts_edge_points_that_follow_their_faces() {
+        let (level, coarse, mut x) = rotated_fixture(4);
+        let nv = level.nv;
+        for e in 0..level.ne() {
+            if let Some(off) = edge_offset(&level, &coarse, e) {
+                for k in 0..3 {
+                    x[k][nv + e] += crate::transform::round_div(off[k] as i128, 32);
+                }
+            }
+        }
+        let frames = rot_frames(&level, &coarse, false);
+        assert_eq!(shift_weights(&level, &x, &frames), (4, 4));
+        let plain = code_in_mode(&level, &coarse, &x, Mode::Rotated);
+        let shifted = code_in_mode(&level, &coarse, &x, Mode::Shifted(4, 4));
+        assert!(
+            shifted * 10 < plain * 7,
+            "shifted {shifted} B, rotated {plain} B"
+        );
+        // The encoder picks it.
+        let mut act = vec![UNKNOWN; nv];
+        let mut models = LevelModels::new(ROTATED_VERSION);
+        let bytes = encode(&level, false, &x, &coarse, &mut act, &mut models, None);
+        assert_eq!(&bytes[..2], &[5, 0x44]);
+    }
+
+    #[test]
+    fn rotated_modes_need_format_17_and_valid_weights() {
+        let (level, coarse, x) = rotated_fixture(10);
+        let frames = rot_frames(&level, &coarse, false);
+        let mut m = Models::new(ROTATED_VERSION);
+        let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
+        let body = encode_mode(
+            &level,
+            false,
+            &x,
+            &coarse,
+            &frames,
+            &mut act,
+            &mut mags,
+            Mode::Shifted(2, 5),
+            &mut m,
+        )
+        .unwrap();
+        let run = |version: u16, head: &[u8]| {
+            let mut payload = head.to_vec();
+            payload.extend_from_slice(&body);
+            let mut y = coarse.clone();
+            let mut act = vec![UNKNOWN; level.nv];
+            let mut models = LevelModels::new(version);
+            decode(&payload, &level, false, &mut y, &mut act, &mut models, None).map(|_| y)
+        };
+        assert_eq!(run(17, &[5, 0x25]).unwrap(), x);
+        for (version, head) in [
+            (16, &[5u8, 0x25][..]),
+            (16, &[4]),
+            (17, &[5, 0x95]),
+            (17, &[5, 0x29]),
+            (17, &[3]),
+            (17, &[6]),
+        ] {
+            let err = run(version, head).unwrap_err().to_string();
+            assert!(err.contains("LEVL"), "{version} {head:?}: {err}");
+        }
+        // Mode 5 without its weights.
+        let mut y = coarse.clone();
+        let mut act = vec![UNKNOWN; level.nv];
+        let mut models = LevelModels::new(17);
+        let err = decode(&[5], &level, false, &mut y, &mut act, &mut models, None).unwrap_err();
+        assert!(err.to_string().contains("shift weights"), "{err}");
     }
 }
