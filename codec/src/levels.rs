@@ -397,20 +397,46 @@ fn mul_q(p: i64, y: i64) -> i64 {
     ((p as i128 * y as i128 + (1 << (ROT_BITS - 1))) >> ROT_BITS) as i64
 }
 
-/// Floor of the square root of `v`.
-fn isqrt(v: u64) -> u64 {
-    if v < 2 {
-        return v;
-    }
-    // Newton's iteration from a power of two above the root decreases to the floor.
-    let mut x = 1u64 << (64 - v.leading_zeros()).div_ceil(2);
-    loop {
-        let y = (x + v / x) >> 1;
-        if y >= x {
-            return x;
+/// `SQRT_TABLE[m] = floor(sqrt(m 2^16))`: square roots of 8-bit mantissas to 12 bits.
+const SQRT_TABLE: [u32; 256] = {
+    let mut t = [0u32; 256];
+    let mut m = 0;
+    while m < 256 {
+        let v = (m as u32) << 16;
+        let mut r = 0u32;
+        while (r + 1) * (r + 1) <= v {
+            r += 1;
         }
-        x = y;
+        t[m] = r;
+        m += 1;
     }
+    t
+};
+
+/// Floor of the square root of `v`: a first guess from [`SQRT_TABLE`] good to about
+/// 1 %, two Newton steps (each at least the floor after the first, the error squared
+/// each time), then exact correction.
+fn isqrt(v: u64) -> u64 {
+    debug_assert!(v < 1 << 60, "the correction steps square the root");
+    if v < 256 {
+        return (SQRT_TABLE[v as usize] >> 8) as u64;
+    }
+    // An even shift leaving 7 or 8 significant bits: v = m 2^sh, sqrt(v) = sqrt(m) 2^(sh/2).
+    let len = 64 - v.leading_zeros();
+    let sh = (len - 7) & !1;
+    let m = (v >> sh) as usize;
+    let mut x = ((SQRT_TABLE[m] as u64) << (sh / 2)) >> 8;
+    x = x.max(1);
+    for _ in 0..2 {
+        x = (x + v / x) >> 1;
+    }
+    while x * x > v {
+        x -= 1;
+    }
+    while (x + 1) * (x + 1) <= v {
+        x += 1;
+    }
+    x
 }
 
 /// One plane rotation of components `i` and `j` as three lifting steps (SPEC.md 10.5),
@@ -442,13 +468,14 @@ impl Givens {
             }
         } else {
             // cos = a / r, sin = -b / r; p = (cos - 1) / sin = b / (r + a), u = sin.
-            let one = 1i128 << ROT_BITS;
+            // [n / d] of 9.1 in 64 bits: |b| 2^31 + d < 2^58.
+            let div = |n: i64, d: i64| (2 * n + d).div_euclid(2 * d);
             Givens {
                 i,
                 j,
                 flip,
-                p: crate::transform::round_div(b as i128 * one, (r + a) as i128),
-                u: crate::transform::round_div(-(b as i128) * one, r as i128),
+                p: div(b << ROT_BITS, r + a),
+                u: div(-b << ROT_BITS, r),
             }
         };
         (g, r)
@@ -1183,7 +1210,15 @@ mod tests {
 
     #[test]
     fn isqrt_is_the_floor_of_the_square_root() {
-        for v in (0u64..5000).chain([u32::MAX as u64, (1 << 51) - 1, 1 << 51, 1 << 52]) {
+        let squares = (1u64..1 << 26)
+            .step_by(9973)
+            .flat_map(|r| [r * r - 1, r * r, r * r + 1]);
+        let spread = (0..52).flat_map(|b| [(1u64 << b) - 1, 1 << b, (1 << b) + 12345]);
+        for v in (0u64..70_000)
+            .chain(squares)
+            .chain(spread)
+            .chain([(1 << 52) - 1])
+        {
             let r = isqrt(v);
             assert!(r * r <= v && (r + 1) * (r + 1) > v, "isqrt({v}) = {r}");
         }
