@@ -443,17 +443,18 @@ fn isqrt(v: u64) -> u64 {
 /// after negating both when `flip`: exactly invertible on integers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Givens {
-    i: usize,
-    j: usize,
+    i: u8,
+    j: u8,
     flip: bool,
-    p: i64,
-    u: i64,
+    /// The lifting factors, `|p|, |u| <= 2^30`.
+    p: i32,
+    u: i32,
 }
 
 impl Givens {
     /// The rotation that turns `(a, b)` (components `i`, `j`) onto the positive `i` axis,
     /// and the length it leaves there.
-    fn towards(i: usize, j: usize, a: i64, b: i64) -> (Givens, i64) {
+    fn towards(i: u8, j: u8, a: i64, b: i64) -> (Givens, i64) {
         let flip = a < 0;
         let (a, b) = if flip { (-a, -b) } else { (a, b) };
         // |a|, |b| < 2^26 (24-bit normals and tangents, rotated), so the squares fit.
@@ -474,29 +475,39 @@ impl Givens {
                 i,
                 j,
                 flip,
-                p: div(b << ROT_BITS, r + a),
-                u: div(-b << ROT_BITS, r),
+                p: div(b << ROT_BITS, r + a) as i32,
+                u: div(-b << ROT_BITS, r) as i32,
             }
         };
         (g, r)
     }
 
     fn forward(&self, v: &mut [i64; 3]) {
-        let (i, j) = (self.i, self.j);
+        let (i, j, p, u) = (
+            self.i as usize,
+            self.j as usize,
+            self.p as i64,
+            self.u as i64,
+        );
         if self.flip {
             v[i] = -v[i];
             v[j] = -v[j];
         }
-        v[i] += mul_q(self.p, v[j]);
-        v[j] += mul_q(self.u, v[i]);
-        v[i] += mul_q(self.p, v[j]);
+        v[i] += mul_q(p, v[j]);
+        v[j] += mul_q(u, v[i]);
+        v[i] += mul_q(p, v[j]);
     }
 
     fn inverse(&self, v: &mut [i64; 3]) {
-        let (i, j) = (self.i, self.j);
-        v[i] -= mul_q(self.p, v[j]);
-        v[j] -= mul_q(self.u, v[i]);
-        v[i] -= mul_q(self.p, v[j]);
+        let (i, j, p, u) = (
+            self.i as usize,
+            self.j as usize,
+            self.p as i64,
+            self.u as i64,
+        );
+        v[i] -= mul_q(p, v[j]);
+        v[j] -= mul_q(u, v[i]);
+        v[i] -= mul_q(p, v[j]);
         if self.flip {
             v[i] = -v[i];
             v[j] = -v[j];
