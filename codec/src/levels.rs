@@ -68,6 +68,8 @@ pub struct LevelModels {
     /// Format 15: per vertex, the magnitude classes of its coded components (base
     /// vertices `UNKNOWN`).
     mags: Vec<[u8; 3]>,
+    /// Whether the encoder tries format 17's rotated modes (not part of the format).
+    pub rotated: bool,
 }
 
 impl LevelModels {
@@ -77,6 +79,7 @@ impl LevelModels {
             version,
             last: None,
             mags: Vec::new(),
+            rotated: true,
         }
     }
 
@@ -763,7 +766,7 @@ pub fn encode(
     if let Some(t) = targets.filter(|_| version >= 7) {
         modes.push(Mode::Tangent(t));
     }
-    let frames = if version >= ROTATED_VERSION {
+    let frames = if version >= ROTATED_VERSION && models.rotated {
         modes.push(Mode::Rotated);
         let frames = rot_frames(level, coarse, sqrt2);
         match shift_weights(level, x, &frames) {

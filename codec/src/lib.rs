@@ -156,14 +156,15 @@ fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Header {
     }
 }
 
-/// Codes a canonical hierarchy with wavelet `w` (SPEC.md 9, 10); `None` if a lifted
-/// value leaves the supported range.
+/// Codes a canonical hierarchy with wavelet `w` (SPEC.md 9, 10), trying the rotated
+/// level modes (10.5) when `rotated`; `None` if a lifted value leaves the supported range.
 fn code_hierarchy(
     canon: &Canonical,
     pos: &[Vec<i64>; 3],
     w: Wavelet,
     disc: DiscTransform,
     header: &Header,
+    rotated: bool,
 ) -> Option<Payloads> {
     let mut x = pos.clone();
     // The coarse values of each level, as the decoder will have them when it reads the
@@ -212,6 +213,7 @@ fn code_hierarchy(
     let (mut header, base_bytes) = hierarchy_base(canon, &x, header);
     let mut act = vec![levels::UNKNOWN; canon.base.nv];
     let mut models = levels::LevelModels::new(FORMAT_VERSION);
+    models.rotated = rotated;
     let level_bytes = canon
         .levels
         .iter()
@@ -480,7 +482,7 @@ fn encode_with(
                 let pos = canonical_positions(mesh, &canon);
                 // code_hierarchy drops the disc transform of a hierarchy without poles.
                 let disc = opts.disc.unwrap_or(DiscTransform::None);
-                if let Some(mut p) = code_hierarchy(&canon, &pos, first, disc, &flat_h) {
+                if let Some(mut p) = code_hierarchy(&canon, &pos, first, disc, &flat_h, true) {
                     if opts.keep_order {
                         let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
                         p.order = Some(order_section(&canon.order, faces, rotations));
@@ -495,8 +497,8 @@ fn encode_with(
             };
             // Codes the chosen hierarchy with (w, d) and keeps it if smaller (the same
             // ORDR section: the order depends on the hierarchy only).
-            let try_code = |p: &mut Payloads, w: Wavelet, d: DiscTransform| {
-                if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, &flat_h) {
+            let try_code = |p: &mut Payloads, w: Wavelet, d: DiscTransform, rotated: bool| {
+                if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, &flat_h, rotated) {
                     q.order = p.order.clone();
                     if q.size() < p.size() {
                         *p = q;
@@ -506,7 +508,7 @@ fn encode_with(
             let disc = p.header.disc;
             if opts.transform == TransformChoice::Auto {
                 for &w in others.iter().filter(|&&w| w != first) {
-                    try_code(&mut p, w, disc);
+                    try_code(&mut p, w, disc, true);
                 }
             }
             // A polar hierarchy: the other disc transforms, with the best transform.
@@ -514,8 +516,15 @@ fn encode_with(
                 (canon.poles.is_empty(), opts.disc, p.header.transform)
             {
                 for d in DiscTransform::ALL.into_iter().filter(|&d| d != disc) {
-                    try_code(&mut p, w, d);
+                    try_code(&mut p, w, d, true);
                 }
+            }
+            // Each level keeps its smallest mode, but a rotated level hands the next one
+            // models learnt in another frame: the best coding without the rotated modes
+            // can be smaller in all.
+            if let Transform::Wavelet(w) = p.header.transform {
+                let d = p.header.disc;
+                try_code(&mut p, w, d, false);
             }
             if best.as_ref().is_none_or(|b| p.size() < b.size()) {
                 best = Some(p);
