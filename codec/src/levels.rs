@@ -1317,25 +1317,35 @@ mod tests {
         (level, coarse, x)
     }
 
+    /// The body of `x`'s details coded in `mode` from fresh format 17 models, or `None`
+    /// if the mode cannot code them.
+    fn body_in_mode(
+        level: &Level,
+        coarse: &[Vec<i64>; 3],
+        x: &[Vec<i64>; 3],
+        mode: Mode<'_>,
+    ) -> Option<Vec<u8>> {
+        let frames = rot_frames(level, coarse, false);
+        let mut m = Models::new(ROTATED_VERSION);
+        let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
+        encode_mode(
+            level, false, x, coarse, &frames, &mut act, &mut mags, mode, &mut m,
+        )
+    }
+
+    /// Codes `x`'s details in `mode`, decodes them and checks the round trip; the
+    /// payload's size.
     fn code_in_mode(
         level: &Level,
         coarse: &[Vec<i64>; 3],
         x: &[Vec<i64>; 3],
         mode: Mode<'_>,
     ) -> usize {
-        let nv = level.nv;
-        let frames = rot_frames(level, coarse, false);
-        let mut act = vec![UNKNOWN; nv];
-        let mut mags = Vec::new();
-        let mut m = Models::new(ROTATED_VERSION);
-        let body = encode_mode(
-            level, false, x, coarse, &frames, &mut act, &mut mags, mode, &mut m,
-        )
-        .expect("in range");
+        let body = body_in_mode(level, coarse, x, mode).expect("in range");
         let mut payload = mode.bytes();
         payload.extend_from_slice(&body);
         let mut y = coarse.clone();
-        let mut act = vec![UNKNOWN; nv];
+        let mut act = vec![UNKNOWN; level.nv];
         let mut models = LevelModels::new(ROTATED_VERSION);
         decode(&payload, level, false, &mut y, &mut act, &mut models, None).unwrap();
         assert_eq!(&y, x, "round trip");
@@ -1355,26 +1365,31 @@ mod tests {
         }
         // Extreme details: the rotated values stay in range or the mode is refused.
         let (level, coarse, mut x) = rotated_fixture(14);
-        for (i, v) in x[0].iter_mut().enumerate().skip(level.nv) {
-            *v = if i % 2 == 0 { MAX_LIFTED } else { -MAX_LIFTED };
+        for (k, xk) in x.iter_mut().enumerate() {
+            for (i, v) in xk.iter_mut().enumerate().skip(level.nv) {
+                *v = if (i + k) % 2 == 0 {
+                    MAX_LIFTED
+                } else {
+                    -MAX_LIFTED
+                };
+            }
         }
         let frames = rot_frames(&level, &coarse, false);
-        let mut m = Models::new(ROTATED_VERSION);
-        let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
-        let r = encode_mode(
-            &level,
-            false,
-            &x,
-            &coarse,
-            &frames,
-            &mut act,
-            &mut mags,
-            Mode::Rotated,
-            &mut m,
-        );
-        if r.is_some() {
-            code_in_mode(&level, &coarse, &x, Mode::Rotated);
+        let out_of_range = frames.iter().enumerate().any(|(i, f)| {
+            f.as_ref().is_some_and(|f| {
+                let d = std::array::from_fn(|k| x[k][level.nv + i]);
+                f.rot.forward(d).iter().any(|v| v.abs() > MAX_LIFTED)
+            })
+        });
+        // Three values of 2^52 - 1 have length sqrt(3) (2^52 - 1): some rotated value
+        // passes the bound, and the mode is refused.
+        assert!(out_of_range);
+        assert!(body_in_mode(&level, &coarse, &x, Mode::Rotated).is_none());
+        // Halved, every rotated value fits (length below 0.87 2^52): it round-trips.
+        for v in x.iter_mut().flat_map(|xk| xk[level.nv..].iter_mut()) {
+            *v /= 2;
         }
+        code_in_mode(&level, &coarse, &x, Mode::Rotated);
     }
 
     /// Edge points displaced by half their faces' offset from the midpoint (Catmull-Clark's
@@ -1409,21 +1424,7 @@ mod tests {
     #[test]
     fn rotated_modes_need_format_17_and_valid_weights() {
         let (level, coarse, x) = rotated_fixture(10);
-        let frames = rot_frames(&level, &coarse, false);
-        let mut m = Models::new(ROTATED_VERSION);
-        let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
-        let body = encode_mode(
-            &level,
-            false,
-            &x,
-            &coarse,
-            &frames,
-            &mut act,
-            &mut mags,
-            Mode::Shifted(2, 5),
-            &mut m,
-        )
-        .unwrap();
+        let body = body_in_mode(&level, &coarse, &x, Mode::Shifted(2, 5)).unwrap();
         let run = |version: u16, head: &[u8]| {
             let mut payload = head.to_vec();
             payload.extend_from_slice(&body);
