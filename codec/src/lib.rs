@@ -880,7 +880,7 @@ fn synthesise_levels(
     // A sqrt(2) level's successor, derived from it (cheaper than from its fine faces).
     let mut next: Option<Level> = None;
     for l in 0..upto as usize {
-        let level = match next.take() {
+        let mut level = match next.take() {
             Some(n) => n,
             None => Level::new(&topo)?,
         };
@@ -898,6 +898,12 @@ fn synthesise_levels(
         // sqrt2-lazy: the face points' predictions, from the coarse values, serve the
         // tangent targets and the synthesis; the other sqrt(2) transforms take a plan.
         let lazy = is_sqrt2 && w == Wavelet::Sqrt2Lazy;
+        // Only sqrt2-sym (SPEC.md 9.8) reads the per-vertex lists.
+        if is_sqrt2 && w != Wavelet::Sqrt2Sym {
+            level.free_vertex_adjacency();
+        }
+        // (Made before the details are decoded: while the coarse values alone are in
+        // memory, which is smaller than making them after.)
         let predictions = lazy.then(|| sqrt2::predictions(&level, &x));
         let plan = (is_sqrt2 && !lazy).then(|| sqrt2::Plan::for_synthesis(&level, w));
         // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
@@ -947,9 +953,10 @@ fn synthesise_levels(
             return Err(Error::corrupt("LEVL", "reconstructed value out of range"));
         }
         if is_sqrt2 && l + 1 < upto as usize {
-            next = Some(sqrt2::next_level(&level)?);
+            next = Some(sqrt2::next_level(level)?);
         } else if is_sqrt2 {
-            topo = sqrt2::fine(&level);
+            // The finest topology needs only the level's edges: its other arrays go first.
+            topo = sqrt2::fine_owned(level);
         } else {
             topo = level.fine_with(&pole);
             if !pole.is_empty() {

@@ -247,16 +247,34 @@ impl Level {
         }
     }
 
-    /// Coarse vertex `v`'s edges.
+    /// Coarse vertex `v`'s edges (none once [`Level::free_vertex_adjacency`] ran).
     #[inline]
     pub fn v_edges(&self, v: usize) -> &[u32] {
-        &self.vert_edges[self.ve_starts[v] as usize..self.ve_starts[v + 1] as usize]
+        match (self.ve_starts.get(v), self.ve_starts.get(v + 1)) {
+            (Some(&a), Some(&b)) => &self.vert_edges[a as usize..b as usize],
+            _ => &[],
+        }
     }
 
-    /// Coarse vertex `v`'s faces (one entry per corner).
+    /// Coarse vertex `v`'s faces, one entry per corner (none once
+    /// [`Level::free_vertex_adjacency`] ran).
     #[inline]
     pub fn v_faces(&self, v: usize) -> &[u32] {
-        &self.vert_faces[self.vf_starts[v] as usize..self.vf_starts[v + 1] as usize]
+        match (self.vf_starts.get(v), self.vf_starts.get(v + 1)) {
+            (Some(&a), Some(&b)) => &self.vert_faces[a as usize..b as usize],
+            _ => &[],
+        }
+    }
+
+    /// Frees the per-vertex lists, for a decoder step that never reads them (a
+    /// sqrt2-lazy or ir2w level: its predictions, update, details and synthesis read
+    /// faces and edges only), so the level's memory is smaller where the decoder's
+    /// peaks.
+    pub fn free_vertex_adjacency(&mut self) {
+        self.vert_edges = Vec::new();
+        self.vert_faces = Vec::new();
+        self.ve_starts = Vec::new();
+        self.vf_starts = Vec::new();
     }
 
     /// Face `f`'s edges, in corner order.

@@ -44,12 +44,42 @@ pub fn fine(level: &Level) -> Topo {
     t
 }
 
+/// [`fine`] of a level no longer needed: its adjacency is freed before the fine faces
+/// are allocated (the decoder's last sqrt(2) step, where memory peaks).
+pub fn fine_owned(level: Level) -> Topo {
+    let Level {
+        nv,
+        edges,
+        edge_faces,
+        coarse,
+        face_edges,
+        vert_edges,
+        vert_faces,
+        ve_starts,
+        vf_starts,
+    } = level;
+    let nf = coarse.nf();
+    drop((
+        coarse, face_edges, vert_edges, vert_faces, ve_starts, vf_starts,
+    ));
+    let mut t = Topo::new(nv + nf);
+    t.idx.reserve(4 * edges.len());
+    t.starts.reserve(edges.len());
+    let f0 = nv as u32;
+    for (&[a, b], &[f1, f2]) in edges.iter().zip(&edge_faces) {
+        t.push(&[a, f0 + f2, b, f0 + f1]);
+    }
+    t
+}
+
 /// The level of [`fine`]`(level)`, equal to `Level::new(&fine(level))` but derived from
 /// `level` without looking edges up: a fine edge joins a corner's vertex to its face's
 /// point, so it is numbered by the corner. Falls back to [`Level::new`] unless every face
 /// has distinct corners (then each corner is one fine edge between the quads of its two
-/// coarse edges). The level must be [`closed`].
-pub fn next_level(level: &Level) -> crate::error::Result<Level> {
+/// coarse edges). The level must be [`closed`]. It is consumed, and its arrays freed
+/// before the new level's adjacency is built (the decoder's memory peaks here).
+pub fn next_level(level: Level) -> crate::error::Result<Level> {
+    let fine_topo = fine(&level);
     let topo = &level.coarse;
     let distinct = (0..topo.nf()).all(|f| {
         let face = topo.face(f);
@@ -57,8 +87,8 @@ pub fn next_level(level: &Level) -> crate::error::Result<Level> {
             .enumerate()
             .all(|(i, v)| !face[i + 1..].contains(v))
     });
-    let fine_topo = fine(level);
     if !distinct {
+        drop(level);
         return Level::new(&fine_topo);
     }
     // Per coarse edge, its two occurrences as (corner, next corner) slots, in face order.
@@ -102,6 +132,7 @@ pub fn next_level(level: &Level) -> crate::error::Result<Level> {
             face_edges.push(id[c]);
         }
     }
+    drop((occ, id, level));
     Ok(Level::from_edges(fine_topo, edges, edge_faces, face_edges))
 }
 
@@ -532,26 +563,25 @@ fn targets(
 /// weights of that corner's valence (the regular row when none); other faces lift none.
 fn ir2w_update(level: &Level, nb: &Neighbours<'_>) -> Rows {
     let topo = &level.coarse;
-    // Gather form: per vertex, (face, weight) pairs.
-    let mut pairs: Vec<(u32, u32, i32)> = Vec::new();
-    for f in 0..level.nf() {
+    // Face f's scaling functions phi_0..phi_11 (vertices) and their weights (SPEC.md
+    // 9.7), the last one left out at a valence-3 corner; `None` for a face without them.
+    let terms = |f: usize| -> Option<([u32; 12], [i32; 12], usize)> {
         let face = topo.face(f);
         if face.len() != 4 {
-            continue;
+            return None;
         }
         let n: Vec<usize> = face.iter().map(|&v| nb.valence(v)).collect();
         if !n.iter().all(|&n| table_valence(n)) {
-            continue;
+            return None;
         }
         let odd: Vec<usize> = (0..4).filter(|&i| n[i] != 4).collect();
         if odd.len() > 1 {
-            continue;
+            return None;
         }
         let e = odd.first().copied().unwrap_or(0);
         let row = tables::OMEGA[n[e] - 3];
         let s = topo.starts[f] as usize;
         let corner = |i: usize| s + (e + i) % 4;
-        // Weight of each scaling function phi_0..phi_11 (SPEC.md 9.7).
         let w = [
             row[0], row[1], row[2], row[1], row[3], row[4], row[5], row[6], row[6], row[5], row[4],
             row[3],
@@ -564,27 +594,45 @@ fn ir2w_update(level: &Level, nb: &Neighbours<'_>) -> Rows {
             phi[4 + 2 * i] = nb.at(c, ni - 1);
             phi[4 + 2 * ((i + 3) % 4) + 1] = nb.at(c, 2);
         }
-        for k in 0..12 {
-            if k == 11 && n[e] == 3 {
-                continue;
+        Some((phi, w, if n[e] == 3 { 11 } else { 12 }))
+    };
+    // Gather form, per vertex its (face, weight) terms in face order: counted first, then
+    // placed (what sorting every term by vertex and face gave, without holding them all
+    // twice).
+    let nv = level.nv;
+    let mut starts = vec![0u32; nv + 1];
+    for f in 0..level.nf() {
+        if let Some((phi, _, k)) = terms(f) {
+            // (Ring entries are coarse vertices; anything else would have no row.)
+            for &v in phi[..k].iter().filter(|&&v| (v as usize) < nv) {
+                starts[v as usize + 1] += 1;
             }
-            pairs.push((phi[k], f as u32, w[k]));
         }
     }
-    pairs.sort_by_key(|p| (p.0, p.1));
-    let mut rows = Rows::new();
-    let mut it = pairs.into_iter().peekable();
-    for v in 0..level.nv as u32 {
-        while let Some(&(pv, f, w)) = it.peek() {
-            if pv != v {
-                break;
-            }
-            rows.term(f, w);
-            it.next();
-        }
-        rows.push(ONE as i64);
+    for v in 0..nv {
+        starts[v + 1] += starts[v];
     }
-    rows
+    let total = starts[nv] as usize;
+    let mut at: Vec<u32> = starts[..nv].to_vec();
+    let (mut src, mut w) = (vec![0u32; total], vec![0i32; total]);
+    for f in 0..level.nf() {
+        if let Some((phi, wt, k)) = terms(f) {
+            for (&v, &wk) in phi[..k].iter().zip(&wt[..k]) {
+                let Some(slot) = at.get_mut(v as usize) else {
+                    continue;
+                };
+                src[*slot as usize] = f as u32;
+                w[*slot as usize] = wk;
+                *slot += 1;
+            }
+        }
+    }
+    Rows {
+        starts,
+        src,
+        w,
+        den: vec![ONE as i64; nv],
+    }
 }
 
 #[cfg(test)]
@@ -645,8 +693,9 @@ mod tests {
         for base in [prism, flipped] {
             let mut level = Level::new(&base).unwrap();
             for _ in 0..5 {
-                let next = next_level(&level).unwrap();
+                let next = next_level(level.clone()).unwrap();
                 assert_eq!(next, Level::new(&fine(&level)).unwrap());
+                assert_eq!(fine_owned(level.clone()), fine(&level));
                 level = next;
             }
         }
@@ -669,6 +718,34 @@ mod tests {
             }
             t = fine(&level);
             assert!(t.all_quads());
+        }
+    }
+
+    /// The decoder frees a sqrt2-lazy or ir2w level's per-vertex lists: its predictions,
+    /// synthesis plan, next level and fine faces come out the same without them.
+    #[test]
+    fn lazy_and_ir2w_steps_need_no_vertex_lists() {
+        let mut t = prism_with_triangles();
+        for depth in 0..4 {
+            let level = Level::new(&t).unwrap();
+            let mut lean = level.clone();
+            lean.free_vertex_adjacency();
+            assert!(lean.v_edges(0).is_empty() && lean.v_faces(0).is_empty());
+            let x: [Vec<i64>; 3] =
+                std::array::from_fn(|k| pseudo(40 + 3 * depth + k as u64, fine_nv(&level), 30));
+            assert_eq!(predictions(&lean, &x), predictions(&level, &x));
+            for w in [Wavelet::Sqrt2Lazy, Wavelet::Ir2w] {
+                let (mut a, mut b) = (x[0].clone(), x[0].clone());
+                Plan::for_synthesis(&level, w).synthesise(&mut a);
+                Plan::for_synthesis(&lean, w).synthesise(&mut b);
+                assert_eq!(a, b, "{w:?} at depth {depth}");
+            }
+            assert_eq!(
+                next_level(lean.clone()).unwrap(),
+                next_level(level.clone()).unwrap()
+            );
+            assert_eq!(fine_owned(lean), fine(&level));
+            t = fine(&level);
         }
     }
 
