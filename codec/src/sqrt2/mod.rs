@@ -33,40 +33,25 @@ pub fn closed(level: &Level) -> bool {
 /// The fine topology of one sqrt(2) step (SPEC.md 8.4): per coarse edge, in edge order,
 /// the quad (a, f2, b, f1). The level must be [`closed`].
 pub fn fine(level: &Level) -> Topo {
-    let mut t = Topo::new(level.nv + level.nf());
-    t.idx.reserve(4 * level.ne());
-    t.starts.reserve(level.ne());
-    let f0 = level.nv as u32;
-    for (e, &[a, b]) in level.edges.iter().enumerate() {
-        let [f1, f2] = level.edge_faces[e];
-        t.push(&[a, f0 + f2, b, f0 + f1]);
-    }
-    t
+    fine_of_edges(level.nv, level.nf(), &level.edges, &level.edge_faces)
 }
 
-/// [`fine`] of a level no longer needed: its adjacency is freed before the fine faces
-/// are allocated (the decoder's last sqrt(2) step, where memory peaks).
-pub fn fine_owned(level: Level) -> Topo {
-    let Level {
-        nv,
-        edges,
-        edge_faces,
-        coarse,
-        face_edges,
-        vert_edges,
-        vert_faces,
-        ve_starts,
-        vf_starts,
-    } = level;
-    let nf = coarse.nf();
-    drop((
-        coarse, face_edges, vert_edges, vert_faces, ve_starts, vf_starts,
-    ));
+/// [`fine`] of a level no longer needed: its other arrays are freed before the fine
+/// faces are allocated (the decoder's last sqrt(2) step, where memory peaks).
+pub fn fine_owned(mut level: Level) -> Topo {
+    let nf = level.nf();
+    level.free_vertex_adjacency();
+    level.coarse = Topo::new(0);
+    level.face_edges = Vec::new();
+    fine_of_edges(level.nv, nf, &level.edges, &level.edge_faces)
+}
+
+fn fine_of_edges(nv: usize, nf: usize, edges: &[[u32; 2]], edge_faces: &[[u32; 2]]) -> Topo {
     let mut t = Topo::new(nv + nf);
     t.idx.reserve(4 * edges.len());
     t.starts.reserve(edges.len());
     let f0 = nv as u32;
-    for (&[a, b], &[f1, f2]) in edges.iter().zip(&edge_faces) {
+    for (&[a, b], &[f1, f2]) in edges.iter().zip(edge_faces) {
         t.push(&[a, f0 + f2, b, f0 + f1]);
     }
     t
