@@ -896,7 +896,8 @@ fn synthesise_levels(
         }
         let payload = c.sections[2 + l].payload;
         // sqrt2-lazy: the face points' predictions, from the coarse values, serve the
-        // tangent targets and the synthesis; the other sqrt(2) transforms take a plan.
+        // tangent targets and the synthesis; sqrt2-sym takes a plan, ir2w a pass of its
+        // own after the details.
         let lazy = is_sqrt2 && w == Wavelet::Sqrt2Lazy;
         // Only sqrt2-sym (SPEC.md 9.8) reads the per-vertex lists.
         if is_sqrt2 && w != Wavelet::Sqrt2Sym {
@@ -905,14 +906,13 @@ fn synthesise_levels(
         // (Made before the details are decoded: while the coarse values alone are in
         // memory, which is smaller than making them after.)
         let predictions = lazy.then(|| sqrt2::predictions(&level, &x));
-        let plan = (is_sqrt2 && !lazy).then(|| sqrt2::Plan::for_synthesis(&level, w));
+        let plan = (is_sqrt2 && w == Wavelet::Sqrt2Sym).then(|| sqrt2::Plan::new(&level, w));
         // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
         let tangent = c.version >= 7 && payload.first() == Some(&2);
-        let targets = match (&predictions, &plan) {
-            (Some(pr), _) if tangent => Some(sqrt2::tangent_targets_from(&level, &x, pr)),
-            (None, Some(p)) if tangent => Some(sqrt2::tangent_targets(&level, p, &x)),
-            _ => None,
-        };
+        let targets = (is_sqrt2 && tangent).then(|| match &predictions {
+            Some(pr) => sqrt2::tangent_targets_from(&level, &x, pr),
+            None => sqrt2::tangent_targets_from(&level, &x, &sqrt2::predictions(&level, &x)),
+        });
         levels::decode(
             payload,
             &level,
@@ -922,22 +922,16 @@ fn synthesise_levels(
             &mut models,
             targets.as_deref(),
         )?;
-        if is_sqrt2 {
+        if is_sqrt2 && w == Wavelet::Ir2w {
+            sqrt2::ir2w_synthesise(&level, &mut x);
+        } else if is_sqrt2 {
             if let Some(plan) = &plan {
                 for xs in x.iter_mut() {
                     plan.synthesise(xs);
                 }
             }
-            // sqrt2-lazy predicts from the coarse values as decoded, a decoder's ir2w
-            // plan from them after its update.
-            let pr = match predictions {
-                Some(pr) => Some(pr),
-                None if plan.as_ref().is_some_and(sqrt2::Plan::predicts_later) => {
-                    Some(sqrt2::predictions(&level, &x))
-                }
-                None => None,
-            };
-            for (xs, pk) in x.iter_mut().zip(pr.iter().flatten()) {
+            // sqrt2-lazy predicts from the coarse values as decoded.
+            for (xs, pk) in x.iter_mut().zip(predictions.iter().flatten()) {
                 sqrt2::apply_predictions(xs, level.nv, pk, false);
             }
         } else {

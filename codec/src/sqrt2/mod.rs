@@ -176,9 +176,6 @@ pub struct Plan {
     /// sqrt2-sym: per vertex, its faces (step 1, step 3) and ring-2 faces (step 3).
     sym_own: Rows,
     sym_ring: Rows,
-    /// The face points' prediction is left to [`predictions`] (a decoder's ir2w plan:
-    /// [`Plan::synthesise`] runs the update only).
-    one_pass: bool,
 }
 
 /// Valences (ring lengths) and the neighbour of corner `c` at ring offset `j`.
@@ -218,7 +215,6 @@ impl Plan {
             update: Rows::new(),
             sym_own: Rows::new(),
             sym_ring: Rows::new(),
-            one_pass: false,
         };
         match w {
             Wavelet::Sqrt2Lazy | Wavelet::Ir2w => {
@@ -263,40 +259,9 @@ impl Plan {
         plan
     }
 
-    /// A decoder's plan of `w`: as [`Plan::new`], except that ir2w keeps only its
-    /// update; its synthesis then leaves the face points' prediction to the caller, by
-    /// [`predictions`] of the updated coarse values (one pass over the faces for the
-    /// three axes, no stored rows: less memory and time on large levels).
-    pub fn for_synthesis(level: &Level, w: Wavelet) -> Plan {
-        if w != Wavelet::Ir2w {
-            return Plan::new(level, w);
-        }
-        let rings = Rings::from_level(level);
-        let nb = Neighbours {
-            rings: &rings,
-            topo: &level.coarse,
-        };
-        Plan {
-            nv: level.nv,
-            nf: level.nf(),
-            wavelet: w,
-            predict: Rows::new(),
-            update: ir2w_update(level, &nb),
-            sym_own: Rows::new(),
-            sym_ring: Rows::new(),
-            one_pass: true,
-        }
-    }
-
-    /// Whether [`Plan::synthesise`] leaves the face points' prediction to the caller.
-    pub fn predicts_later(&self) -> bool {
-        self.one_pass
-    }
-
     /// IR2W's prediction rows, for the transforms that predict with them (sqrt2-lazy, ir2w).
     fn prediction(&self) -> Option<&Rows> {
-        (!self.one_pass && matches!(self.wavelet, Wavelet::Sqrt2Lazy | Wavelet::Ir2w))
-            .then_some(&self.predict)
+        matches!(self.wavelet, Wavelet::Sqrt2Lazy | Wavelet::Ir2w).then_some(&self.predict)
     }
 
     /// Analysis: fine values `x[..nv + nf]` to coarse values and face-point details.
@@ -322,9 +287,7 @@ impl Plan {
             Wavelet::Sqrt2Lazy => self.predict_faces(x, false),
             Wavelet::Ir2w => {
                 self.ir2w_vertices(x, false);
-                if !self.one_pass {
-                    self.predict_faces(x, false);
-                }
+                self.predict_faces(x, false);
             }
             Wavelet::Sqrt2Sym => {
                 self.sym_vertices(x, false);
@@ -463,34 +426,42 @@ pub fn predictions(level: &Level, x: &[Vec<i64>; 3]) -> [Vec<i64>; 3] {
         rings: &rings,
         topo: &level.coarse,
     };
-    let topo = &level.coarse;
     let mut out: [Vec<i64>; 3] = std::array::from_fn(|_| Vec::with_capacity(level.nf()));
     for f in 0..level.nf() {
-        let s = topo.starts[f] as usize;
-        let k = topo.starts[f + 1] as usize - s;
-        let mut acc = [0i128; 3];
-        let mut add = |u: usize, w: i128| {
-            for (a, xa) in acc.iter_mut().zip(x) {
-                *a += w * xa[u] as i128;
-            }
-        };
-        for c in s..s + k {
-            let v = topo.idx[c];
-            let n = nb.valence(v);
-            if table_valence(n) {
-                add(v as usize, ONE / 2);
-                for (j, &a) in tables::ALPHA[n - 3].iter().enumerate() {
-                    add(nb.at(c, j) as usize, a as i128);
-                }
-            } else {
-                add(v as usize, ONE);
-            }
-        }
-        for (o, a) in out.iter_mut().zip(acc) {
-            o.push(crate::transform::round_div(a, k as i128 * ONE));
+        for (o, p) in out
+            .iter_mut()
+            .zip(face_prediction(&level.coarse, &nb, f, x))
+        {
+            o.push(p);
         }
     }
     out
+}
+
+/// `P_f` of face f on the three axes (SPEC.md 9.7, eq. 1), from the coarse values
+/// `x[k][..nv]`.
+fn face_prediction(topo: &Topo, nb: &Neighbours<'_>, f: usize, x: &[Vec<i64>; 3]) -> [i64; 3] {
+    let s = topo.starts[f] as usize;
+    let k = topo.starts[f + 1] as usize - s;
+    let mut acc = [0i128; 3];
+    let mut add = |u: usize, w: i128| {
+        for (a, xa) in acc.iter_mut().zip(x) {
+            *a += w * xa[u] as i128;
+        }
+    };
+    for c in s..s + k {
+        let v = topo.idx[c];
+        let n = nb.valence(v);
+        if table_valence(n) {
+            add(v as usize, ONE / 2);
+            for (j, &a) in tables::ALPHA[n - 3].iter().enumerate() {
+                add(nb.at(c, j) as usize, a as i128);
+            }
+        } else {
+            add(v as usize, ONE);
+        }
+    }
+    acc.map(|a| crate::transform::round_div(a, k as i128 * ONE))
 }
 
 /// sqrt2-lazy on one axis with [`predictions`] from the same coarse values: analysis
@@ -543,27 +514,30 @@ fn targets(
         .collect()
 }
 
-/// The ir2w update rows (SPEC.md 9.7): every quad face whose corners have table valences,
-/// at most one of them other than 4, lifts its twelve scaling functions with the frozen
-/// weights of that corner's valence (the regular row when none); other faces lift none.
-fn ir2w_update(level: &Level, nb: &Neighbours<'_>) -> Rows {
+/// Visits every term of the ir2w update (SPEC.md 9.7) as `visit(f, v, w)`: every quad
+/// face f whose corners have table valences, at most one of them other than 4, lifts its
+/// twelve scaling functions v with the frozen weights w of that corner's valence (the
+/// regular row when none); other faces lift none. Faces in order, each face's terms in
+/// slot order.
+fn ir2w_terms(level: &Level, nb: &Neighbours<'_>, mut visit: impl FnMut(usize, u32, i32)) {
     let topo = &level.coarse;
-    // Face f's scaling functions phi_0..phi_11 (vertices) and their weights (SPEC.md
-    // 9.7), the last one left out at a valence-3 corner; `None` for a face without them.
-    let terms = |f: usize| -> Option<([u32; 12], [i32; 12], usize)> {
+    for f in 0..level.nf() {
         let face = topo.face(f);
         if face.len() != 4 {
-            return None;
+            continue;
         }
-        let n: Vec<usize> = face.iter().map(|&v| nb.valence(v)).collect();
+        let mut n = [0usize; 4];
+        for (n, &v) in n.iter_mut().zip(face) {
+            *n = nb.valence(v);
+        }
         if !n.iter().all(|&n| table_valence(n)) {
-            return None;
+            continue;
         }
-        let odd: Vec<usize> = (0..4).filter(|&i| n[i] != 4).collect();
-        if odd.len() > 1 {
-            return None;
+        let mut odd = (0..4).filter(|&i| n[i] != 4);
+        let e = odd.next().unwrap_or(0);
+        if odd.next().is_some() {
+            continue;
         }
-        let e = odd.first().copied().unwrap_or(0);
         let row = tables::OMEGA[n[e] - 3];
         let s = topo.starts[f] as usize;
         let corner = |i: usize| s + (e + i) % 4;
@@ -579,44 +553,78 @@ fn ir2w_update(level: &Level, nb: &Neighbours<'_>) -> Rows {
             phi[4 + 2 * i] = nb.at(c, ni - 1);
             phi[4 + 2 * ((i + 3) % 4) + 1] = nb.at(c, 2);
         }
-        Some((phi, w, if n[e] == 3 { 11 } else { 12 }))
-    };
-    // Gather form, per vertex its (face, weight) terms in face order: counted first, then
-    // placed (what sorting every term by vertex and face gave, without holding them all
-    // twice).
-    let nv = level.nv;
-    let mut starts = vec![0u32; nv + 1];
-    for f in 0..level.nf() {
-        if let Some((phi, _, k)) = terms(f) {
-            // (Ring entries are coarse vertices; anything else would have no row.)
-            for &v in phi[..k].iter().filter(|&&v| (v as usize) < nv) {
-                starts[v as usize + 1] += 1;
-            }
+        // At a valence-3 corner the last scaling function is the first ring one again
+        // and takes no weight.
+        let k = if n[e] == 3 { 11 } else { 12 };
+        for (&v, &wk) in phi[..k].iter().zip(&w[..k]) {
+            visit(f, v, wk);
         }
     }
+}
+
+/// The ir2w update rows (SPEC.md 9.7) in gather form: per coarse vertex its (face,
+/// weight) terms in face order, counted first, then placed.
+fn ir2w_update(level: &Level, nb: &Neighbours<'_>) -> Rows {
+    let nv = level.nv;
+    let mut starts = vec![0u32; nv + 1];
+    // (Ring entries are coarse vertices; anything else would have no row.)
+    ir2w_terms(level, nb, |_, v, _| {
+        if let Some(s) = starts.get_mut(v as usize + 1).filter(|_| (v as usize) < nv) {
+            *s += 1;
+        }
+    });
     for v in 0..nv {
         starts[v + 1] += starts[v];
     }
     let total = starts[nv] as usize;
     let mut at: Vec<u32> = starts[..nv].to_vec();
     let (mut src, mut w) = (vec![0u32; total], vec![0i32; total]);
-    for f in 0..level.nf() {
-        if let Some((phi, wt, k)) = terms(f) {
-            for (&v, &wk) in phi[..k].iter().zip(&wt[..k]) {
-                let Some(slot) = at.get_mut(v as usize) else {
-                    continue;
-                };
-                src[*slot as usize] = f as u32;
-                w[*slot as usize] = wk;
-                *slot += 1;
-            }
+    ir2w_terms(level, nb, |f, v, wk| {
+        if let Some(slot) = at.get_mut(v as usize) {
+            src[*slot as usize] = f as u32;
+            w[*slot as usize] = wk;
+            *slot += 1;
         }
-    }
+    });
     Rows {
         starts,
         src,
         w,
         den: vec![ONE as i64; nv],
+    }
+}
+
+/// A decoder's ir2w synthesis of a level, all three axes (SPEC.md 9.7): every coarse
+/// vertex `v += U_v` from the decoded details `x[k][nv..]`, then every face point
+/// `f += P_f` from the updated coarse values. The same numbers as a [`Plan`]'s
+/// synthesis, with the level's rings built once and neither update rows nor
+/// predictions stored: the update is scattered face by face into one 128-bit sum per
+/// vertex, an axis at a time, and each prediction is added where it is made.
+pub fn ir2w_synthesise(level: &Level, x: &mut [Vec<i64>; 3]) {
+    let rings = Rings::from_level(level);
+    let nb = Neighbours {
+        rings: &rings,
+        topo: &level.coarse,
+    };
+    let nv = level.nv;
+    // One axis at a time: one sum per vertex alive, not three.
+    let mut acc = vec![0i128; nv];
+    for xk in x.iter_mut() {
+        ir2w_terms(level, &nb, |f, v, w| {
+            if let Some(a) = acc.get_mut(v as usize) {
+                *a += xk[nv + f].weighted(w as i128);
+            }
+        });
+        for (xv, a) in xk.iter_mut().zip(acc.iter_mut()) {
+            *xv = xv.plus(i64::round(std::mem::take(a), ONE));
+        }
+    }
+    drop(acc);
+    for f in 0..level.nf() {
+        let p = face_prediction(&level.coarse, &nb, f, x);
+        for (xk, p) in x.iter_mut().zip(p) {
+            xk[nv + f] = xk[nv + f].plus(p);
+        }
     }
 }
 
@@ -721,15 +729,49 @@ mod tests {
             assert_eq!(predictions(&lean, &x), predictions(&level, &x));
             for w in [Wavelet::Sqrt2Lazy, Wavelet::Ir2w] {
                 let (mut a, mut b) = (x[0].clone(), x[0].clone());
-                Plan::for_synthesis(&level, w).synthesise(&mut a);
-                Plan::for_synthesis(&lean, w).synthesise(&mut b);
+                Plan::new(&level, w).synthesise(&mut a);
+                Plan::new(&lean, w).synthesise(&mut b);
                 assert_eq!(a, b, "{w:?} at depth {depth}");
             }
+            let (mut a, mut b) = (x.clone(), x.clone());
+            ir2w_synthesise(&level, &mut a);
+            ir2w_synthesise(&lean, &mut b);
+            assert_eq!(a, b, "ir2w at depth {depth}");
             assert_eq!(
                 next_level(lean.clone()).unwrap(),
                 next_level(level.clone()).unwrap()
             );
             assert_eq!(fine_owned(lean), fine(&level));
+            t = fine(&level);
+        }
+    }
+
+    /// The decoder's ir2w pass (update scattered by face, predictions added in place)
+    /// gives the plan's synthesis (gathered rows) exactly, and inverts its analysis, on
+    /// valences 3 to 5, also with values near the range bound.
+    #[test]
+    fn ir2w_pass_is_the_plans_synthesis() {
+        let mut t = prism_with_triangles();
+        for depth in 0..4 {
+            let level = Level::new(&t).unwrap();
+            let plan = Plan::new(&level, Wavelet::Ir2w);
+            for bits in [12, 40, 52] {
+                let orig: [Vec<i64>; 3] = std::array::from_fn(|k| {
+                    pseudo(7 * depth + k as u64 + bits as u64, fine_nv(&level), bits)
+                });
+                let mut x = orig.clone();
+                for xk in x.iter_mut() {
+                    plan.analyse(xk);
+                }
+                assert_ne!(x, orig);
+                let mut gathered = x.clone();
+                for xk in gathered.iter_mut() {
+                    plan.synthesise(xk);
+                }
+                assert_eq!(gathered, orig, "plan at depth {depth}, {bits} bits");
+                ir2w_synthesise(&level, &mut x);
+                assert_eq!(x, orig, "pass at depth {depth}, {bits} bits");
+            }
             t = fine(&level);
         }
     }
