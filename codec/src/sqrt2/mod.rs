@@ -84,7 +84,8 @@ pub fn next_level(level: Level) -> crate::error::Result<Level> {
         for i in 0..k {
             let e = level.face_edges[s + i] as usize;
             let n = (occ[e][0][0] != NONE) as usize;
-            occ[e][n] = [(s + i) as u32, (s + (i + 1) % k) as u32];
+            let next = if i + 1 == k { s } else { s + i + 1 };
+            occ[e][n] = [(s + i) as u32, next as u32];
         }
     }
     // The corner slot of vertex v in the face occurrence `o`.
@@ -426,11 +427,12 @@ pub fn predictions(level: &Level, x: &[Vec<i64>; 3]) -> [Vec<i64>; 3] {
         rings: &rings,
         topo: &level.coarse,
     };
+    let small = small_values(x, level.nv);
     let mut out: [Vec<i64>; 3] = std::array::from_fn(|_| Vec::with_capacity(level.nf()));
     for f in 0..level.nf() {
         for (o, p) in out
             .iter_mut()
-            .zip(face_prediction(&level.coarse, &nb, f, x))
+            .zip(face_prediction(&level.coarse, &nb, f, x, small))
         {
             o.push(p);
         }
@@ -438,30 +440,75 @@ pub fn predictions(level: &Level, x: &[Vec<i64>; 3]) -> [Vec<i64>; 3] {
     out
 }
 
+/// Whether every coarse value `x[k][..nv]` is below 2^40 in magnitude: then a face of
+/// at most eight corners sums its prediction (weights below 2^18 per corner) in 64 bits.
+fn small_values(x: &[Vec<i64>; 3], nv: usize) -> bool {
+    x.iter().all(|xk| {
+        xk[..nv.min(xk.len())]
+            .iter()
+            .all(|v| v.unsigned_abs() < 1 << 40)
+    })
+}
+
 /// `P_f` of face f on the three axes (SPEC.md 9.7, eq. 1), from the coarse values
-/// `x[k][..nv]`.
-fn face_prediction(topo: &Topo, nb: &Neighbours<'_>, f: usize, x: &[Vec<i64>; 3]) -> [i64; 3] {
+/// `x[k][..nv]`; `small` from [`small_values`] of the same values (the same numbers in
+/// 64-bit sums).
+fn face_prediction(
+    topo: &Topo,
+    nb: &Neighbours<'_>,
+    f: usize,
+    x: &[Vec<i64>; 3],
+    small: bool,
+) -> [i64; 3] {
     let s = topo.starts[f] as usize;
     let k = topo.starts[f + 1] as usize - s;
+    if small && k <= 8 {
+        let mut acc = [0i64; 3];
+        corner_terms(topo, nb, s..s + k, |u, w| {
+            for (a, xa) in acc.iter_mut().zip(x) {
+                *a += w as i64 * xa[u];
+            }
+        });
+        return acc.map(|a| crate::transform::round_div(a as i128, k as i128 * ONE));
+    }
     let mut acc = [0i128; 3];
-    let mut add = |u: usize, w: i128| {
+    corner_terms(topo, nb, s..s + k, |u, w| {
         for (a, xa) in acc.iter_mut().zip(x) {
-            *a += w * xa[u] as i128;
+            *a += w as i128 * xa[u] as i128;
         }
-    };
-    for c in s..s + k {
+    });
+    acc.map(|a| crate::transform::round_div(a, k as i128 * ONE))
+}
+
+/// The terms (vertex, weight) of eq. 1 at the corners `cs` of a face: `2^15` at a
+/// corner's vertex and `A_n` over its ring from the corner's place (`p_j` of 8.4), or
+/// `2^16` at a vertex of valence outside the table.
+#[inline]
+fn corner_terms(
+    topo: &Topo,
+    nb: &Neighbours<'_>,
+    cs: std::ops::Range<usize>,
+    mut add: impl FnMut(usize, i32),
+) {
+    for c in cs {
         let v = topo.idx[c];
-        let n = nb.valence(v);
+        let ring = nb.rings.of(v as usize);
+        let n = ring.len();
         if table_valence(n) {
-            add(v as usize, ONE / 2);
-            for (j, &a) in tables::ALPHA[n - 3].iter().enumerate() {
-                add(nb.at(c, j) as usize, a as i128);
+            add(v as usize, (ONE / 2) as i32);
+            // Walk the ring from the corner's place without a division per term.
+            let mut i = nb.rings.pos[c] as usize % n;
+            for &a in tables::ALPHA[n - 3] {
+                add(ring[i] as usize, a);
+                i += 1;
+                if i == n {
+                    i = 0;
+                }
             }
         } else {
-            add(v as usize, ONE);
+            add(v as usize, ONE as i32);
         }
     }
-    acc.map(|a| crate::transform::round_div(a, k as i128 * ONE))
 }
 
 /// sqrt2-lazy on one axis with [`predictions`] from the same coarse values: analysis
@@ -620,8 +667,9 @@ pub fn ir2w_synthesise(level: &Level, x: &mut [Vec<i64>; 3]) {
         }
     }
     drop(acc);
+    let small = small_values(x, nv);
     for f in 0..level.nf() {
-        let p = face_prediction(&level.coarse, &nb, f, x);
+        let p = face_prediction(&level.coarse, &nb, f, x, small);
         for (xk, p) in x.iter_mut().zip(p) {
             xk[nv + f] = xk[nv + f].plus(p);
         }
@@ -636,9 +684,13 @@ mod prediction_tests {
     #[test]
     fn one_pass_predictions_are_the_plans() {
         // A closed mesh with valences 3 to 5, its sqrt(2) step, and a level beyond.
+        // Values below 2^40 (64-bit sums) and up to 2^55 (128-bit sums).
         let mut t = prism_with_triangles();
         let mut s = 99u64;
-        for _ in 0..3 {
+        for (depth, bits) in [(0, 41), (0, 56), (1, 41), (1, 56), (2, 41), (2, 56)] {
+            if depth > 0 && bits == 41 {
+                t = fine(&Level::new(&t).unwrap());
+            }
             let level = Level::new(&t).unwrap();
             let x: [Vec<i64>; 3] = std::array::from_fn(|_| {
                 (0..fine_nv(&level))
@@ -646,10 +698,11 @@ mod prediction_tests {
                         s ^= s << 13;
                         s ^= s >> 7;
                         s ^= s << 17;
-                        (s % (1 << 40)) as i64 - (1 << 39)
+                        (s % (1 << bits)) as i64 - (1 << (bits - 1))
                     })
                     .collect()
             });
+            assert_eq!(small_values(&x, level.nv), bits == 41);
             let p = predictions(&level, &x);
             let plan = Plan::new(&level, Wavelet::Sqrt2Lazy);
             for k in 0..3 {
@@ -661,7 +714,6 @@ mod prediction_tests {
                 apply_predictions(&mut b, level.nv, &p[k], false);
                 assert_eq!(b, x[k]);
             }
-            t = fine(&level);
         }
     }
 }

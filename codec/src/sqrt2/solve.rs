@@ -80,12 +80,17 @@ impl Rings {
             for i in 0..k {
                 let v = face[i];
                 let c = s + i;
-                next_vertex[c] = face[(i + 1) % k];
+                // (Neighbouring corners without a division per corner.)
+                let (next, prev) = (
+                    if i + 1 == k { 0 } else { i + 1 },
+                    if i == 0 { k - 1 } else { i - 1 },
+                );
+                next_vertex[c] = face[next];
                 if first[v as usize] == NONE {
                     first[v as usize] = c as u32;
                 }
                 count[v as usize] += 1;
-                let [g0, g1] = level.edge_faces[fe[(i + k - 1) % k] as usize];
+                let [g0, g1] = level.edge_faces[fe[prev] as usize];
                 let g = if g0 as usize == f { g1 } else { g0 };
                 if g == NONE {
                     continue;
