@@ -166,7 +166,7 @@ impl Rows {
 }
 
 /// The precomputed steps of one transform on one level.
-pub struct Plan {
+pub struct Plan<'a> {
     nv: usize,
     nf: usize,
     wavelet: Wavelet,
@@ -174,9 +174,9 @@ pub struct Plan {
     predict: Rows,
     /// ir2w: per coarse vertex, its update from the face points' details.
     update: Rows,
-    /// sqrt2-sym: per vertex, its faces (step 1, step 3) and ring-2 faces (step 3).
-    sym_own: Rows,
-    sym_ring: Rows,
+    /// The level (sqrt2-sym reads its faces and its vertices' face lists as it goes,
+    /// rather than storing rows beside them).
+    level: &'a Level,
 }
 
 /// Valences (ring lengths) and the neighbour of corner `c` at ring offset `j`.
@@ -203,9 +203,9 @@ fn table_valence(n: usize) -> bool {
     (3..=TABLE_MAX).contains(&n)
 }
 
-impl Plan {
+impl<'a> Plan<'a> {
     /// Precomputes the steps of sqrt(2) wavelet `w` on `level`.
-    pub fn new(level: &Level, w: Wavelet) -> Plan {
+    pub fn new(level: &'a Level, w: Wavelet) -> Plan<'a> {
         let (nv, nf) = (level.nv, level.nf());
         let topo = &level.coarse;
         let mut plan = Plan {
@@ -214,48 +214,18 @@ impl Plan {
             wavelet: w,
             predict: Rows::new(),
             update: Rows::new(),
-            sym_own: Rows::new(),
-            sym_ring: Rows::new(),
+            level,
         };
-        match w {
-            Wavelet::Sqrt2Lazy | Wavelet::Ir2w => {
-                let rings = Rings::from_level(level);
-                let nb = Neighbours {
-                    rings: &rings,
-                    topo,
-                };
-                plan.predict = predict_rows(level, &nb);
-                if w == Wavelet::Ir2w {
-                    plan.update = ir2w_update(level, &nb);
-                }
+        if let Wavelet::Sqrt2Lazy | Wavelet::Ir2w = w {
+            let rings = Rings::from_level(level);
+            let nb = Neighbours {
+                rings: &rings,
+                topo,
+            };
+            plan.predict = predict_rows(level, &nb);
+            if w == Wavelet::Ir2w {
+                plan.update = ir2w_update(level, &nb);
             }
-            Wavelet::Sqrt2Sym => {
-                for v in 0..nv {
-                    let faces = level.v_faces(v);
-                    for &f in faces {
-                        plan.sym_own.term(f, 1);
-                    }
-                    plan.sym_own.push(faces.len().max(1) as i64);
-                    // Ring-2 faces: across every edge of v's faces that v is not on.
-                    for &f in faces {
-                        let face = topo.face(f as usize);
-                        let fe = level.f_edges(f as usize);
-                        for (i, &e) in fe.iter().enumerate() {
-                            let (a, b) = (face[i], face[(i + 1) % face.len()]);
-                            if a as usize == v || b as usize == v {
-                                continue;
-                            }
-                            let [g0, g1] = level.edge_faces[e as usize];
-                            let g = if g0 == f { g1 } else { g0 };
-                            if g != NONE {
-                                plan.sym_ring.term(g, 1);
-                            }
-                        }
-                    }
-                    plan.sym_ring.push(1);
-                }
-            }
-            _ => {}
         }
         plan
     }
@@ -324,48 +294,65 @@ impl Plan {
     }
 
     /// sqrt2-sym step 1: `v'' = [(16 n v - 3 S) / (13 n)]` with S the sum of v's face
-    /// points (analysis), or its exact inverse (SPEC.md 9.8).
+    /// points (analysis), or its exact inverse (SPEC.md 9.8). (It reads face points
+    /// and writes vertices, so in place.)
     fn sym_scale<T: Sample>(&self, x: &mut [T], forward: bool) {
-        let y: Vec<T> = (0..self.nv)
-            .map(|v| match self.own_sum(v, x) {
+        for v in 0..self.nv {
+            x[v] = match self.own_sum(v, x) {
                 (0, _) => x[v],
                 (n, s) if forward => T::sym_scale(x[v], s, n as i128),
                 (n, s) => T::sym_unscale(x[v], s, n as i128),
-            })
-            .collect();
-        x[..self.nv].copy_from_slice(&y);
+            };
+        }
     }
 
-    /// Vertex `v`'s face count and the sum of its faces' values.
+    /// Vertex `v`'s face count (once per corner) and the sum of its faces' values.
     fn own_sum<T: Sample>(&self, v: usize, x: &[T]) -> (usize, T::Acc) {
-        let r = self.sym_own.starts[v] as usize..self.sym_own.starts[v + 1] as usize;
+        let faces = self.level.v_faces(v);
         let mut s = T::Acc::default();
-        for k in r.clone() {
-            s += x[self.nv + self.sym_own.src[k] as usize].acc();
+        for &f in faces {
+            s += x[self.nv + f as usize].acc();
         }
-        (r.len(), s)
+        (faces.len(), s)
     }
 
     /// sqrt2-sym step 2: `f'' = f - [sum of corners / k]` (analysis) or its inverse.
     fn sym_faces<T: Sample>(&self, x: &mut [T], forward: bool) {
-        // Face f's corners: every vertex lists its faces, so walk the vertex rows.
-        let mut sum = vec![T::Acc::default(); self.nf];
-        let mut cnt = vec![0i128; self.nf];
-        for v in 0..self.nv {
-            for k in self.sym_own.starts[v] as usize..self.sym_own.starts[v + 1] as usize {
-                let f = self.sym_own.src[k] as usize;
-                sum[f] += x[v].acc();
-                cnt[f] += 1;
-            }
-        }
+        let topo = &self.level.coarse;
         for f in 0..self.nf {
-            if cnt[f] == 0 {
-                continue;
+            let face = topo.face(f);
+            let mut sum = T::Acc::default();
+            for &v in face {
+                sum += x[v as usize].acc();
             }
-            let p = T::combine(1, sum[f], 0, T::Acc::default(), cnt[f]);
+            let p = T::combine(1, sum, 0, T::Acc::default(), face.len() as i128);
             let i = self.nv + f;
             x[i] = if forward { x[i].minus(p) } else { x[i].plus(p) };
         }
+    }
+
+    /// The faces across the edges of v's faces that do not touch v (SPEC.md 9.8's
+    /// `R_v`, repeats kept): their number and the sum of their values.
+    fn ring_sum<T: Sample>(&self, v: usize, x: &[T]) -> (usize, T::Acc) {
+        let level = self.level;
+        let (mut r, mut s) = (0, T::Acc::default());
+        for &f in level.v_faces(v) {
+            let face = level.coarse.face(f as usize);
+            let fe = level.f_edges(f as usize);
+            for (i, &e) in fe.iter().enumerate() {
+                let (a, b) = (face[i], face[if i + 1 == face.len() { 0 } else { i + 1 }]);
+                if a as usize == v || b as usize == v {
+                    continue;
+                }
+                let [g0, g1] = level.edge_faces[e as usize];
+                let g = if g0 == f { g1 } else { g0 };
+                if g != NONE {
+                    s += x[self.nv + g as usize].acc();
+                    r += 1;
+                }
+            }
+        }
+        (r, s)
     }
 
     /// sqrt2-sym step 3: `v~ = v'' - [n1 (4/n) S1 + m1 (8/r) S2]` (analysis) or its inverse.
@@ -375,12 +362,8 @@ impl Plan {
             if n == 0 {
                 continue;
             }
-            let r = self.sym_ring.starts[v] as usize..self.sym_ring.starts[v + 1] as usize;
-            let mut s2 = T::Acc::default();
-            for k in r.clone() {
-                s2 += x[self.nv + self.sym_ring.src[k] as usize].acc();
-            }
-            let (n, r) = (n as i128, r.len() as i128);
+            let (r, s2) = self.ring_sum(v, x);
+            let (n, r) = (n as i128, r as i128);
             // n1 = -15/64, m1 = 11/256: -(240 r S1 - 88 n S2) / (256 n r).
             let p = if r == 0 {
                 T::combine(-240, s1, 0, s2, 256 * n)
@@ -526,7 +509,7 @@ pub fn apply_predictions(x: &mut [i64], nv: usize, p: &[i64], forward: bool) {
 /// The tangent targets of a level's face points (SPEC.md 10.3): per face, the rounded
 /// centroid of its corners minus IR2W's prediction (eq. 1), both from the coarse values
 /// `coarse`. Reuses the prediction of `plan` (this level's) when it has one.
-pub fn tangent_targets(level: &Level, plan: &Plan, coarse: &[Vec<i64>; 3]) -> Vec<[i64; 3]> {
+pub fn tangent_targets(level: &Level, plan: &Plan<'_>, coarse: &[Vec<i64>; 3]) -> Vec<[i64; 3]> {
     match plan.prediction() {
         Some(rows) => targets(level, coarse, |k, f| rows.eval(f, &coarse[k][..])),
         None => tangent_targets_from(level, coarse, &predictions(level, coarse)),
