@@ -922,6 +922,11 @@ fn synthesise_levels(
             &mut models,
             targets.as_deref(),
         )?;
+        if l + 1 == upto as usize {
+            // The last level read: its activities and magnitudes serve no later level.
+            act = Vec::new();
+            models = levels::LevelModels::new(c.version);
+        }
         if is_sqrt2 && w == Wavelet::Ir2w {
             sqrt2::ir2w_synthesise(&level, &mut x);
         } else if is_sqrt2 {
@@ -947,7 +952,9 @@ fn synthesise_levels(
             return Err(Error::corrupt("LEVL", "reconstructed value out of range"));
         }
         if is_sqrt2 && l + 1 < upto as usize {
-            next = Some(sqrt2::next_level(level)?);
+            // Only sqrt2-sym reads the per-vertex lists: the others' levels are made
+            // without them.
+            next = Some(sqrt2::next_level(level, w == Wavelet::Sqrt2Sym)?);
         } else if is_sqrt2 {
             // The finest topology needs only the level's edges: its other arrays go first.
             topo = sqrt2::fine_owned(level);

@@ -327,18 +327,34 @@ impl Level {
             edges,
             edge_faces,
             face_edges,
+            true,
         ))
     }
 
     /// The level of `coarse` whose edges, their faces and the faces' edges are already
-    /// known (exactly as [`Level::new`] would find them).
+    /// known (exactly as [`Level::new`] would find them); without the per-vertex lists
+    /// unless `lists` (as after [`Level::free_vertex_adjacency`]).
     pub(crate) fn from_edges(
         coarse: Topo,
         edges: Vec<[u32; 2]>,
         edge_faces: Vec<[u32; 2]>,
         face_edges: Vec<u32>,
+        lists: bool,
     ) -> Level {
         let nv = coarse.nv;
+        if !lists {
+            return Level {
+                nv,
+                edges,
+                edge_faces,
+                coarse,
+                face_edges,
+                vert_edges: Vec::new(),
+                vert_faces: Vec::new(),
+                ve_starts: Vec::new(),
+                vf_starts: Vec::new(),
+            };
+        }
         let (ve_starts, vert_edges) = csr(
             nv,
             edges

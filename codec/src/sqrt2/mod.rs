@@ -62,8 +62,10 @@ fn fine_of_edges(nv: usize, nf: usize, edges: &[[u32; 2]], edge_faces: &[[u32; 2
 /// point, so it is numbered by the corner. Falls back to [`Level::new`] unless every face
 /// has distinct corners (then each corner is one fine edge between the quads of its two
 /// coarse edges). The level must be [`closed`]. It is consumed, and its arrays freed
-/// before the new level's adjacency is built (the decoder's memory peaks here).
-pub fn next_level(level: Level) -> crate::error::Result<Level> {
+/// before the new level's adjacency is built (the decoder's memory peaks here). Without
+/// `lists` the new level has no per-vertex lists (a decoder's sqrt2-lazy or ir2w level,
+/// which never reads them), as if [`Level::free_vertex_adjacency`] had been called.
+pub fn next_level(level: Level, lists: bool) -> crate::error::Result<Level> {
     let fine_topo = fine(&level);
     let topo = &level.coarse;
     let distinct = (0..topo.nf()).all(|f| {
@@ -74,7 +76,11 @@ pub fn next_level(level: Level) -> crate::error::Result<Level> {
     });
     if !distinct {
         drop(level);
-        return Level::new(&fine_topo);
+        let mut next = Level::new(&fine_topo)?;
+        if !lists {
+            next.free_vertex_adjacency();
+        }
+        return Ok(next);
     }
     // Per coarse edge, its two occurrences as (corner, next corner) slots, in face order.
     let mut occ = vec![[[NONE; 2]; 2]; level.ne()];
@@ -119,7 +125,9 @@ pub fn next_level(level: Level) -> crate::error::Result<Level> {
         }
     }
     drop((occ, id, level));
-    Ok(Level::from_edges(fine_topo, edges, edge_faces, face_edges))
+    Ok(Level::from_edges(
+        fine_topo, edges, edge_faces, face_edges, lists,
+    ))
 }
 
 /// Number of fine vertices of a sqrt(2) step.
@@ -721,7 +729,10 @@ mod tests {
         for base in [prism, flipped] {
             let mut level = Level::new(&base).unwrap();
             for _ in 0..5 {
-                let next = next_level(level.clone()).unwrap();
+                let next = next_level(level.clone(), true).unwrap();
+                let mut lean = next.clone();
+                lean.free_vertex_adjacency();
+                assert_eq!(next_level(level.clone(), false).unwrap(), lean);
                 assert_eq!(next, Level::new(&fine(&level)).unwrap());
                 assert_eq!(fine_owned(level.clone()), fine(&level));
                 level = next;
@@ -773,8 +784,8 @@ mod tests {
             ir2w_synthesise(&lean, &mut b);
             assert_eq!(a, b, "ir2w at depth {depth}");
             assert_eq!(
-                next_level(lean.clone()).unwrap(),
-                next_level(level.clone()).unwrap()
+                next_level(lean.clone(), true).unwrap(),
+                next_level(level.clone(), true).unwrap()
             );
             assert_eq!(fine_owned(lean), fine(&level));
             t = fine(&level);
