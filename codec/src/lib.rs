@@ -193,11 +193,12 @@ fn code_hierarchy(
             // Polar levels: the poles' discs first, then the rest (SPEC.md 9.9).
             let n = level.fine_nv();
             let (discs, owned) = discs::discs(level, &canon.poles, l as u32, disc);
+            let st = transform::Stencils::new(level, w);
             for xs in x.iter_mut() {
                 for d in &discs {
                     discs::analyse(d, disc, &mut xs[..n]);
                 }
-                transform::analyse_except(level, w, &mut xs[..n], &owned);
+                transform::analyse_with(level, w, &st, &mut xs[..n], &owned);
             }
         }
         coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
@@ -941,8 +942,9 @@ fn synthesise_levels(
             }
         } else {
             let (discs, owned) = discs::discs(&level, &h.poles, l as u32, h.disc);
+            let st = transform::Stencils::new(&level, w);
             for xs in x.iter_mut() {
-                transform::synthesise_except(&level, w, xs, &owned);
+                transform::synthesise_with(&level, w, &st, xs, &owned);
                 for d in discs.iter().rev() {
                     discs::synthesise(d, h.disc, xs);
                 }

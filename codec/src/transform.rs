@@ -501,11 +501,34 @@ pub fn analyse<T: Sample>(level: &Level, w: Wavelet, x: &mut [T]) {
 /// they are; indices past the end of `skip` are not skipped). Polar levels skip their
 /// pole discs, which the polar transform codes (SPEC.md 9.9).
 pub fn analyse_except<T: Sample>(level: &Level, w: Wavelet, x: &mut [T], skip: &[bool]) {
+    analyse_with(level, w, &Stencils::new(level, w), x, skip);
+}
+
+/// A level's neighbourhoods that a transform would otherwise look up for every value:
+/// interp4's beyond vertices and beyond edges (SPEC.md 9.11). Made once per level, they
+/// serve all three axes.
+pub struct Stencils(Option<Interp4>);
+
+impl Stencils {
+    /// The stencils of wavelet `w` on `level` (none for the transforms without any).
+    pub fn new(level: &Level, w: Wavelet) -> Stencils {
+        Stencils((w == Wavelet::Interp4).then(|| Interp4::new(level)))
+    }
+}
+
+/// [`analyse_except`] with the level's [`Stencils`] made beforehand.
+pub fn analyse_with<T: Sample>(
+    level: &Level,
+    w: Wavelet,
+    st: &Stencils,
+    x: &mut [T],
+    skip: &[bool],
+) {
     if w == Wavelet::DyadicSym {
         return dyadic_sym(level, x, true, skip);
     }
-    if w == Wavelet::Interp4 {
-        return interp4(level, x, true, skip);
+    if let (Wavelet::Interp4, Some(st)) = (w, &st.0) {
+        return interp4(level, st, x, true, skip);
     }
     for &s in w.steps() {
         step(level, x, s, true, skip);
@@ -519,11 +542,22 @@ pub fn synthesise<T: Sample>(level: &Level, w: Wavelet, x: &mut [T]) {
 
 /// The exact inverse of [`analyse_except`] with the same `skip`.
 pub fn synthesise_except<T: Sample>(level: &Level, w: Wavelet, x: &mut [T], skip: &[bool]) {
+    synthesise_with(level, w, &Stencils::new(level, w), x, skip);
+}
+
+/// [`synthesise_except`] with the level's [`Stencils`] made beforehand.
+pub fn synthesise_with<T: Sample>(
+    level: &Level,
+    w: Wavelet,
+    st: &Stencils,
+    x: &mut [T],
+    skip: &[bool],
+) {
     if w == Wavelet::DyadicSym {
         return dyadic_sym(level, x, false, skip);
     }
-    if w == Wavelet::Interp4 {
-        return interp4(level, x, false, skip);
+    if let (Wavelet::Interp4, Some(st)) = (w, &st.0) {
+        return interp4(level, st, x, false, skip);
     }
     for &s in w.steps().iter().rev() {
         step(level, x, s, false, skip);
@@ -659,18 +693,51 @@ fn beyond_edge(level: &Level, f: usize, e: u32) -> Option<usize> {
     Some(fe[(i + 2) % 4] as usize)
 }
 
+/// interp4's stencils (SPEC.md 9.11): per edge its two ends' beyond vertices, per quad
+/// face the beyond edge of each of its edges ([`NONE`] where there is none; non-quads
+/// take the lazy rule and no stencil).
+struct Interp4 {
+    edge: Vec<[u32; 2]>,
+    face: Vec<[u32; 4]>,
+}
+
+impl Interp4 {
+    fn new(level: &Level) -> Interp4 {
+        let some = |v: Option<usize>| v.map_or(NONE, |v| v as u32);
+        let edge = (0..level.ne())
+            .map(|e| {
+                let [a, b] = level.edges[e];
+                [
+                    some(beyond_vertex(level, e, a as usize)),
+                    some(beyond_vertex(level, e, b as usize)),
+                ]
+            })
+            .collect();
+        let face = (0..level.nf())
+            .map(|f| {
+                let fe = level.f_edges(f);
+                if fe.len() != 4 {
+                    return [NONE; 4];
+                }
+                std::array::from_fn(|i| some(beyond_edge(level, f, fe[i])))
+            })
+            .collect();
+        Interp4 { edge, face }
+    }
+}
+
 /// Edge point `e`'s prediction from the coarse values: `[(-x_a' + 9 x_a + 9 x_b - x_b') /
 /// 16]` with both beyond vertices, else `[(x_a + x_b) / 2]`.
 #[inline]
-fn interp4_edge<T: Sample>(level: &Level, x: &[T], e: usize) -> T {
+fn interp4_edge<T: Sample>(level: &Level, st: &Interp4, x: &[T], e: usize) -> T {
     let [a, b] = level.edges[e];
     let (a, b) = (a as usize, b as usize);
-    match (beyond_vertex(level, e, a), beyond_vertex(level, e, b)) {
-        (Some(a2), Some(b2)) => {
+    match st.edge[e] {
+        [a2, b2] if a2 != NONE && b2 != NONE => {
             let mut s = x[a].weighted(9);
             s += x[b].weighted(9);
-            s += x[a2].weighted(-1);
-            s += x[b2].weighted(-1);
+            s += x[a2 as usize].weighted(-1);
+            s += x[b2 as usize].weighted(-1);
             T::round(s, 16)
         }
         _ => {
@@ -686,19 +753,20 @@ fn interp4_edge<T: Sample>(level: &Level, x: &[T], e: usize) -> T {
 /// with both beyond edge points y, y', else `8 (m + m')`, over 32; for other faces the
 /// lazy rule `[(2 sum of edge points - sum of corners) / k]`.
 #[inline]
-fn interp4_face<T: Sample>(level: &Level, x: &[T], f: usize) -> T {
+fn interp4_face<T: Sample>(level: &Level, st: &Interp4, x: &[T], f: usize) -> T {
     let e0 = level.nv;
     let fe = level.f_edges(f);
     if fe.len() == 4 {
+        let beyond = st.face[f];
         let mut s = T::Acc::default();
         for d in 0..2 {
             let (m, m2) = (fe[d], fe[d + 2]);
-            match (beyond_edge(level, f, m), beyond_edge(level, f, m2)) {
-                (Some(y), Some(y2)) => {
+            match (beyond[d], beyond[d + 2]) {
+                (y, y2) if y != NONE && y2 != NONE => {
                     s += x[e0 + m as usize].weighted(9);
                     s += x[e0 + m2 as usize].weighted(9);
-                    s += x[e0 + y].weighted(-1);
-                    s += x[e0 + y2].weighted(-1);
+                    s += x[e0 + y as usize].weighted(-1);
+                    s += x[e0 + y2 as usize].weighted(-1);
                 }
                 _ => {
                     s += x[e0 + m as usize].weighted(8);
@@ -721,26 +789,26 @@ fn interp4_face<T: Sample>(level: &Level, x: &[T], f: usize) -> T {
 /// The 4-point interpolating transform and its inverse (SPEC.md 9.11): details are the
 /// fine values less their predictions; analysis predicts the face points first (from the
 /// fine edge points), synthesis the edge points first.
-fn interp4<T: Sample>(level: &Level, x: &mut [T], forward: bool, skip: &[bool]) {
+fn interp4<T: Sample>(level: &Level, st: &Interp4, x: &mut [T], forward: bool, skip: &[bool]) {
     let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
     let (e0, f0) = (nv, nv + ne);
     let live = |i: usize| !flag(skip, i);
     if forward {
         for f in (0..nf).filter(|&f| live(f0 + f)) {
-            let p = interp4_face(level, x, f);
+            let p = interp4_face(level, st, x, f);
             x[f0 + f] = x[f0 + f].minus(p);
         }
         for e in (0..ne).filter(|&e| live(e0 + e)) {
-            let p = interp4_edge(level, x, e);
+            let p = interp4_edge(level, st, x, e);
             x[e0 + e] = x[e0 + e].minus(p);
         }
     } else {
         for e in (0..ne).filter(|&e| live(e0 + e)) {
-            let p = interp4_edge(level, x, e);
+            let p = interp4_edge(level, st, x, e);
             x[e0 + e] = x[e0 + e].plus(p);
         }
         for f in (0..nf).filter(|&f| live(f0 + f)) {
-            let p = interp4_face(level, x, f);
+            let p = interp4_face(level, st, x, f);
             x[f0 + f] = x[f0 + f].plus(p);
         }
     }
