@@ -878,7 +878,8 @@ fn synthesise_levels(
             }
         }
     }
-    // A sqrt(2) level's successor, derived from it (cheaper than from its fine faces).
+    // A sqrt(2) or Catmull-Clark level's successor, derived from it (cheaper than from
+    // its fine faces).
     let mut next: Option<Level> = None;
     for l in 0..upto as usize {
         let mut level = match next.take() {
@@ -960,6 +961,9 @@ fn synthesise_levels(
         } else if is_sqrt2 {
             // The finest topology needs only the level's edges: its other arrays go first.
             topo = sqrt2::fine_owned(level);
+        } else if pole.is_empty() && l + 1 < upto as usize {
+            // A Catmull-Clark level's successor, derived from it (no edge lookups).
+            next = Some(level.next());
         } else {
             topo = level.fine_with(&pole);
             if !pole.is_empty() {

@@ -413,6 +413,58 @@ impl Level {
         t
     }
 
+    /// The level of [`Level::fine`]`()`, equal to `Level::new(&self.fine())` but derived
+    /// from this level without looking edges up: a fine edge is half of a coarse edge
+    /// (from one of its ends to its edge point) or a face's spoke (from an edge point to
+    /// its face point), numbered as `Level::new` numbers them, by first appearance in
+    /// the fine faces' corner order.
+    pub fn next(&self) -> Level {
+        let fine = self.fine();
+        let (nv, ne) = (self.nv as u32, self.ne());
+        let (e0, f0) = (nv, nv + ne as u32);
+        // Per coarse edge, the fine edges of its halves at its first and second end.
+        let mut half = vec![[NONE; 2]; ne];
+        let mut edges: Vec<[u32; 2]> = Vec::with_capacity(2 * ne + self.coarse.idx.len());
+        let mut edge_faces: Vec<[u32; 2]> = Vec::with_capacity(edges.capacity());
+        let mut face_edges = Vec::with_capacity(fine.idx.len());
+        let mut q = 0u32;
+        // A fine edge `a -> b` seen in fine face q: its number (new if `*id` is NONE).
+        let mut visit = |id: &mut u32, a: u32, b: u32, q: u32, face_edges: &mut Vec<u32>| {
+            if *id == NONE {
+                *id = edges.len() as u32;
+                edges.push([a, b]);
+                edge_faces.push([q, NONE]);
+            } else {
+                edge_faces[*id as usize][1] = q;
+            }
+            face_edges.push(*id);
+        };
+        for f in 0..self.nf() {
+            let face = self.coarse.face(f);
+            let fe = self.f_edges(f);
+            let k = face.len();
+            let fp = f0 + f as u32;
+            // Spoke i: edge point of fe[i] to the face point.
+            let mut spoke = vec![NONE; k];
+            for i in 0..k {
+                let p = if i == 0 { k - 1 } else { i - 1 };
+                let c = face[i];
+                let (ei, ep) = (fe[i] as usize, fe[p] as usize);
+                let (a, b) = (e0 + fe[i], e0 + fe[p]);
+                // Quad (c, a, fp, b): half of fe[i] at c, spoke i, spoke p, half of
+                // fe[p] at c.
+                let end = |e: usize| (self.edges[e][0] != c) as usize;
+                let (hi, hp) = (end(ei), end(ep));
+                visit(&mut half[ei][hi], c, a, q, &mut face_edges);
+                visit(&mut spoke[i], a, fp, q, &mut face_edges);
+                visit(&mut spoke[p], fp, b, q, &mut face_edges);
+                visit(&mut half[ep][hp], b, c, q, &mut face_edges);
+                q += 1;
+            }
+        }
+        Level::from_edges(fine, edges, edge_faces, face_edges, true)
+    }
+
     /// The number of faces [`Level::fine_with`] makes.
     pub fn fine_faces_with(&self, pole: &[bool]) -> usize {
         let splits = (0..self.nf())
@@ -716,5 +768,57 @@ pub(crate) mod fixtures {
             t.push(&[i, j, j + 5, i + 5]);
         }
         t
+    }
+}
+
+#[cfg(test)]
+mod next_tests {
+    use super::fixtures::{prism_with_triangles, shuffle};
+    use super::*;
+
+    /// `Level::next` is `Level::new` of the fine faces, for closed and open meshes,
+    /// mixed degrees, several components, scrambled numbering and inconsistent
+    /// orientation, three levels deep.
+    #[test]
+    fn next_level_is_the_level_of_the_fine_faces() {
+        let mut open = Topo::new(9);
+        open.push(&[0, 1, 2]);
+        open.push(&[0, 2, 3, 4]);
+        open.push(&[0, 4, 5, 6, 1]);
+        // A second component, its face against the others' orientation.
+        open.push(&[7, 8, 6]);
+        let mut grid = Topo::new(16);
+        for y in 0..3u32 {
+            for x in 0..3u32 {
+                let i = y * 4 + x;
+                grid.push(&[i, i + 1, i + 5, i + 4]);
+            }
+        }
+        let mut flipped = prism_with_triangles();
+        let mut f0: Vec<u32> = flipped.face(0).to_vec();
+        f0.reverse();
+        let mut t = Topo::new(flipped.nv);
+        t.push(&f0);
+        for f in 1..flipped.nf() {
+            t.push(flipped.face(f));
+        }
+        flipped = t;
+        let prism = prism_with_triangles();
+        for base in [
+            shuffle(&prism, 3),
+            prism,
+            open.clone(),
+            shuffle(&open, 5),
+            grid.clone(),
+            shuffle(&grid, 9),
+            flipped,
+        ] {
+            let mut level = Level::new(&base).unwrap();
+            for depth in 0..3 {
+                let next = level.next();
+                assert_eq!(next, Level::new(&level.fine()).unwrap(), "depth {depth}");
+                level = next;
+            }
+        }
     }
 }
