@@ -601,10 +601,18 @@ struct RotFrame {
 }
 
 impl RotFrame {
-    /// The frame of detail `fd` with coarse normal `n`.
-    fn new(level: &Level, coarse: &[Vec<i64>; 3], sqrt2: bool, fd: usize, n: [i64; 3]) -> Self {
+    /// The frame of detail `fd` with coarse normal `n`; without an edge point's offset
+    /// unless `offset` (only [`Mode::Shifted`] reads it).
+    fn new(
+        level: &Level,
+        coarse: &[Vec<i64>; 3],
+        sqrt2: bool,
+        fd: usize,
+        n: [i64; 3],
+        offset: bool,
+    ) -> Self {
         let rot = Rotation::new(n, tangent_ref(level, coarse, fd));
-        let offset = if !sqrt2 && fd < level.ne() {
+        let offset = if offset && !sqrt2 && fd < level.ne() {
             edge_offset(level, coarse, fd).map(|v| rot.forward(v))
         } else {
             None
@@ -634,7 +642,8 @@ fn rot_frames(level: &Level, coarse: &[Vec<i64>; 3], sqrt2: bool) -> Vec<Option<
     (0..details(level, sqrt2))
         .map(|i| {
             let fd = ne + i;
-            frame(level, &normals, fd).map(|(_, n)| RotFrame::new(level, coarse, sqrt2, fd, n))
+            frame(level, &normals, fd)
+                .map(|(_, n)| RotFrame::new(level, coarse, sqrt2, fd, n, true))
         })
         .collect()
 }
@@ -1006,7 +1015,8 @@ pub fn decode(
         };
         let rotation = match (mode, fr) {
             (Mode::Rotated | Mode::Shifted(..), Some((_, n))) => {
-                let f = RotFrame::new(level, x, sqrt2, fd, n);
+                let shifted = matches!(mode, Mode::Shifted(..));
+                let f = RotFrame::new(level, x, sqrt2, fd, n, shifted);
                 Some((f.rot, f.pred(mode)))
             }
             _ => None,
