@@ -342,41 +342,33 @@ impl Level {
         lists: bool,
     ) -> Level {
         let nv = coarse.nv;
-        if !lists {
-            return Level {
-                nv,
-                edges,
-                edge_faces,
-                coarse,
-                face_edges,
-                vert_edges: Vec::new(),
-                vert_faces: Vec::new(),
-                ve_starts: Vec::new(),
-                vf_starts: Vec::new(),
-            };
-        }
-        let (ve_starts, vert_edges) = csr(
-            nv,
-            edges
-                .iter()
-                .enumerate()
-                .flat_map(|(e, &[a, b])| [(a, e as u32), (b, e as u32)]),
-        );
-        let (vf_starts, vert_faces) = csr(
-            nv,
-            (0..coarse.nf()).flat_map(|f| coarse.face(f).iter().map(move |&v| (v, f as u32))),
-        );
-        Level {
+        let mut level = Level {
             nv,
             edges,
             edge_faces,
             coarse,
             face_edges,
-            vert_edges,
-            vert_faces,
-            ve_starts,
-            vf_starts,
+            vert_edges: Vec::new(),
+            vert_faces: Vec::new(),
+            ve_starts: Vec::new(),
+            vf_starts: Vec::new(),
+        };
+        if lists {
+            (level.ve_starts, level.vert_edges) = csr(
+                nv,
+                level
+                    .edges
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(e, &[a, b])| [(a, e as u32), (b, e as u32)]),
+            );
+            let coarse = &level.coarse;
+            (level.vf_starts, level.vert_faces) = csr(
+                nv,
+                (0..coarse.nf()).flat_map(|f| coarse.face(f).iter().map(move |&v| (v, f as u32))),
+            );
         }
+        level
     }
 
     /// The fine topology (SPEC.md 8.1): per coarse face f, per corner i, the quad
@@ -427,9 +419,9 @@ impl Level {
         let mut edges: Vec<[u32; 2]> = Vec::with_capacity(2 * ne + self.coarse.idx.len());
         let mut edge_faces: Vec<[u32; 2]> = Vec::with_capacity(edges.capacity());
         let mut face_edges = Vec::with_capacity(fine.idx.len());
-        let mut q = 0u32;
+        let (mut q, mut spoke) = (0u32, Vec::new());
         // A fine edge `a -> b` seen in fine face q: its number (new if `*id` is NONE).
-        let mut visit = |id: &mut u32, a: u32, b: u32, q: u32, face_edges: &mut Vec<u32>| {
+        let mut visit = |id: &mut u32, a: u32, b: u32, q: u32| {
             if *id == NONE {
                 *id = edges.len() as u32;
                 edges.push([a, b]);
@@ -444,8 +436,9 @@ impl Level {
             let fe = self.f_edges(f);
             let k = face.len();
             let fp = f0 + f as u32;
-            // Spoke i: edge point of fe[i] to the face point.
-            let mut spoke = vec![NONE; k];
+            // Spoke i: edge point of fe[i] to the face point (one buffer for all faces).
+            spoke.clear();
+            spoke.resize(k, NONE);
             for i in 0..k {
                 let p = if i == 0 { k - 1 } else { i - 1 };
                 let c = face[i];
@@ -455,10 +448,10 @@ impl Level {
                 // fe[p] at c.
                 let end = |e: usize| (self.edges[e][0] != c) as usize;
                 let (hi, hp) = (end(ei), end(ep));
-                visit(&mut half[ei][hi], c, a, q, &mut face_edges);
-                visit(&mut spoke[i], a, fp, q, &mut face_edges);
-                visit(&mut spoke[p], fp, b, q, &mut face_edges);
-                visit(&mut half[ep][hp], b, c, q, &mut face_edges);
+                visit(&mut half[ei][hi], c, a, q);
+                visit(&mut spoke[i], a, fp, q);
+                visit(&mut spoke[p], fp, b, q);
+                visit(&mut half[ep][hp], b, c, q);
                 q += 1;
             }
         }
