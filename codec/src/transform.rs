@@ -514,6 +514,14 @@ impl Stencils {
     pub fn new(level: &Level, w: Wavelet) -> Stencils {
         Stencils((w == Wavelet::Interp4).then(|| Interp4::new(level)))
     }
+
+    /// interp4's stencils: these, or made now if they were made for another wavelet.
+    fn interp4(&self, level: &Level) -> std::borrow::Cow<'_, Interp4> {
+        match &self.0 {
+            Some(st) => std::borrow::Cow::Borrowed(st),
+            None => std::borrow::Cow::Owned(Interp4::new(level)),
+        }
+    }
 }
 
 /// [`analyse_except`] with the level's [`Stencils`] made beforehand.
@@ -527,8 +535,8 @@ pub fn analyse_with<T: Sample>(
     if w == Wavelet::DyadicSym {
         return dyadic_sym(level, x, true, skip);
     }
-    if let (Wavelet::Interp4, Some(st)) = (w, &st.0) {
-        return interp4(level, st, x, true, skip);
+    if w == Wavelet::Interp4 {
+        return interp4(level, &st.interp4(level), x, true, skip);
     }
     for &s in w.steps() {
         step(level, x, s, true, skip);
@@ -556,8 +564,8 @@ pub fn synthesise_with<T: Sample>(
     if w == Wavelet::DyadicSym {
         return dyadic_sym(level, x, false, skip);
     }
-    if let (Wavelet::Interp4, Some(st)) = (w, &st.0) {
-        return interp4(level, st, x, false, skip);
+    if w == Wavelet::Interp4 {
+        return interp4(level, &st.interp4(level), x, false, skip);
     }
     for &s in w.steps().iter().rev() {
         step(level, x, s, false, skip);
@@ -696,6 +704,7 @@ fn beyond_edge(level: &Level, f: usize, e: u32) -> Option<usize> {
 /// interp4's stencils (SPEC.md 9.11): per edge its two ends' beyond vertices, per quad
 /// face the beyond edge of each of its edges ([`NONE`] where there is none; non-quads
 /// take the lazy rule and no stencil).
+#[derive(Clone)]
 struct Interp4 {
     edge: Vec<[u32; 2]>,
     face: Vec<[u32; 4]>,
@@ -932,6 +941,24 @@ mod tests {
             synthesise(&level, wav, &mut x);
             prop_assert_eq!(x, orig);
         }
+    }
+
+    /// Stencils made for another wavelet do not change interp4: it makes its own.
+    #[test]
+    fn interp4_with_stencils_of_another_wavelet_is_interp4() {
+        let level = Level::new(&open_mixed()).unwrap();
+        let orig: Vec<i64> = (0..level.fine_nv() as i64)
+            .map(|i| i * i * 37 % 1001)
+            .collect();
+        let mut want = orig.clone();
+        analyse(&level, Wavelet::Interp4, &mut want);
+        assert_ne!(want, orig);
+        let other = Stencils::new(&level, Wavelet::Lazy);
+        let mut got = orig.clone();
+        analyse_with(&level, Wavelet::Interp4, &other, &mut got, &[]);
+        assert_eq!(got, want);
+        synthesise_with(&level, Wavelet::Interp4, &other, &mut got, &[]);
+        assert_eq!(got, orig);
     }
 
     #[test]
