@@ -70,6 +70,10 @@ pub struct LevelModels {
     mags: Vec<[u8; 3]>,
     /// Whether the encoder tries format 17's rotated modes (not part of the format).
     pub rotated: bool,
+    /// The encoder's mode for each coming level (not part of the format): where given,
+    /// a level is coded in that mode only (mode 5 with its own weights; every open mode
+    /// if that one is not open to the level).
+    pub only: Option<Vec<u8>>,
 }
 
 impl LevelModels {
@@ -80,6 +84,7 @@ impl LevelModels {
             last: None,
             mags: Vec::new(),
             rotated: true,
+            only: None,
         }
     }
 
@@ -760,11 +765,21 @@ pub fn encode(
         models.last = Some(m);
         return body;
     }
+    // The mode asked for, if any (the first level's entry; the rest for the next).
+    let only = models.only.as_mut().and_then(|o| {
+        let first = o.first().copied();
+        if !o.is_empty() {
+            o.remove(0);
+        }
+        first
+    });
+    let open = |m: u8| only.is_none_or(|o| o == m);
     let mut modes = vec![Mode::Plain, Mode::Framed];
     if let Some(t) = targets.filter(|_| version >= 7) {
         modes.push(Mode::Tangent(t));
     }
-    let frames = if version >= ROTATED_VERSION && models.rotated {
+    let rotated = version >= ROTATED_VERSION && models.rotated && (open(4) || open(5));
+    let frames = if rotated {
         modes.push(Mode::Rotated);
         let frames = rot_frames(level, coarse, sqrt2);
         match shift_weights(level, x, &frames) {
@@ -775,6 +790,9 @@ pub fn encode(
     } else {
         Vec::new()
     };
+    if modes.iter().any(|m| open(m.byte())) {
+        modes.retain(|m| open(m.byte()));
+    }
     let start = models.start();
     // The smallest mode's payload, with the activities, magnitudes and models it leaves.
     struct Tried {
@@ -1419,6 +1437,37 @@ mod tests {
         let mut models = LevelModels::new(ROTATED_VERSION);
         let bytes = encode(&level, false, &x, &coarse, &mut act, &mut models, None);
         assert_eq!(&bytes[..2], &[5, 0x44]);
+    }
+
+    /// The encoder's mode plan (`LevelModels::only`): each level in its planned mode,
+    /// every open mode where the planned one is not open (mode 2 on a Catmull-Clark
+    /// level), and the payloads decode exactly.
+    #[test]
+    fn planned_modes_are_the_ones_coded() {
+        let (level, coarse, x) = rotated_fixture(10);
+        let nv = level.nv;
+        let free = {
+            let mut act = vec![UNKNOWN; nv];
+            let mut models = LevelModels::new(ROTATED_VERSION);
+            encode(&level, false, &x, &coarse, &mut act, &mut models, None)
+        };
+        for (plan, want) in [(0u8, Some(0u8)), (1, Some(1)), (4, Some(4)), (2, None)] {
+            let mut act = vec![UNKNOWN; nv];
+            let mut models = LevelModels::new(ROTATED_VERSION);
+            models.only = Some(vec![plan, plan]);
+            let bytes = encode(&level, false, &x, &coarse, &mut act, &mut models, None);
+            match want {
+                Some(m) => assert_eq!(bytes[0], m, "planned {plan}"),
+                None => assert_eq!(bytes, free, "mode {plan} is not open: every mode"),
+            }
+            // The plan's first entry was used; the second is left for the next level.
+            assert_eq!(models.only.as_deref(), Some(&[plan][..]));
+            let mut y = coarse.clone();
+            let mut act = vec![UNKNOWN; nv];
+            let mut dm = LevelModels::new(ROTATED_VERSION);
+            decode(&bytes, &level, false, &mut y, &mut act, &mut dm, None).unwrap();
+            assert_eq!(y, x, "planned {plan}");
+        }
     }
 
     #[test]

@@ -165,6 +165,7 @@ fn code_hierarchy(
     disc: DiscTransform,
     header: &Header,
     rotated: bool,
+    modes: Option<Vec<u8>>,
 ) -> Option<Payloads> {
     let mut x = pos.clone();
     // The coarse values of each level, as the decoder will have them when it reads the
@@ -215,6 +216,7 @@ fn code_hierarchy(
     let mut act = vec![levels::UNKNOWN; canon.base.nv];
     let mut models = levels::LevelModels::new(FORMAT_VERSION);
     models.rotated = rotated;
+    models.only = modes;
     let level_bytes = canon
         .levels
         .iter()
@@ -271,6 +273,10 @@ const FIT_SCREEN: f64 = 12.0;
 /// The least-squares fit stops when no control value moves by more than this (units of
 /// the grid): far below the 2^-10 of the finest precision tried.
 const FIT_TOLERANCE: f64 = 1e-5;
+
+/// `auto` codes the best-ranked other transform of a family in every mode when its
+/// ranking size is below this many hundredths of the first transform's size.
+const RANK_MARGIN: usize = 103;
 
 /// Extra bits `auto` tries for the fit's control values.
 const FIT_BITS: [u8; 3] = [6, 8, 10];
@@ -483,7 +489,8 @@ fn encode_with(
                 let pos = canonical_positions(mesh, &canon);
                 // code_hierarchy drops the disc transform of a hierarchy without poles.
                 let disc = opts.disc.unwrap_or(DiscTransform::None);
-                if let Some(mut p) = code_hierarchy(&canon, &pos, first, disc, &flat_h, true) {
+                if let Some(mut p) = code_hierarchy(&canon, &pos, first, disc, &flat_h, true, None)
+                {
                     if opts.keep_order {
                         let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
                         p.order = Some(order_section(&canon.order, faces, rotations));
@@ -499,26 +506,58 @@ fn encode_with(
             // Codes the chosen hierarchy with (w, d) and keeps it if smaller (the same
             // ORDR section: the order depends on the hierarchy only).
             let try_code = |p: &mut Payloads, w: Wavelet, d: DiscTransform, rotated: bool| {
-                if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, &flat_h, rotated) {
+                if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, &flat_h, rotated, None) {
                     q.order = p.order.clone();
                     if q.size() < p.size() {
                         *p = q;
                     }
                 }
             };
+            // Other (transform, disc) pairs are ranked coding each level in the mode p
+            // chose for it (a fraction of the work of trying every mode); the best of
+            // them is then coded in every mode. Whichever coding is smallest is kept.
+            let rank_then_code = |p: &mut Payloads, pairs: &[(Wavelet, DiscTransform)]| {
+                let modes: Vec<u8> = p.levels.iter().map(|l| l[0]).collect();
+                let mut ranked: Option<(usize, Wavelet, DiscTransform)> = None;
+                let base_size = p.size();
+                for &(w, d) in pairs {
+                    let m = Some(modes.clone());
+                    if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, &flat_h, true, m) {
+                        if ranked.is_none_or(|(s, ..)| q.size() < s) {
+                            ranked = Some((q.size(), w, d));
+                        }
+                        q.order = p.order.clone();
+                        if q.size() < p.size() {
+                            *p = q;
+                        }
+                    }
+                }
+                if let Some((s, w, d)) = ranked {
+                    if s * 100 < base_size * RANK_MARGIN {
+                        try_code(p, w, d, true);
+                    }
+                }
+            };
             let disc = p.header.disc;
             if opts.transform == TransformChoice::Auto {
-                for &w in others.iter().filter(|&&w| w != first) {
-                    try_code(&mut p, w, disc, true);
-                }
+                let pairs: Vec<_> = others
+                    .iter()
+                    .filter(|&&w| w != first)
+                    .map(|&w| (w, disc))
+                    .collect();
+                rank_then_code(&mut p, &pairs);
             }
             // A polar hierarchy: the other disc transforms, with the best transform.
             if let (false, None, Transform::Wavelet(w)) =
                 (canon.poles.is_empty(), opts.disc, p.header.transform)
             {
-                for d in DiscTransform::ALL.into_iter().filter(|&d| d != disc) {
-                    try_code(&mut p, w, d, true);
-                }
+                let d0 = p.header.disc;
+                let pairs: Vec<_> = DiscTransform::ALL
+                    .into_iter()
+                    .filter(|&d| d != d0)
+                    .map(|d| (w, d))
+                    .collect();
+                rank_then_code(&mut p, &pairs);
             }
             // Each level keeps its smallest mode, but a rotated level hands the next one
             // models learnt in another frame: the best coding without the rotated modes

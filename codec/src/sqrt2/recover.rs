@@ -83,30 +83,72 @@ fn colour(t: &Topo) -> Option<Vec<u8>> {
     Some(c)
 }
 
+/// Entries `(key, value)` grouped by key: `items[start[k]..start[k + 1]]` are key k's
+/// values, sorted.
+struct Grouped {
+    start: Vec<u32>,
+    items: Vec<(u32, u32)>,
+}
+
+impl Grouped {
+    /// Groups `(key, item)` pairs (keys below `n`), each group sorted by item.
+    fn new(n: usize, pairs: impl Iterator<Item = (u32, (u32, u32))> + Clone) -> Grouped {
+        let mut start = vec![0u32; n + 1];
+        for (k, _) in pairs.clone() {
+            start[k as usize + 1] += 1;
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut items = vec![(0, 0); start[n] as usize];
+        for (k, it) in pairs {
+            items[fill[k as usize] as usize] = it;
+            fill[k as usize] += 1;
+        }
+        for k in 0..n {
+            items[start[k] as usize..start[k + 1] as usize].sort_unstable();
+        }
+        Grouped { start, items }
+    }
+
+    fn group(&self, k: u32) -> &[(u32, u32)] {
+        &self.items[self.start[k as usize] as usize..self.start[k as usize + 1] as usize]
+    }
+
+    /// Whether some group holds two items with the same first member.
+    fn repeats(&self) -> bool {
+        (0..self.start.len() - 1).any(|k| self.group(k as u32).windows(2).any(|w| w[0].0 == w[1].0))
+    }
+}
+
 /// Undoes one step with the vertices of colour `side` as face points.
 fn coarsen(t: &Topo, colours: &[u8], side: u8) -> Option<Coarse> {
-    // Per face point: its coarse edges start -> end.
-    let mut succ = PairMap::with_capacity(t.idx.len() / 2 + 4);
-    let mut directed = PairMap::with_capacity(t.idx.len() / 2 + 4);
-    let mut count = vec![0u32; t.nv];
+    // Every quad corner g of colour `side` names the coarse edge a -> b around it.
+    let mut corners = Vec::with_capacity(t.idx.len() / 2);
     for f in 0..t.nf() {
         let q = t.face(f);
         for i in 0..4 {
-            if colours[q[i] as usize] != side {
-                continue;
+            if colours[q[i] as usize] == side {
+                let (a, b) = (q[(i + 1) % 4], q[(i + 3) % 4]);
+                if a == b {
+                    return None;
+                }
+                corners.push((q[i], a, b));
             }
-            let (g, a, b) = (q[i], q[(i + 1) % 4], q[(i + 3) % 4]);
-            if a == b || succ.get(g, a).is_some() {
-                return None;
-            }
-            succ.insert(g, a, b);
-            let (_, fresh) = directed.get_or_insert(a, b, || 0);
-            if !fresh {
-                return None;
-            }
-            count[g as usize] += 1;
         }
     }
+    // Per face point, its coarse edges start -> end, one per start; and each directed
+    // coarse edge from one quad only.
+    let succ = Grouped::new(t.nv, corners.iter().map(|&(g, a, b)| (g, (a, b))));
+    if succ.repeats() || Grouped::new(t.nv, corners.iter().map(|&(_, a, b)| (a, (b, 0)))).repeats()
+    {
+        return None;
+    }
+    let next = |g: u32, a: u32| {
+        let e = succ.group(g);
+        e.binary_search_by_key(&a, |&(s, _)| s).ok().map(|i| e[i].1)
+    };
     let mut topo = Topo::new(t.nv);
     let mut points = Vec::new();
     let mut stamp = vec![NONE; t.nv];
@@ -120,7 +162,7 @@ fn coarsen(t: &Topo, colours: &[u8], side: u8) -> Option<Coarse> {
                 continue;
             }
             done[g as usize] = true;
-            let k = count[g as usize];
+            let k = succ.group(g).len();
             if k < 3 {
                 return None;
             }
@@ -134,7 +176,7 @@ fn coarsen(t: &Topo, colours: &[u8], side: u8) -> Option<Coarse> {
                 }
                 stamp[cur as usize] = g;
                 poly.push(cur);
-                cur = succ.get(g, cur)?;
+                cur = next(g, cur)?;
             }
             if cur != start {
                 return None;
