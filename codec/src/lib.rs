@@ -561,8 +561,10 @@ fn encode_with(
             }
             // Each level keeps its smallest mode, but a rotated level hands the next one
             // models learnt in another frame: the best coding without the rotated modes
-            // can be smaller in all.
-            if let Transform::Wavelet(w) = p.header.transform {
+            // can be smaller in all. (Without a rotated level it would be this coding
+            // again: the same modes win, the rotated ones coming last on ties.)
+            let rotated = p.levels.iter().any(|l| matches!(l.first(), Some(4 | 5)));
+            if let (true, Transform::Wavelet(w)) = (rotated, p.header.transform) {
                 let d = p.header.disc;
                 try_code(&mut p, w, d, false);
             }
