@@ -476,6 +476,12 @@ impl Encoder {
         }
     }
 
+    /// Bytes the stream has written so far: [`Encoder::finish`] returns at least as
+    /// many.
+    pub fn written(&self) -> usize {
+        self.inner.bulk().len() * 4
+    }
+
     /// Finishes the stream and returns it as bytes (little-endian 32-bit words).
     pub fn finish(self) -> Vec<u8> {
         let words = self.inner.into_compressed().unwrap_or_default();

@@ -74,6 +74,8 @@ pub struct LevelModels {
     /// a level is coded in that mode only (mode 5 with its own weights; every open mode
     /// if that one is not open to the level).
     pub only: Option<Vec<u8>>,
+    /// The mode the encoder chose for the previous level (not part of the format).
+    prev_mode: Option<u8>,
 }
 
 impl LevelModels {
@@ -85,6 +87,7 @@ impl LevelModels {
             mags: Vec::new(),
             rotated: true,
             only: None,
+            prev_mode: None,
         }
     }
 
@@ -759,6 +762,7 @@ pub fn encode(
             &mut mags,
             Mode::Plain,
             &mut m,
+            usize::MAX,
         )
         .expect("plain details are in range");
         models.mags = mags;
@@ -802,29 +806,54 @@ pub fn encode(
         mags: Vec<[u8; 3]>,
         models: Models,
     }
-    let mut best: Option<Tried> = None;
-    for mode in modes {
+    // The previous level's mode is tried first: a mode is abandoned once its stream
+    // passes the best size so far, and the best is often the previous level's. Ties go
+    // to the first mode in `modes`' order whatever the order of trying.
+    let mut order: Vec<usize> = (0..modes.len()).collect();
+    if let Some(i) = modes
+        .iter()
+        .position(|m| Some(m.byte()) == models.prev_mode)
+    {
+        order.remove(i);
+        order.insert(0, i);
+    }
+    let mut best: Option<(usize, Tried)> = None;
+    for i in order {
+        let mode = modes[i];
+        let head = mode.bytes().len();
+        // A stream longer than this loses (or ties with a mode tried before it).
+        let limit = best.as_ref().map_or(usize::MAX, |(_, b)| {
+            (b.body.len() + b.mode.len()).saturating_sub(head)
+        });
         let mut a = act.clone();
         let mut mg = models.mags.clone();
         let mut m = start.clone();
         let Some(body) = encode_mode(
-            level, sqrt2, x, coarse, &frames, &mut a, &mut mg, mode, &mut m,
+            level, sqrt2, x, coarse, &frames, &mut a, &mut mg, mode, &mut m, limit,
         ) else {
             continue;
         };
-        if best
-            .as_ref()
-            .is_none_or(|b| body.len() + mode.bytes().len() < b.body.len() + b.mode.len())
-        {
-            best = Some(Tried {
-                mode: mode.bytes(),
-                body,
-                act: a,
-                mags: mg,
-                models: m,
-            });
+        let size = body.len() + head;
+        if best.as_ref().is_none_or(|(j, b)| {
+            let bs = b.body.len() + b.mode.len();
+            size < bs || (size == bs && i < *j)
+        }) {
+            best = Some((
+                i,
+                Tried {
+                    mode: mode.bytes(),
+                    body,
+                    act: a,
+                    mags: mg,
+                    models: m,
+                },
+            ));
         }
     }
+    let best = best.map(|(i, t)| {
+        models.prev_mode = Some(modes[i].byte());
+        t
+    });
     let Tried {
         mode,
         body,
@@ -901,6 +930,7 @@ fn encode_mode(
     mags: &mut Vec<[u8; 3]>,
     mode: Mode<'_>,
     m: &mut Models,
+    limit: usize,
 ) -> Option<Vec<u8>> {
     let mut enc = Encoder::new();
     let (nv, nd) = (level.nv, details(level, sqrt2));
@@ -945,8 +975,12 @@ fn encode_mode(
         }
         mags[nv + i] = put(&mut enc, m, class, bins, d, fr);
         act[nv + i] = activity(d);
+        if i % 64 == 63 && enc.written() > limit {
+            return None;
+        }
     }
-    Some(enc.finish())
+    let body = enc.finish();
+    (body.len() <= limit).then_some(body)
 }
 
 /// `a + b` per component, `None` on overflow (see [`in_range`]).
@@ -1347,7 +1381,16 @@ mod tests {
         let mut m = Models::new(ROTATED_VERSION);
         let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
         encode_mode(
-            level, false, x, coarse, &frames, &mut act, &mut mags, mode, &mut m,
+            level,
+            false,
+            x,
+            coarse,
+            &frames,
+            &mut act,
+            &mut mags,
+            mode,
+            &mut m,
+            usize::MAX,
         )
     }
 
@@ -1467,6 +1510,50 @@ mod tests {
             let mut dm = LevelModels::new(ROTATED_VERSION);
             decode(&bytes, &level, false, &mut y, &mut act, &mut dm, None).unwrap();
             assert_eq!(y, x, "planned {plan}");
+        }
+    }
+
+    /// Whichever mode the encoder tries first (the previous level's), abandoning modes
+    /// whose stream passes the best size so far, it picks the same mode and bytes as
+    /// trying every mode in full; and a stream over its limit is abandoned.
+    #[test]
+    fn trying_the_previous_mode_first_codes_the_same() {
+        for (seed, shift) in [(10, false), (4, true), (14, false)] {
+            let (level, coarse, mut x) = rotated_fixture(seed);
+            if shift {
+                for e in 0..level.ne() {
+                    if let Some(off) = edge_offset(&level, &coarse, e) {
+                        for k in 0..3 {
+                            x[k][level.nv + e] += crate::transform::round_div(off[k] as i128, 32);
+                        }
+                    }
+                }
+            }
+            let run = |prev: Option<u8>| {
+                let mut act = vec![UNKNOWN; level.nv];
+                let mut models = LevelModels::new(ROTATED_VERSION);
+                models.prev_mode = prev;
+                encode(&level, false, &x, &coarse, &mut act, &mut models, None)
+            };
+            let free = run(None);
+            for prev in [0, 1, 4, 5] {
+                assert_eq!(run(Some(prev)), free, "seed {seed}, previous mode {prev}");
+            }
+            // Plain and framed coded in full, then each refused under its own size.
+            for mode in [Mode::Plain, Mode::Framed] {
+                let full = body_in_mode(&level, &coarse, &x, mode).unwrap();
+                let frames = rot_frames(&level, &coarse, false);
+                let run = |limit: usize| {
+                    let mut m = Models::new(ROTATED_VERSION);
+                    let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
+                    encode_mode(
+                        &level, false, &x, &coarse, &frames, &mut act, &mut mags, mode, &mut m,
+                        limit,
+                    )
+                };
+                assert_eq!(run(full.len()).as_ref(), Some(&full));
+                assert!(run(full.len() - 1).is_none());
+            }
         }
     }
 
