@@ -748,6 +748,24 @@ pub fn encode(
     models: &mut LevelModels,
     targets: Option<&[[i64; 3]]>,
 ) -> Vec<u8> {
+    encode_within(level, sqrt2, x, coarse, act, models, targets, usize::MAX)
+        .expect("no bound on the size")
+}
+
+/// [`encode`], or `None` (`act` and `models` then unusable) when the payload would take
+/// more than `limit` bytes in every mode: a caller that only wants a smaller coding
+/// than one it has stops early.
+#[allow(clippy::too_many_arguments)]
+pub fn encode_within(
+    level: &Level,
+    sqrt2: bool,
+    x: &[Vec<i64>; 3],
+    coarse: &[Vec<i64>; 3],
+    act: &mut Vec<u8>,
+    models: &mut LevelModels,
+    targets: Option<&[[i64; 3]]>,
+    limit: usize,
+) -> Option<Vec<u8>> {
     let version = models.version;
     if version < 3 {
         let mut m = models.start();
@@ -767,7 +785,7 @@ pub fn encode(
         .expect("plain details are in range");
         models.mags = mags;
         models.last = Some(m);
-        return body;
+        return Some(body);
     }
     // The mode asked for, if any (the first level's entry; the rest for the next).
     let only = models.only.as_mut().and_then(|o| {
@@ -822,9 +840,10 @@ pub fn encode(
         let mode = modes[i];
         let head = mode.bytes().len();
         // A stream longer than this loses (or ties with a mode tried before it).
-        let limit = best.as_ref().map_or(usize::MAX, |(_, b)| {
-            (b.body.len() + b.mode.len()).saturating_sub(head)
-        });
+        let limit = best
+            .as_ref()
+            .map_or(limit, |(_, b)| (b.body.len() + b.mode.len()).min(limit))
+            .saturating_sub(head);
         let mut a = act.clone();
         let mut mg = models.mags.clone();
         let mut m = start.clone();
@@ -860,14 +879,14 @@ pub fn encode(
         act: a,
         mags,
         models: m,
-    } = best.expect("at least one mode");
+    } = best?;
     *act = a;
     models.mags = mags;
     models.last = Some(m);
     let mut out = Vec::with_capacity(body.len() + 2);
     out.extend_from_slice(&mode);
     out.extend_from_slice(&body);
-    out
+    Some(out)
 }
 
 /// How a level's details are coded (SPEC.md 10.2, 10.3).

@@ -118,6 +118,11 @@ struct Payloads {
 }
 
 impl Payloads {
+    /// Bytes of the BASE and LEVL payloads: what the codings of one hierarchy differ by.
+    fn coded(&self) -> usize {
+        self.base.len() + self.levels.iter().map(Vec::len).sum::<usize>()
+    }
+
     fn size(&self) -> usize {
         self.base.len()
             + self.levels.iter().map(Vec::len).sum::<usize>()
@@ -157,7 +162,10 @@ fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Header {
 }
 
 /// Codes a canonical hierarchy with wavelet `w` (SPEC.md 9, 10), trying the rotated
-/// level modes (10.5) when `rotated`; `None` if a lifted value leaves the supported range.
+/// level modes (10.5) when `rotated`, each level in its mode from `modes` where given
+/// (every open mode where not); `None` if a lifted value leaves the supported range or
+/// the BASE and LEVL payloads would take more than `bound` bytes.
+#[allow(clippy::too_many_arguments)]
 fn code_hierarchy(
     canon: &Canonical,
     pos: &[Vec<i64>; 3],
@@ -166,6 +174,7 @@ fn code_hierarchy(
     header: &Header,
     rotated: bool,
     modes: Option<Vec<u8>>,
+    bound: usize,
 ) -> Option<Payloads> {
     let mut x = pos.clone();
     // The coarse values of each level, as the decoder will have them when it reads the
@@ -217,15 +226,15 @@ fn code_hierarchy(
     let mut models = levels::LevelModels::new(FORMAT_VERSION);
     models.rotated = rotated;
     models.only = modes;
-    let level_bytes = canon
-        .levels
-        .iter()
-        .zip(&coarse)
-        .zip(&targets)
-        .map(|((l, c), t)| {
-            levels::encode(l, canon.sqrt2, &x, c, &mut act, &mut models, t.as_deref())
-        })
-        .collect();
+    // Bytes the levels may take: a coding over the bound is not wanted.
+    let mut room = bound.checked_sub(base_bytes.len())?;
+    let mut level_bytes = Vec::with_capacity(canon.levels.len());
+    for ((l, c), t) in canon.levels.iter().zip(&coarse).zip(&targets) {
+        let (s2, t) = (canon.sqrt2, t.as_deref());
+        let b = levels::encode_within(l, s2, &x, c, &mut act, &mut models, t, room)?;
+        room -= b.len();
+        level_bytes.push(b);
+    }
     header.disc = if canon.poles.is_empty() {
         DiscTransform::None
     } else {
@@ -273,6 +282,9 @@ const FIT_SCREEN: f64 = 12.0;
 /// The least-squares fit stops when no control value moves by more than this (units of
 /// the grid): far below the 2^-10 of the finest precision tried.
 const FIT_TOLERANCE: f64 = 1e-5;
+
+/// No bound on a hierarchy coding's size ([`code_hierarchy`]).
+const UNBOUNDED: usize = usize::MAX;
 
 /// `auto` codes the best-ranked other transform of a family in every mode when its
 /// ranking size is below this many hundredths of the first transform's size.
@@ -489,7 +501,8 @@ fn encode_with(
                 let pos = canonical_positions(mesh, &canon);
                 // code_hierarchy drops the disc transform of a hierarchy without poles.
                 let disc = opts.disc.unwrap_or(DiscTransform::None);
-                if let Some(mut p) = code_hierarchy(&canon, &pos, first, disc, &flat_h, true, None)
+                if let Some(mut p) =
+                    code_hierarchy(&canon, &pos, first, disc, &flat_h, true, None, UNBOUNDED)
                 {
                     if opts.keep_order {
                         let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
@@ -505,10 +518,18 @@ fn encode_with(
             };
             // Codes the chosen hierarchy with (w, d) and keeps it if smaller (the same
             // ORDR section: the order depends on the hierarchy only).
+            // Codes of one hierarchy share their ORDR section (the order depends on the
+            // hierarchy only), so they compare by `coded()`, and a coding stops as soon
+            // as it cannot be wanted (`code_hierarchy`'s bound).
+            //
+            // Codes the chosen hierarchy with (w, d) and keeps it if smaller.
             let try_code = |p: &mut Payloads, w: Wavelet, d: DiscTransform, rotated: bool| {
-                if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, &flat_h, rotated, None) {
+                let bound = p.coded().saturating_sub(1);
+                if let Some(mut q) =
+                    code_hierarchy(&canon, &pos, w, d, &flat_h, rotated, None, bound)
+                {
                     q.order = p.order.clone();
-                    if q.size() < p.size() {
+                    if q.coded() < p.coded() {
                         *p = q;
                     }
                 }
@@ -519,23 +540,27 @@ fn encode_with(
             let rank_then_code = |p: &mut Payloads, pairs: &[(Wavelet, DiscTransform)]| {
                 let modes: Vec<u8> = p.levels.iter().map(|l| l[0]).collect();
                 let mut ranked: Option<(usize, Wavelet, DiscTransform)> = None;
-                let base_size = p.size();
+                let first = p.coded();
+                // The largest ranking size that leads to coding in every mode.
+                let margin = (first * RANK_MARGIN).div_ceil(100).saturating_sub(1);
                 for &(w, d) in pairs {
                     let m = Some(modes.clone());
-                    if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, &flat_h, true, m) {
-                        if ranked.is_none_or(|(s, ..)| q.size() < s) {
-                            ranked = Some((q.size(), w, d));
+                    // Wanted if smaller than p, or ranked first within the margin.
+                    let rank = ranked.map_or(margin, |(s, ..)| s.saturating_sub(1).min(margin));
+                    let bound = p.coded().saturating_sub(1).max(rank);
+                    if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, &flat_h, true, m, bound)
+                    {
+                        if ranked.is_none_or(|(s, ..)| q.coded() < s) {
+                            ranked = Some((q.coded(), w, d));
                         }
                         q.order = p.order.clone();
-                        if q.size() < p.size() {
+                        if q.coded() < p.coded() {
                             *p = q;
                         }
                     }
                 }
-                if let Some((s, w, d)) = ranked {
-                    if s * 100 < base_size * RANK_MARGIN {
-                        try_code(p, w, d, true);
-                    }
+                if let Some((_, w, d)) = ranked.filter(|&(s, ..)| s <= margin) {
+                    try_code(p, w, d, true);
                 }
             };
             let disc = p.header.disc;
@@ -1128,4 +1153,53 @@ fn restore_order(mesh: &Mesh, o: &order::InputOrder) -> Mesh {
     out.faces = faces;
     out.face_starts = starts;
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hierarchy::fixtures::{prism_with_triangles, pseudo};
+
+    /// `code_hierarchy`'s bound: a coding whose BASE and LEVL payloads fit is the
+    /// unbounded one, byte for byte; one byte less and it is refused. With and without
+    /// a mode plan, for several transforms.
+    #[test]
+    fn bounded_codings_are_the_unbounded_ones_or_none() {
+        let mut t = prism_with_triangles();
+        for _ in 0..3 {
+            t = hierarchy::Level::new(&t).unwrap().fine();
+        }
+        let rec = hierarchy::cc::recover_all(t.nv, &t, 16).remove(0);
+        let canon = hierarchy::canonicalise(&rec, true).unwrap();
+        let vals: Vec<Vec<i64>> = (0..3).map(|k| pseudo(k + 1, t.nv, 12)).collect();
+        let pos: [Vec<i64>; 3] =
+            std::array::from_fn(|k| canon.order.iter().map(|&o| vals[k][o as usize]).collect());
+        let mesh = Mesh {
+            positions: (0..t.nv)
+                .map(|v| std::array::from_fn(|k| vals[k][v]))
+                .collect(),
+            face_starts: t.starts.clone(),
+            faces: t.idx.clone(),
+        };
+        let q = Quantization::Decimal { decimals: 0 };
+        let header = flat_header(&mesh, &q, &EncodeOptions::default());
+        let d = DiscTransform::None;
+        for w in [Wavelet::Bicubic, Wavelet::Interp4, Wavelet::Lazy] {
+            let free = code_hierarchy(&canon, &pos, w, d, &header, true, None, UNBOUNDED).unwrap();
+            let plan: Vec<u8> = free.levels.iter().map(|l| l[0]).collect();
+            for modes in [None, Some(plan)] {
+                let whole =
+                    code_hierarchy(&canon, &pos, w, d, &header, true, modes.clone(), UNBOUNDED)
+                        .unwrap();
+                let n = whole.coded();
+                let fit = code_hierarchy(&canon, &pos, w, d, &header, true, modes.clone(), n)
+                    .expect("fits its own size");
+                assert_eq!((fit.base, fit.levels), (whole.base, whole.levels), "{w:?}");
+                assert!(
+                    code_hierarchy(&canon, &pos, w, d, &header, true, modes, n - 1).is_none(),
+                    "{w:?}"
+                );
+            }
+        }
+    }
 }
