@@ -242,7 +242,13 @@ pub fn recover(topo: &Topo, max_levels: usize) -> Option<Recovered> {
         chains.push(chain);
     }
     let mut base = Topo::new(n);
-    let mut face_points: Vec<PairMap> = (0..depth).map(|_| PairMap::with_capacity(16)).collect();
+    // Level l's map holds every directed edge of its coarse faces.
+    let mut face_points: Vec<PairMap> = (1..=depth)
+        .map(|l| {
+            let n = chains.iter().map(|c| c[depth - l].topo.idx.len()).sum();
+            PairMap::with_capacity(n)
+        })
+        .collect();
     for ((verts, _), chain) in comps.iter().zip(&chains) {
         let b = &chain[depth - 1].topo;
         for f in 0..b.nf() {
