@@ -516,9 +516,7 @@ fn encode_with(
             let Some((mut p, canon, pos)) = fam_best else {
                 continue;
             };
-            // Codes the chosen hierarchy with (w, d) and keeps it if smaller (the same
-            // ORDR section: the order depends on the hierarchy only).
-            // Codes of one hierarchy share their ORDR section (the order depends on the
+            // Codings of one hierarchy share their ORDR section (the order depends on the
             // hierarchy only), so they compare by `coded()`, and a coding stops as soon
             // as it cannot be wanted (`code_hierarchy`'s bound).
             //
@@ -540,9 +538,8 @@ fn encode_with(
             let rank_then_code = |p: &mut Payloads, pairs: &[(Wavelet, DiscTransform)]| {
                 let modes: Vec<u8> = p.levels.iter().map(|l| l[0]).collect();
                 let mut ranked: Option<(usize, Wavelet, DiscTransform)> = None;
-                let first = p.coded();
                 // The largest ranking size that leads to coding in every mode.
-                let margin = (first * RANK_MARGIN).div_ceil(100).saturating_sub(1);
+                let margin = (p.coded() * RANK_MARGIN).div_ceil(100).saturating_sub(1);
                 for &(w, d) in pairs {
                     let m = Some(modes.clone());
                     // Wanted if smaller than p, or ranked first within the margin.
