@@ -736,27 +736,12 @@ fn get(
 /// Codes the details `x[k][nv..]` of one level (a sqrt(2) step when `sqrt2`). `coarse`
 /// holds the level's coarse values (what the decoder has when it reads this level);
 /// `act` holds the coarse vertices' activity and is extended to the fine vertices.
-/// `version` is the container's format version: from version 3 the payload starts with
-/// a mode byte, and the encoder keeps whichever of plain axes (0) and the normal frame
-/// (1) codes smaller (SPEC.md 10.2).
-pub fn encode(
-    level: &Level,
-    sqrt2: bool,
-    x: &[Vec<i64>; 3],
-    coarse: &[Vec<i64>; 3],
-    act: &mut Vec<u8>,
-    models: &mut LevelModels,
-    targets: Option<&[[i64; 3]]>,
-) -> Vec<u8> {
-    encode_within(level, sqrt2, x, coarse, act, models, targets, usize::MAX)
-        .expect("no bound on the size")
-}
-
-/// [`encode`], or `None` (`act` and `models` then unusable) when the payload would take
-/// more than `limit` bytes in every mode: a caller that only wants a smaller coding
-/// than one it has stops early.
+/// From format version 3 the payload starts with a mode byte, and the encoder keeps the
+/// mode that codes smallest (SPEC.md 10.2, 10.5). `None` (`act` and `models` then
+/// unusable) when the payload would take more than `limit` bytes in every mode: a caller
+/// that only wants a smaller coding than one it has stops early.
 #[allow(clippy::too_many_arguments)]
-pub fn encode_within(
+pub fn encode(
     level: &Level,
     sqrt2: bool,
     x: &[Vec<i64>; 3],
@@ -1119,6 +1104,18 @@ pub fn decode(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`super::encode`] of a Catmull-Clark level without a limit or targets.
+    fn encode_fresh(
+        level: &Level,
+        x: &[Vec<i64>; 3],
+        coarse: &[Vec<i64>; 3],
+        act: &mut Vec<u8>,
+        models: &mut LevelModels,
+    ) -> Vec<u8> {
+        encode(level, false, x, coarse, act, models, None, usize::MAX).unwrap()
+    }
+
     use crate::hierarchy::fixtures::{prism_with_triangles, pseudo};
 
     fn refined(times: usize) -> Level {
@@ -1277,7 +1274,7 @@ mod tests {
         for version in [14u16, 15] {
             let mut act = vec![UNKNOWN; nv];
             let mut models = LevelModels::new(version);
-            let bytes = encode(&level, false, &x, &coarse, &mut act, &mut models, None);
+            let bytes = encode_fresh(&level, &x, &coarse, &mut act, &mut models);
             let mut y = coarse.clone();
             let mut act = vec![UNKNOWN; nv];
             let mut models = LevelModels::new(version);
@@ -1497,7 +1494,7 @@ mod tests {
         // The encoder picks it.
         let mut act = vec![UNKNOWN; nv];
         let mut models = LevelModels::new(ROTATED_VERSION);
-        let bytes = encode(&level, false, &x, &coarse, &mut act, &mut models, None);
+        let bytes = encode_fresh(&level, &x, &coarse, &mut act, &mut models);
         assert_eq!(&bytes[..2], &[5, 0x44]);
     }
 
@@ -1511,13 +1508,13 @@ mod tests {
         let free = {
             let mut act = vec![UNKNOWN; nv];
             let mut models = LevelModels::new(ROTATED_VERSION);
-            encode(&level, false, &x, &coarse, &mut act, &mut models, None)
+            encode_fresh(&level, &x, &coarse, &mut act, &mut models)
         };
         for (plan, want) in [(0u8, Some(0u8)), (1, Some(1)), (4, Some(4)), (2, None)] {
             let mut act = vec![UNKNOWN; nv];
             let mut models = LevelModels::new(ROTATED_VERSION);
             models.only = Some(vec![plan, plan]);
-            let bytes = encode(&level, false, &x, &coarse, &mut act, &mut models, None);
+            let bytes = encode_fresh(&level, &x, &coarse, &mut act, &mut models);
             match want {
                 Some(m) => assert_eq!(bytes[0], m, "planned {plan}"),
                 None => assert_eq!(bytes, free, "mode {plan} is not open: every mode"),
@@ -1552,7 +1549,7 @@ mod tests {
                 let mut act = vec![UNKNOWN; level.nv];
                 let mut models = LevelModels::new(ROTATED_VERSION);
                 models.prev_mode = prev;
-                encode(&level, false, &x, &coarse, &mut act, &mut models, None)
+                encode_fresh(&level, &x, &coarse, &mut act, &mut models)
             };
             let free = run(None);
             for prev in [0, 1, 4, 5] {

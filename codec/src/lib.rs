@@ -231,7 +231,7 @@ fn code_hierarchy(
     let mut level_bytes = Vec::with_capacity(canon.levels.len());
     for ((l, c), t) in canon.levels.iter().zip(&coarse).zip(&targets) {
         let (s2, t) = (canon.sqrt2, t.as_deref());
-        let b = levels::encode_within(l, s2, &x, c, &mut act, &mut models, t, room)?;
+        let b = levels::encode(l, s2, &x, c, &mut act, &mut models, t, room)?;
         room -= b.len();
         level_bytes.push(b);
     }

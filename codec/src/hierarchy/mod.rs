@@ -471,7 +471,10 @@ impl Level {
 }
 
 /// Compressed lists: for each key in `0..n`, its values in insertion order.
-fn csr(n: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> (Vec<u32>, Vec<u32>) {
+pub(crate) fn csr<T: Copy + Default>(
+    n: usize,
+    pairs: impl Iterator<Item = (u32, T)> + Clone,
+) -> (Vec<u32>, Vec<T>) {
     let mut starts = vec![0u32; n + 1];
     for (k, _) in pairs.clone() {
         starts[k as usize + 1] += 1;
@@ -480,7 +483,7 @@ fn csr(n: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> (Vec<u32>, 
         starts[i + 1] += starts[i];
     }
     let mut fill = starts.clone();
-    let mut vals = vec![0u32; starts[n] as usize];
+    let mut vals = vec![T::default(); starts[n] as usize];
     for (k, v) in pairs {
         vals[fill[k as usize] as usize] = v;
         fill[k as usize] += 1;

@@ -10,7 +10,7 @@
 
 use crate::error::{Error, Result};
 use crate::hierarchy::{
-    base_numbering, check_matches, push_face_points, Canonical, Level, PairMap, Topo, NONE,
+    base_numbering, check_matches, csr, push_face_points, Canonical, Level, PairMap, Topo, NONE,
 };
 
 /// A recovered sqrt(2) hierarchy, in the input's vertex numbers.
@@ -93,19 +93,7 @@ struct Grouped {
 impl Grouped {
     /// Groups `(key, item)` pairs (keys below `n`), each group sorted by item.
     fn new(n: usize, pairs: impl Iterator<Item = (u32, (u32, u32))> + Clone) -> Grouped {
-        let mut start = vec![0u32; n + 1];
-        for (k, _) in pairs.clone() {
-            start[k as usize + 1] += 1;
-        }
-        for i in 0..n {
-            start[i + 1] += start[i];
-        }
-        let mut fill = start.clone();
-        let mut items = vec![(0, 0); start[n] as usize];
-        for (k, it) in pairs {
-            items[fill[k as usize] as usize] = it;
-            fill[k as usize] += 1;
-        }
+        let (start, mut items) = csr(n, pairs);
         for k in 0..n {
             items[start[k] as usize..start[k + 1] as usize].sort_unstable();
         }
