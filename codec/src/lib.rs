@@ -501,13 +501,21 @@ fn encode_with(
                 let pos = canonical_positions(mesh, &canon);
                 // code_hierarchy drops the disc transform of a hierarchy without poles.
                 let disc = opts.disc.unwrap_or(DiscTransform::None);
+                let order = if opts.keep_order {
+                    let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
+                    Some(order_section(&canon.order, faces, rotations))
+                } else {
+                    None
+                };
+                // Wanted only if smaller than the best candidate so far.
+                let bound = fam_best.as_ref().map_or(UNBOUNDED, |b| {
+                    let order_len = order.as_ref().map_or(0, Vec::len);
+                    b.0.size().saturating_sub(order_len + 1)
+                });
                 if let Some(mut p) =
-                    code_hierarchy(&canon, &pos, first, disc, &flat_h, true, None, UNBOUNDED)
+                    code_hierarchy(&canon, &pos, first, disc, &flat_h, true, None, bound)
                 {
-                    if opts.keep_order {
-                        let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
-                        p.order = Some(order_section(&canon.order, faces, rotations));
-                    }
+                    p.order = order;
                     if fam_best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
                         fam_best = Some((p, canon, pos));
                     }
