@@ -73,7 +73,7 @@ pub struct LevelModels {
     /// The encoder's mode for each coming level (not part of the format): where given,
     /// a level is coded in that mode only (mode 5 with its own weights; every open mode
     /// if that one is not open to the level).
-    pub only: Option<Vec<u8>>,
+    pub only: Option<std::vec::IntoIter<u8>>,
     /// The mode the encoder chose for the previous level (not part of the format).
     prev_mode: Option<u8>,
 }
@@ -772,14 +772,8 @@ pub fn encode(
         models.last = Some(m);
         return Some(body);
     }
-    // The mode asked for, if any (the first level's entry; the rest for the next).
-    let only = models.only.as_mut().and_then(|o| {
-        let first = o.first().copied();
-        if !o.is_empty() {
-            o.remove(0);
-        }
-        first
-    });
+    // The mode asked for this level, if any.
+    let only = models.only.as_mut().and_then(Iterator::next);
     let open = |m: u8| only.is_none_or(|o| o == m);
     let mut modes = vec![Mode::Plain, Mode::Framed];
     if let Some(t) = targets.filter(|_| version >= 7) {
@@ -824,8 +818,9 @@ pub fn encode(
     for i in order {
         let mode = modes[i];
         let head = mode.bytes().len();
-        // A stream longer than this loses (or ties with a mode tried before it).
-        let limit = best
+        // A stream longer than this is over the limit or loses to the best so far (or
+        // ties with a mode tried before it).
+        let room = best
             .as_ref()
             .map_or(limit, |(_, b)| (b.body.len() + b.mode.len()).min(limit))
             .saturating_sub(head);
@@ -833,7 +828,7 @@ pub fn encode(
         let mut mg = models.mags.clone();
         let mut m = start.clone();
         let Some(body) = encode_mode(
-            level, sqrt2, x, coarse, &frames, &mut a, &mut mg, mode, &mut m, limit,
+            level, sqrt2, x, coarse, &frames, &mut a, &mut mg, mode, &mut m, room,
         ) else {
             continue;
         };
@@ -1104,6 +1099,7 @@ pub fn decode(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::hierarchy::fixtures::{prism_with_triangles, pseudo};
 
     /// [`super::encode`] of a Catmull-Clark level without a limit or targets.
     fn encode_fresh(
@@ -1115,8 +1111,6 @@ mod tests {
     ) -> Vec<u8> {
         encode(level, false, x, coarse, act, models, None, usize::MAX).unwrap()
     }
-
-    use crate::hierarchy::fixtures::{prism_with_triangles, pseudo};
 
     fn refined(times: usize) -> Level {
         let mut t = prism_with_triangles();
@@ -1469,6 +1463,18 @@ mod tests {
         code_in_mode(&level, &coarse, &x, Mode::Rotated);
     }
 
+    /// Displaces every edge point by half its faces' offset from the midpoint
+    /// (Catmull-Clark's edge rule, tangentially; the offset is sixteen times it).
+    fn follow_faces(level: &Level, coarse: &[Vec<i64>; 3], x: &mut [Vec<i64>; 3]) {
+        for e in 0..level.ne() {
+            if let Some(off) = edge_offset(level, coarse, e) {
+                for k in 0..3 {
+                    x[k][level.nv + e] += crate::transform::round_div(off[k] as i128, 32);
+                }
+            }
+        }
+    }
+
     /// Edge points displaced by half their faces' offset from the midpoint (Catmull-Clark's
     /// edge rule, tangentially) code at least 30 % smaller with the shifted mode, whose
     /// weights the encoder finds.
@@ -1476,13 +1482,7 @@ mod tests {
     fn shifted_mode_predicts_edge_points_that_follow_their_faces() {
         let (level, coarse, mut x) = rotated_fixture(4);
         let nv = level.nv;
-        for e in 0..level.ne() {
-            if let Some(off) = edge_offset(&level, &coarse, e) {
-                for k in 0..3 {
-                    x[k][nv + e] += crate::transform::round_div(off[k] as i128, 32);
-                }
-            }
-        }
+        follow_faces(&level, &coarse, &mut x);
         let frames = rot_frames(&level, &coarse, false);
         assert_eq!(shift_weights(&level, &x, &frames), (4, 4));
         let plain = code_in_mode(&level, &coarse, &x, Mode::Rotated);
@@ -1513,14 +1513,17 @@ mod tests {
         for (plan, want) in [(0u8, Some(0u8)), (1, Some(1)), (4, Some(4)), (2, None)] {
             let mut act = vec![UNKNOWN; nv];
             let mut models = LevelModels::new(ROTATED_VERSION);
-            models.only = Some(vec![plan, plan]);
+            models.only = Some(vec![plan, plan].into_iter());
             let bytes = encode_fresh(&level, &x, &coarse, &mut act, &mut models);
             match want {
                 Some(m) => assert_eq!(bytes[0], m, "planned {plan}"),
                 None => assert_eq!(bytes, free, "mode {plan} is not open: every mode"),
             }
             // The plan's first entry was used; the second is left for the next level.
-            assert_eq!(models.only.as_deref(), Some(&[plan][..]));
+            assert_eq!(
+                models.only.as_ref().map(|o| o.as_slice()),
+                Some(&[plan][..])
+            );
             let mut y = coarse.clone();
             let mut act = vec![UNKNOWN; nv];
             let mut dm = LevelModels::new(ROTATED_VERSION);
@@ -1537,13 +1540,7 @@ mod tests {
         for (seed, shift) in [(10, false), (4, true), (14, false)] {
             let (level, coarse, mut x) = rotated_fixture(seed);
             if shift {
-                for e in 0..level.ne() {
-                    if let Some(off) = edge_offset(&level, &coarse, e) {
-                        for k in 0..3 {
-                            x[k][level.nv + e] += crate::transform::round_div(off[k] as i128, 32);
-                        }
-                    }
-                }
+                follow_faces(&level, &coarse, &mut x);
             }
             let run = |prev: Option<u8>| {
                 let mut act = vec![UNKNOWN; level.nv];

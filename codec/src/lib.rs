@@ -124,9 +124,13 @@ impl Payloads {
     }
 
     fn size(&self) -> usize {
-        self.base.len()
-            + self.levels.iter().map(Vec::len).sum::<usize>()
-            + self.order.as_ref().map_or(0, Vec::len)
+        self.coded() + self.order.as_ref().map_or(0, Vec::len)
+    }
+
+    /// Each LEVL payload's mode byte (SPEC.md 10.1).
+    fn modes(&self) -> Vec<u8> {
+        let mode = |l: &Vec<u8>| level_mode(SectionKind::LEVEL, FORMAT_VERSION, l);
+        self.levels.iter().filter_map(mode).collect()
     }
 }
 
@@ -225,7 +229,7 @@ fn code_hierarchy(
     let mut act = vec![levels::UNKNOWN; canon.base.nv];
     let mut models = levels::LevelModels::new(FORMAT_VERSION);
     models.rotated = rotated;
-    models.only = modes;
+    models.only = modes.map(Vec::into_iter);
     // Bytes the levels may take: a coding over the bound is not wanted.
     let mut room = bound.checked_sub(base_bytes.len())?;
     let mut level_bytes = Vec::with_capacity(canon.levels.len());
@@ -544,7 +548,7 @@ fn encode_with(
             // chose for it (a fraction of the work of trying every mode); the best of
             // them is then coded in every mode. Whichever coding is smallest is kept.
             let rank_then_code = |p: &mut Payloads, pairs: &[(Wavelet, DiscTransform)]| {
-                let modes: Vec<u8> = p.levels.iter().map(|l| l[0]).collect();
+                let modes = p.modes();
                 let mut ranked: Option<(usize, Wavelet, DiscTransform)> = None;
                 // The largest ranking size that leads to coding in every mode.
                 let margin = (p.coded() * RANK_MARGIN).div_ceil(100).saturating_sub(1);
@@ -593,7 +597,7 @@ fn encode_with(
             // models learnt in another frame: the best coding without the rotated modes
             // can be smaller in all. (Without a rotated level it would be this coding
             // again: the same modes win, the rotated ones coming last on ties.)
-            let rotated = p.levels.iter().any(|l| matches!(l.first(), Some(4 | 5)));
+            let rotated = p.modes().iter().any(|m| matches!(m, 4 | 5));
             if let (true, Transform::Wavelet(w)) = (rotated, p.header.transform) {
                 let d = p.header.disc;
                 try_code(&mut p, w, d, false);
@@ -1177,8 +1181,6 @@ mod tests {
         let rec = hierarchy::cc::recover_all(t.nv, &t, 16).remove(0);
         let canon = hierarchy::canonicalise(&rec, true).unwrap();
         let vals: Vec<Vec<i64>> = (0..3).map(|k| pseudo(k + 1, t.nv, 12)).collect();
-        let pos: [Vec<i64>; 3] =
-            std::array::from_fn(|k| canon.order.iter().map(|&o| vals[k][o as usize]).collect());
         let mesh = Mesh {
             positions: (0..t.nv)
                 .map(|v| std::array::from_fn(|k| vals[k][v]))
@@ -1188,10 +1190,11 @@ mod tests {
         };
         let q = Quantization::Decimal { decimals: 0 };
         let header = flat_header(&mesh, &q, &EncodeOptions::default());
+        let pos = canonical_positions(&mesh, &canon);
         let d = DiscTransform::None;
         for w in [Wavelet::Bicubic, Wavelet::Interp4, Wavelet::Lazy] {
             let free = code_hierarchy(&canon, &pos, w, d, &header, true, None, UNBOUNDED).unwrap();
-            let plan: Vec<u8> = free.levels.iter().map(|l| l[0]).collect();
+            let plan = free.modes();
             for modes in [None, Some(plan)] {
                 let whole =
                     code_hierarchy(&canon, &pos, w, d, &header, true, modes.clone(), UNBOUNDED)
