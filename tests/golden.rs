@@ -99,6 +99,8 @@ fn frozen_containers_still_decode() {
         ("cube_cc4.v17.swv", "cube_cc4.obj"),
         ("sphere_polar3.v17.swv", "sphere_polar3.obj"),
         ("mixed_cc2.v17.swv", "mixed_cc2.obj"),
+        ("prism_sqrt2_5.v18.swv", "prism_sqrt2_5.obj"),
+        ("open_cc2.v18.swv", "open_cc2.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

@@ -43,6 +43,33 @@ struct Models {
     /// model starts from it (reseeded) at its first use.
     parents: Vec<IntModel>,
     used: Vec<bool>,
+    /// Format 18: mode 6's models, [`PHASE_BINS`] per context of `m` (`None` until
+    /// first used), and their shared models (per class, slot and phase bin); empty until a
+    /// level is coded in mode 6, when the shared ones start from `parents` (SPEC.md
+    /// 10.6).
+    ph: Vec<Option<IntModel>>,
+    ph_parents: Vec<IntModel>,
+}
+
+/// From format 18 a sqrt2-lazy level may code its details in mode 6: plain axes, each
+/// value signed and modelled by its prediction's phase (SPEC.md 10.6).
+pub const PHASE_VERSION: u16 = 18;
+
+/// Phase bins: the size of a prediction's remainder in sixths of its divisor, 0..=2.
+const PHASE_BINS: usize = 3;
+
+/// Per axis and detail, the phase of the detail's prediction (SPEC.md 10.6): bit 2 set
+/// when the remainder is negative, bits 0 and 1 its bin.
+pub type Phases = [Vec<u8>; 3];
+
+/// The phase of a prediction `[n / d]` (9.1 rounding, `d > 0`) from its remainder
+/// `r = n - d [n / d]` (so `-d / 2 <= r < d / 2`): the sign of `r`, and how many of
+/// `d, 2d` are at most `6 |r|`.
+#[inline]
+pub fn phase(r: i128, d: i128) -> u8 {
+    let (a, d) = (6 * r.unsigned_abs(), d.unsigned_abs());
+    let bin = (a >= d) as u8 + (a >= 2 * d) as u8;
+    ((r < 0) as u8) << 2 | bin
 }
 
 /// Format 16 on: context models start from their class and slot's shared model.
@@ -95,7 +122,12 @@ impl LevelModels {
         match &self.last {
             Some(m) if self.version >= crate::coder::FAST_START_VERSION => {
                 let mut m = m.clone();
-                for im in m.m.iter_mut().chain(&mut m.parents) {
+                for im in
+                    m.m.iter_mut()
+                        .chain(&mut m.parents)
+                        .chain(m.ph.iter_mut().flatten())
+                        .chain(&mut m.ph_parents)
+                {
                     im.reseed(SEED_TOTAL);
                 }
                 m
@@ -124,6 +156,47 @@ impl Models {
                 Vec::new()
             },
             used: vec![!shared; 2 * 3 * 3 * bins],
+            ph: Vec::new(),
+            ph_parents: Vec::new(),
+        }
+    }
+
+    /// The model of mode 6 for a value of `class` in `slot` with phase bin `bin`
+    /// (SPEC.md 10.6); at its first use a copy of its shared model, reseeded.
+    fn get_phased(
+        &mut self,
+        class: usize,
+        slot: usize,
+        prev: usize,
+        nbr: usize,
+        bin: usize,
+    ) -> &mut IntModel {
+        if self.ph.is_empty() {
+            self.ph = vec![None; self.m.len() * PHASE_BINS];
+            self.ph_parents = (0..6 * PHASE_BINS)
+                .map(|j| {
+                    let mut m = self.parents[j / PHASE_BINS].clone();
+                    m.reseed(SHARED_SEED);
+                    m
+                })
+                .collect();
+        }
+        let p = if slot == 0 { 0 } else { prev_bin(prev) };
+        let i = (((class * 3 + slot) * 3 + p) * self.bins + nbr) * PHASE_BINS + bin;
+        self.ph[i].get_or_insert_with(|| {
+            let mut m = self.ph_parents[(class * 3 + slot) * PHASE_BINS + bin].clone();
+            m.reseed(SHARED_SEED);
+            m
+        })
+    }
+
+    /// Format 18: the shared model of `class`, `slot` and phase bin `bin` learns `v`.
+    fn observe_phased(&mut self, class: usize, slot: usize, bin: usize, v: i64) {
+        if let Some(p) = self
+            .ph_parents
+            .get_mut((class * 3 + slot) * PHASE_BINS + bin)
+        {
+            p.observe(v);
         }
     }
 
@@ -680,8 +753,71 @@ fn shift_weights(level: &Level, x: &[Vec<i64>; 3], frames: &[Option<RotFrame>]) 
     (best(&cost[0]), best(&cost[1]))
 }
 
+/// How a detail's values are phased (SPEC.md 10.6, 10.7).
+#[derive(Clone, Copy)]
+enum Phased {
+    /// Not at all (modes 0 to 5).
+    No,
+    /// Mode 6: every value signed and modelled by the phase of its axis.
+    Axes([u8; 3]),
+    /// Mode 7: the values after the first shifted by their expected part and phased.
+    Tangent(TanTerms),
+}
+
+/// Mode 7's terms of a detail (SPEC.md 10.7): `u_d = rho_d + c Q_d` per axis, with `rho`
+/// the remainders of its face's centroid, `Q` the normal part of its tangent target, `c`
+/// its face's corner count.
+#[derive(Clone, Copy)]
+struct TanTerms {
+    u: [i128; 3],
+    c: i128,
+}
+
+impl TanTerms {
+    /// The terms of the face point of face `f` whose tangent target `g` has the
+    /// tangential part `t` (so `Q = g - t`), from the coarse values.
+    fn new(level: &Level, coarse: &[Vec<i64>; 3], f: usize, g: [i64; 3], t: [i64; 3]) -> Self {
+        let face = level.coarse.face(f);
+        let c = face.len() as i128;
+        let mut u = [0i128; 3];
+        for (k, uk) in u.iter_mut().enumerate() {
+            let x = &coarse[k];
+            let s: i128 = face.iter().map(|&v| x[v as usize] as i128).sum();
+            let rho = s - c * crate::transform::round_div(s, c) as i128;
+            *uk = rho + c * (g[k] as i128 - t[k] as i128);
+        }
+        TanTerms { u, c }
+    }
+
+    /// The shift and phase of the value at axis `j` (not the first, `k`) given the first
+    /// value `rk` and the value's prediction `pred = [rk n_j / n_k]`: `A / D` with
+    /// `A = n_k u_j - n_j u_k + c (rk n_j - n_k pred)`, `D = c n_k` (both negated when
+    /// `n_k < 0`) is its expected value; the shift is `[A / D]`, the phase that of the
+    /// remainder. `None` when the shift's magnitude passes 2^52.
+    fn shift(&self, n: [i64; 3], k: usize, j: usize, rk: i64, pred: i64) -> Option<(i64, u8)> {
+        let (nk, nj) = (n[k] as i128, n[j] as i128);
+        let mut a =
+            nk * self.u[j] - nj * self.u[k] + self.c * (rk as i128 * nj - nk * pred as i128);
+        let mut d = self.c * nk;
+        if d < 0 {
+            a = -a;
+            d = -d;
+        }
+        // 9.1's rounding, in 64 bits when it fits (a 128-bit division is slow).
+        let q = match (i64::try_from(2 * a + d), i64::try_from(2 * d)) {
+            (Ok(t), Ok(dd)) => t.div_euclid(dd) as i128,
+            _ => (2 * a + d).div_euclid(2 * d),
+        };
+        if q.abs() > MAX_LIFTED as i128 {
+            return None;
+        }
+        Some((q as i64, phase(a - q * d, d)))
+    }
+}
+
 /// Codes detail `d` (components in the order of frame `fr`, each with its neighbour bin
-/// `nbr[slot]`); returns the magnitude classes of the coded values.
+/// `nbr[slot]`; phased as `ph` says); returns the magnitude classes of the coded values,
+/// or `None` when mode 7's shift is out of range.
 fn put(
     enc: &mut Encoder,
     m: &mut Models,
@@ -689,7 +825,8 @@ fn put(
     nbr: [usize; 3],
     d: [i64; 3],
     fr: Option<(usize, [i64; 3])>,
-) -> [u8; 3] {
+    ph: Phased,
+) -> Option<[u8; 3]> {
     let (order, n) = plan(fr);
     let mut prev = 0;
     let mut mags = [0u8; 3];
@@ -698,13 +835,31 @@ fn put(
             (1 | 2, Some(n)) => predict(d[order[0]], n, order[0], axis),
             _ => 0,
         };
-        let v = d[axis] - pred;
-        enc.int(m.get(class, slot, prev, nbr[slot]), v);
-        m.observe(class, slot, v);
+        let mut v = d[axis] - pred;
+        let q = match (ph, n) {
+            (Phased::Axes(p), _) => Some(p[axis]),
+            (Phased::Tangent(t), Some(n)) if slot > 0 => {
+                let (s, q) = t.shift(n, order[0], axis, d[order[0]], pred)?;
+                v = v.checked_sub(s).filter(|v| v.abs() <= MAX_LIFTED)?;
+                Some(q)
+            }
+            _ => None,
+        };
+        if let Some(q) = q {
+            let bin = (q & 3) as usize;
+            if q & 4 != 0 {
+                v = -v;
+            }
+            enc.int(m.get_phased(class, slot, prev, nbr[slot], bin), v);
+            m.observe_phased(class, slot, bin, v);
+        } else {
+            enc.int(m.get(class, slot, prev, nbr[slot]), v);
+            m.observe(class, slot, v);
+        }
         prev = class_of(v);
         mags[slot] = prev as u8;
     }
-    mags
+    Some(mags)
 }
 
 fn get(
@@ -713,22 +868,46 @@ fn get(
     class: usize,
     nbr: [usize; 3],
     fr: Option<(usize, [i64; 3])>,
+    ph: Phased,
 ) -> Result<([i64; 3], [u8; 3])> {
     let (order, n) = plan(fr);
     let mut d = [0i64; 3];
     let mut prev = 0;
     let mut mags = [0u8; 3];
+    let bad = || Error::corrupt("LEVL", "detail out of range");
     for (slot, &axis) in order.iter().enumerate() {
-        let v = dec.int(m.get(class, slot, prev, nbr[slot]))?;
-        m.observe(class, slot, v);
-        prev = class_of(v);
-        mags[slot] = prev as u8;
         let pred = match (slot, n) {
             (1 | 2, Some(n)) => predict(d[order[0]], n, order[0], axis),
             _ => 0,
         };
+        let q = match (ph, n) {
+            (Phased::Axes(p), _) => Some((0, p[axis])),
+            (Phased::Tangent(t), Some(n)) if slot > 0 => Some(
+                t.shift(n, order[0], axis, d[order[0]], pred)
+                    .ok_or_else(bad)?,
+            ),
+            _ => None,
+        };
+        let v = match q {
+            Some((s, q)) => {
+                let bin = (q & 3) as usize;
+                let v = dec.int(m.get_phased(class, slot, prev, nbr[slot], bin))?;
+                m.observe_phased(class, slot, bin, v);
+                prev = class_of(v);
+                // (|v| < 2^62: the negation cannot overflow.)
+                let v = if q & 4 != 0 { -v } else { v };
+                v.checked_add(s).ok_or_else(bad)?
+            }
+            None => {
+                let v = dec.int(m.get(class, slot, prev, nbr[slot]))?;
+                m.observe(class, slot, v);
+                prev = class_of(v);
+                v
+            }
+        };
+        mags[slot] = prev as u8;
         let x = v.checked_add(pred).filter(|x| x.abs() <= MAX_LIFTED);
-        d[axis] = x.ok_or_else(|| Error::corrupt("LEVL", "detail out of range"))?;
+        d[axis] = x.ok_or_else(bad)?;
     }
     Ok((d, mags))
 }
@@ -749,6 +928,7 @@ pub fn encode(
     act: &mut Vec<u8>,
     models: &mut LevelModels,
     targets: Option<&[[i64; 3]]>,
+    phases: Option<&Phases>,
     limit: usize,
 ) -> Option<Vec<u8>> {
     let version = models.version;
@@ -761,6 +941,7 @@ pub fn encode(
             x,
             coarse,
             &[],
+            None,
             act,
             &mut mags,
             Mode::Plain,
@@ -772,12 +953,23 @@ pub fn encode(
         models.last = Some(m);
         return Some(body);
     }
-    // The mode asked for this level, if any.
+    // The mode asked for this level, if any. A mode with or without phases (0 and 6, 2
+    // and 7) count as one: a plan made with a transform without phases leaves a
+    // transform with them free to use them, and the other way round.
     let only = models.only.as_mut().and_then(Iterator::next);
-    let open = |m: u8| only.is_none_or(|o| o == m);
+    let plain = |m: u8| matches!(m, 0 | 6);
+    let tangent = |m: u8| matches!(m, 2 | 7);
+    let open =
+        |m: u8| only.is_none_or(|o| o == m || (plain(o) && plain(m)) || (tangent(o) && tangent(m)));
     let mut modes = vec![Mode::Plain, Mode::Framed];
     if let Some(t) = targets.filter(|_| version >= 7) {
         modes.push(Mode::Tangent(t));
+        if version >= PHASE_VERSION {
+            modes.push(Mode::TangentPhased(t));
+        }
+    }
+    if phases.is_some() && version >= PHASE_VERSION {
+        modes.push(Mode::Phased);
     }
     let rotated = version >= ROTATED_VERSION && models.rotated && (open(4) || open(5));
     let frames = if rotated {
@@ -828,7 +1020,7 @@ pub fn encode(
         let mut mg = models.mags.clone();
         let mut m = start.clone();
         let Some(body) = encode_mode(
-            level, sqrt2, x, coarse, &frames, &mut a, &mut mg, mode, &mut m, room,
+            level, sqrt2, x, coarse, &frames, phases, &mut a, &mut mg, mode, &mut m, room,
         ) else {
             continue;
         };
@@ -884,6 +1076,35 @@ enum Mode<'a> {
     /// Rotated, and an interior edge point's tangential values less eighths `(a, b)` of
     /// its faces' offset (format 17 on).
     Shifted(u8, u8),
+    /// x, y, z signed and modelled by their predictions' phases (format 18 on).
+    Phased,
+    /// Mode 2 with the values after the first shifted by their expected parts and
+    /// phased (format 18 on).
+    TangentPhased(&'a [[i64; 3]]),
+}
+
+/// Test helper: the phase (SPEC.md 10.6) of an integer detail `d` whose unrounded
+/// counterpart (the same analysis on floating point values) is `exact`: the sign of
+/// `g = d - exact` and how many of 1/6, 2/6 are at most `|g|`; `None` too near a bin's
+/// edge for floating point to tell.
+#[cfg(test)]
+pub(crate) fn expected_phase(d: i64, exact: f64) -> Option<u8> {
+    let g = d as f64 - exact;
+    let a = 6.0 * g.abs();
+    if (a - 1.0).abs() < 1e-6 || (a - 2.0).abs() < 1e-6 {
+        return None;
+    }
+    Some(((g < 0.0) as u8) << 2 | ((a >= 1.0) as u8 + (a >= 2.0) as u8))
+}
+
+/// Where a level's phases come from in the decoder (SPEC.md 10.6).
+pub enum Phasing<'a> {
+    /// Every detail's, known before the level is read (sqrt2-lazy: from the coarse
+    /// values).
+    Ready(&'a Phases),
+    /// A Catmull-Clark level of a predict-only transform: the edge points' from the
+    /// coarse values, the face points' once the edge points are read.
+    Cc(&'a crate::transform::Phaser<'a>),
 }
 
 impl Mode<'_> {
@@ -902,17 +1123,19 @@ impl Mode<'_> {
             Mode::Tangent(_) => 2,
             Mode::Rotated => 4,
             Mode::Shifted(..) => 5,
+            Mode::Phased => 6,
+            Mode::TangentPhased(_) => 7,
         }
     }
 
     fn framed(self) -> bool {
-        !matches!(self, Mode::Plain)
+        !matches!(self, Mode::Plain | Mode::Phased)
     }
 
     /// What is subtracted from detail `i` before coding it in frame `fr`.
     fn offset(self, i: usize, fr: Option<(usize, [i64; 3])>) -> Option<[i64; 3]> {
         match (self, fr) {
-            (Mode::Tangent(t), Some((_, n))) => Some(tangential(t[i], n)),
+            (Mode::Tangent(t) | Mode::TangentPhased(t), Some((_, n))) => Some(tangential(t[i], n)),
             _ => None,
         }
     }
@@ -925,6 +1148,7 @@ fn encode_mode(
     x: &[Vec<i64>; 3],
     coarse: &[Vec<i64>; 3],
     frames: &[Option<RotFrame>],
+    phases: Option<&Phases>,
     act: &mut Vec<u8>,
     mags: &mut Vec<[u8; 3]>,
     mode: Mode<'_>,
@@ -940,6 +1164,10 @@ fn encode_mode(
         return None;
     }
     let framed = mode.framed() && !rotated;
+    let phases = phases.filter(|_| matches!(mode, Mode::Phased));
+    if matches!(mode, Mode::Phased) && !phases.is_some_and(|p| p.iter().all(|p| p.len() == nd)) {
+        return None;
+    }
     act.resize(nv + nd, 0);
     mags.resize(nv, [UNKNOWN; 3]);
     mags.resize(nv + nd, [0; 3]);
@@ -956,7 +1184,8 @@ fn encode_mode(
         } else {
             None
         };
-        if let Some(c) = mode.offset(i, fr) {
+        let offset = mode.offset(i, fr);
+        if let Some(c) = offset {
             d = std::array::from_fn(|k| d[k] - c[k]);
             if d.iter().any(|v| v.abs() > MAX_LIFTED) {
                 return None;
@@ -972,7 +1201,14 @@ fn encode_mode(
                 return None;
             }
         }
-        mags[nv + i] = put(&mut enc, m, class, bins, d, fr);
+        let ph = match (mode, phases, fr) {
+            (_, Some(p), _) => Phased::Axes([p[0][i], p[1][i], p[2][i]]),
+            (Mode::TangentPhased(t), _, Some(_)) => {
+                Phased::Tangent(TanTerms::new(level, coarse, i, t[i], offset?))
+            }
+            _ => Phased::No,
+        };
+        mags[nv + i] = put(&mut enc, m, class, bins, d, fr, ph)?;
         act[nv + i] = activity(d);
         if i % 64 == 63 && enc.written() > limit {
             return None;
@@ -998,6 +1234,9 @@ fn in_range(d: Option<[i64; 3]>) -> Result<[i64; 3]> {
 }
 
 /// Decodes what [`encode`] wrote into `x[k][nv..]`; `x[k][..nv]` are the coarse values.
+/// `targets` are the level's tangent targets (modes 2 and 7), `phasing` its phases (mode
+/// 6), each where the level has them.
+#[allow(clippy::too_many_arguments)]
 pub fn decode(
     payload: &[u8],
     level: &Level,
@@ -1006,6 +1245,7 @@ pub fn decode(
     act: &mut Vec<u8>,
     models: &mut LevelModels,
     targets: Option<&[[i64; 3]]>,
+    phasing: Option<Phasing<'_>>,
 ) -> Result<()> {
     let version = models.version;
     let (nv, nd) = (level.nv, details(level, sqrt2));
@@ -1029,7 +1269,26 @@ pub fn decode(
                     ))
                 }
             },
+            Some((7, rest)) if version >= PHASE_VERSION => match targets {
+                Some(t) if t.len() == nd => (Mode::TangentPhased(t), rest),
+                _ => {
+                    return Err(Error::corrupt(
+                        "LEVL",
+                        "tangent mode on a level without tangent targets",
+                    ))
+                }
+            },
             Some((4, rest)) if version >= ROTATED_VERSION => (Mode::Rotated, rest),
+            Some((6, rest)) if version >= PHASE_VERSION => match &phasing {
+                Some(Phasing::Ready(p)) if p.iter().all(|p| p.len() == nd) => (Mode::Phased, rest),
+                Some(Phasing::Cc(_)) if !sqrt2 => (Mode::Phased, rest),
+                _ => {
+                    return Err(Error::corrupt(
+                        "LEVL",
+                        "phase mode on a level without prediction phases",
+                    ))
+                }
+            },
             Some((5, rest)) if version >= ROTATED_VERSION => match rest.split_first() {
                 Some((&w, rest)) if w >> 4 <= 8 && w & 15 <= 8 => {
                     (Mode::Shifted(w >> 4, w & 15), rest)
@@ -1057,7 +1316,21 @@ pub fn decode(
     for xs in x.iter_mut() {
         xs.resize(nv + nd, 0);
     }
+    // Mode 6: the phases, given or (a Catmull-Clark level's) made as the level is read.
+    let phasing = phasing.filter(|_| matches!(mode, Mode::Phased));
+    let mut made: Phases = Default::default();
+    if let Some(Phasing::Cc(p)) = &phasing {
+        for (k, mk) in made.iter_mut().enumerate() {
+            mk.resize(nd, 0);
+            for (e, q) in mk[..level.ne()].iter_mut().enumerate() {
+                *q = p.predict(&x[k], e).1;
+            }
+        }
+    }
     for i in 0..nd {
+        if let (Some(Phasing::Cc(p)), true) = (&phasing, i == level.ne()) {
+            face_phases(p, level, x, &mut made);
+        }
         let (class, bins, fd) = contexts(level, act, mags, sqrt2, m.bins, i);
         let fr = if framed {
             frame(level, &normals, fd)
@@ -1072,19 +1345,29 @@ pub fn decode(
             }
             _ => None,
         };
+        let offset = mode.offset(i, fr);
+        let ph = match (&phasing, mode, offset) {
+            (Some(Phasing::Ready(p)), ..) => Phased::Axes([p[0][i], p[1][i], p[2][i]]),
+            (Some(Phasing::Cc(_)), ..) => Phased::Axes([made[0][i], made[1][i], made[2][i]]),
+            (None, Mode::TangentPhased(t), Some(c)) => {
+                Phased::Tangent(TanTerms::new(level, x, i, t[i], c))
+            }
+            _ => Phased::No,
+        };
         let (r, mg) = get(
             &mut dec,
             &mut m,
             class,
             bins,
             fr.filter(|_| rotation.is_none()),
+            ph,
         )?;
         mags[nv + i] = mg;
         let mut d = r;
         if let Some((rot, pred)) = rotation {
             d = in_range(Some(rot.inverse(in_range(plus(r, pred))?)))?;
         }
-        if let Some(c) = mode.offset(i, fr) {
+        if let Some(c) = offset {
             d = in_range(plus(r, c))?;
         }
         for k in 0..3 {
@@ -1094,6 +1377,31 @@ pub fn decode(
     }
     models.last = Some(m);
     Ok(())
+}
+
+/// The phases of a Catmull-Clark level's face points into `ph[k][ne..]` (SPEC.md 10.6),
+/// once its edge points' details `x[k][nv..nv + ne]` are read: they are predicted from
+/// the fine edge points, so those are synthesised for the purpose and then restored.
+fn face_phases(
+    p: &crate::transform::Phaser<'_>,
+    level: &Level,
+    x: &mut [Vec<i64>; 3],
+    ph: &mut Phases,
+) {
+    let (nv, ne) = (level.nv, level.ne());
+    for (xk, pk) in x.iter_mut().zip(ph.iter_mut()) {
+        // The corrections are from the coarse values alone: the same before and after.
+        let c: Vec<i64> = (0..ne).map(|e| p.predict(xk, e).0).collect();
+        for (v, c) in xk[nv..nv + ne].iter_mut().zip(&c) {
+            *v = v.wrapping_add(*c);
+        }
+        for (f, q) in pk[ne..].iter_mut().enumerate() {
+            *q = p.predict(xk, ne + f).1;
+        }
+        for (v, c) in xk[nv..nv + ne].iter_mut().zip(&c) {
+            *v = v.wrapping_sub(*c);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -1109,7 +1417,7 @@ mod tests {
         act: &mut Vec<u8>,
         models: &mut LevelModels,
     ) -> Vec<u8> {
-        encode(level, false, x, coarse, act, models, None, usize::MAX).unwrap()
+        encode(level, false, x, coarse, act, models, None, None, usize::MAX).unwrap()
     }
 
     fn refined(times: usize) -> Level {
@@ -1272,7 +1580,17 @@ mod tests {
             let mut y = coarse.clone();
             let mut act = vec![UNKNOWN; nv];
             let mut models = LevelModels::new(version);
-            decode(&bytes, &level, false, &mut y, &mut act, &mut models, None).unwrap();
+            decode(
+                &bytes,
+                &level,
+                false,
+                &mut y,
+                &mut act,
+                &mut models,
+                None,
+                None,
+            )
+            .unwrap();
             assert_eq!(y, x, "version {version} round trip");
             sizes.push(bytes.len());
         }
@@ -1396,6 +1714,7 @@ mod tests {
             x,
             coarse,
             &frames,
+            None,
             &mut act,
             &mut mags,
             mode,
@@ -1418,7 +1737,17 @@ mod tests {
         let mut y = coarse.clone();
         let mut act = vec![UNKNOWN; level.nv];
         let mut models = LevelModels::new(ROTATED_VERSION);
-        decode(&payload, level, false, &mut y, &mut act, &mut models, None).unwrap();
+        decode(
+            &payload,
+            level,
+            false,
+            &mut y,
+            &mut act,
+            &mut models,
+            None,
+            None,
+        )
+        .unwrap();
         assert_eq!(&y, x, "round trip");
         payload.len()
     }
@@ -1527,8 +1856,145 @@ mod tests {
             let mut y = coarse.clone();
             let mut act = vec![UNKNOWN; nv];
             let mut dm = LevelModels::new(ROTATED_VERSION);
-            decode(&bytes, &level, false, &mut y, &mut act, &mut dm, None).unwrap();
+            decode(&bytes, &level, false, &mut y, &mut act, &mut dm, None, None).unwrap();
             assert_eq!(y, x, "planned {plan}");
+        }
+    }
+
+    /// A level coded in `mode` alone from fresh format 18 models, with its mode byte.
+    fn forced(
+        level: &Level,
+        sqrt2: bool,
+        x: &[Vec<i64>; 3],
+        coarse: &[Vec<i64>; 3],
+        phases: Option<&Phases>,
+        mode: Mode<'_>,
+    ) -> Vec<u8> {
+        let mut m = Models::new(PHASE_VERSION);
+        let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
+        let body = encode_mode(
+            level,
+            sqrt2,
+            x,
+            coarse,
+            &[],
+            phases,
+            &mut act,
+            &mut mags,
+            mode,
+            &mut m,
+            usize::MAX,
+        )
+        .unwrap();
+        let mut out = mode.bytes();
+        out.extend(body);
+        out
+    }
+
+    #[test]
+    fn phase_bins_follow_the_remainder() {
+        // Remainders of [n / 12]: -6..6; 6|r| against 12 and 24.
+        let want = [
+            (-6, 0b110),
+            (-4, 0b110),
+            (-3, 0b101),
+            (-2, 0b101),
+            (-1, 0b100),
+            (0, 0),
+            (1, 0),
+            (2, 1),
+            (3, 1),
+            (4, 2),
+            (5, 2),
+        ];
+        for (r, q) in want {
+            assert_eq!(phase(r, 12), q, "remainder {r}");
+        }
+        // Divisor 2 (lazy edge points): remainders 0 and -1.
+        assert_eq!((phase(0, 2), phase(-1, 2)), (0, 0b110));
+    }
+
+    /// Mode 6 on Catmull-Clark levels of lazy and interp4: the encoder's phases (from
+    /// the fine values) are the decoder's (the edge points' from the coarse values, the
+    /// face points' once the edge points are read), so the details come back exactly;
+    /// a mode 6 level without phases is corrupt.
+    #[test]
+    fn phase_mode_round_trips_on_catmull_clark_levels() {
+        use crate::transform::{analyse, synthesise, Phaser, Stencils, Wavelet};
+        let level = refined(2);
+        let (nv, nd) = (level.nv, level.ne() + level.nf());
+        for w in [Wavelet::Lazy, Wavelet::Interp4] {
+            // Fine values: small details on a coarse shape, synthesised.
+            let fine: [Vec<i64>; 3] = std::array::from_fn(|k| {
+                let mut v = pseudo(40 + k as u64, nv, 12);
+                v.extend(pseudo(50 + k as u64, nd, 2));
+                synthesise(&level, w, &mut v);
+                v
+            });
+            let st = Stencils::new(&level, w);
+            let p = Phaser::new(&level, w, &st).unwrap();
+            let phases: Phases =
+                std::array::from_fn(|k| (0..nd).map(|i| p.predict(&fine[k], i).1).collect());
+            let mut x = fine.clone();
+            for xk in x.iter_mut() {
+                analyse(&level, w, xk);
+            }
+            let coarse: [Vec<i64>; 3] = std::array::from_fn(|k| x[k][..nv].to_vec());
+            let bytes = forced(&level, false, &x, &coarse, Some(&phases), Mode::Phased);
+            let mut y = coarse.clone();
+            let mut act = vec![UNKNOWN; nv];
+            let mut dm = LevelModels::new(PHASE_VERSION);
+            let ph = Some(Phasing::Cc(&p));
+            decode(&bytes, &level, false, &mut y, &mut act, &mut dm, None, ph).unwrap();
+            assert_eq!(y, x, "{w:?}");
+            let mut y = coarse.clone();
+            let mut act = vec![UNKNOWN; nv];
+            let mut dm = LevelModels::new(PHASE_VERSION);
+            let err = decode(&bytes, &level, false, &mut y, &mut act, &mut dm, None, None);
+            assert!(err.unwrap_err().to_string().contains("phase"), "{w:?}");
+        }
+    }
+
+    /// Mode 7 on a sqrt(2) level: exact round trip; corrupt without targets, and before
+    /// format 18.
+    #[test]
+    fn tangent_phase_mode_round_trips_on_sqrt2_levels() {
+        let mut t = prism_with_triangles();
+        t = crate::sqrt2::fine(&Level::new(&t).unwrap());
+        t = crate::sqrt2::fine(&Level::new(&t).unwrap());
+        let level = Level::new(&t).unwrap();
+        let (nv, nf) = (level.nv, level.nf());
+        let coarse: [Vec<i64>; 3] = std::array::from_fn(|k| pseudo(60 + k as u64, nv, 10));
+        let p = crate::sqrt2::predictions(&level, &coarse);
+        let targets = crate::sqrt2::tangent_targets_from(&level, &coarse, &p);
+        // Face points at their centroids (rounded), less the predictions: the details.
+        let x: [Vec<i64>; 3] = std::array::from_fn(|k| {
+            let mut v = coarse[k].clone();
+            for f in 0..nf {
+                let face = level.coarse.face(f);
+                let s: i128 = face.iter().map(|&c| coarse[k][c as usize] as i128).sum();
+                let c = crate::transform::round_div(s, face.len() as i128);
+                v.push(c - p[k][f]);
+            }
+            v
+        });
+        let two = forced(&level, true, &x, &coarse, None, Mode::Tangent(&targets));
+        let seven = forced(&level, true, &x, &coarse, None, Mode::TangentPhased(&targets));
+        assert_ne!(two[1..], seven[1..]);
+        for (bytes, targets, version, ok) in [
+            (&seven, Some(&targets[..]), PHASE_VERSION, true),
+            (&two, Some(&targets[..]), PHASE_VERSION, true),
+            (&seven, None, PHASE_VERSION, false),
+            (&seven, Some(&targets[..]), ROTATED_VERSION, false),
+        ] {
+            let mut y = coarse.clone();
+            let mut act = vec![UNKNOWN; nv];
+            let mut dm = LevelModels::new(version);
+            let r = decode(bytes, &level, true, &mut y, &mut act, &mut dm, targets, None);
+            assert_eq!(r.is_ok(), ok);
+            if ok {
+                assert_eq!(y, x);
+            }
         }
     }
 
@@ -1560,8 +2026,8 @@ mod tests {
                     let mut m = Models::new(ROTATED_VERSION);
                     let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
                     encode_mode(
-                        &level, false, &x, &coarse, &frames, &mut act, &mut mags, mode, &mut m,
-                        limit,
+                        &level, false, &x, &coarse, &frames, None, &mut act, &mut mags, mode,
+                        &mut m, limit,
                     )
                 };
                 assert_eq!(run(full.len()).as_ref(), Some(&full));
@@ -1580,7 +2046,17 @@ mod tests {
             let mut y = coarse.clone();
             let mut act = vec![UNKNOWN; level.nv];
             let mut models = LevelModels::new(version);
-            decode(&payload, &level, false, &mut y, &mut act, &mut models, None).map(|_| y)
+            decode(
+                &payload,
+                &level,
+                false,
+                &mut y,
+                &mut act,
+                &mut models,
+                None,
+                None,
+            )
+            .map(|_| y)
         };
         assert_eq!(run(17, &[5, 0x25]).unwrap(), x);
         for (version, head) in [
@@ -1598,7 +2074,17 @@ mod tests {
         let mut y = coarse.clone();
         let mut act = vec![UNKNOWN; level.nv];
         let mut models = LevelModels::new(17);
-        let err = decode(&[5], &level, false, &mut y, &mut act, &mut models, None).unwrap_err();
+        let err = decode(
+            &[5],
+            &level,
+            false,
+            &mut y,
+            &mut act,
+            &mut models,
+            None,
+            None,
+        )
+        .unwrap_err();
         assert!(err.to_string().contains("shift weights"), "{err}");
     }
 }

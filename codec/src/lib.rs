@@ -184,14 +184,19 @@ fn code_hierarchy(
     // The coarse values of each level, as the decoder will have them when it reads the
     // level's details.
     let mut coarse: Vec<[Vec<i64>; 3]> = vec![Default::default(); canon.levels.len()];
-    // sqrt(2) levels: their tangent targets (SPEC.md 10.3), from the same coarse values.
+    // sqrt(2) levels: their tangent targets (SPEC.md 10.3), from the same coarse values;
+    // sqrt2-lazy levels: their predictions' phases (10.6).
     let mut targets: Vec<Option<Vec<[i64; 3]>>> = vec![None; canon.levels.len()];
+    let mut phases: Vec<Option<levels::Phases>> = vec![None; canon.levels.len()];
     for (l, level) in canon.levels.iter().enumerate().rev() {
         // As the decoder: sqrt2-lazy keeps the coarse values, so one prediction per
         // face serves the analysis and the tangent targets; the other sqrt(2)
         // transforms take a plan.
-        let predictions =
-            (canon.sqrt2 && w == Wavelet::Sqrt2Lazy).then(|| sqrt2::predictions(level, &x));
+        let predictions = (canon.sqrt2 && w == Wavelet::Sqrt2Lazy).then(|| {
+            let (p, ph) = sqrt2::predictions_with(level, &x, true);
+            phases[l] = ph;
+            p
+        });
         let plan = (canon.sqrt2 && predictions.is_none()).then(|| sqrt2::Plan::new(level, w));
         if let Some(p) = &predictions {
             let n = sqrt2::fine_nv(level);
@@ -208,6 +213,16 @@ fn code_hierarchy(
             let n = level.fine_nv();
             let (discs, owned) = discs::discs(level, &canon.poles, l as u32, disc);
             let st = transform::Stencils::new(level, w);
+            // Predict-only transforms: the phases of mode 6 (SPEC.md 10.6), from the fine
+            // values (the decoder makes them as it reads the level).
+            if canon.poles.is_empty() {
+                if let Some(p) = transform::Phaser::new(level, w, &st) {
+                    let nd = level.ne() + level.nf();
+                    phases[l] = Some(std::array::from_fn(|k| {
+                        (0..nd).map(|i| p.predict(&x[k], i).1).collect()
+                    }));
+                }
+            }
             for xs in x.iter_mut() {
                 for d in &discs {
                     discs::analyse(d, disc, &mut xs[..n]);
@@ -233,9 +248,9 @@ fn code_hierarchy(
     // Bytes the levels may take: a coding over the bound is not wanted.
     let mut room = bound.checked_sub(base_bytes.len())?;
     let mut level_bytes = Vec::with_capacity(canon.levels.len());
-    for ((l, c), t) in canon.levels.iter().zip(&coarse).zip(&targets) {
+    for (((l, c), t), ph) in canon.levels.iter().zip(&coarse).zip(&targets).zip(&phases) {
         let (s2, t) = (canon.sqrt2, t.as_deref());
-        let b = levels::encode(l, s2, &x, c, &mut act, &mut models, t, room)?;
+        let b = levels::encode(l, s2, &x, c, &mut act, &mut models, t, ph.as_ref(), room)?;
         room -= b.len();
         level_bytes.push(b);
     }
@@ -982,14 +997,34 @@ fn synthesise_levels(
         }
         // (Made before the details are decoded: while the coarse values alone are in
         // memory, which is smaller than making them after.)
-        let predictions = lazy.then(|| sqrt2::predictions(&level, &x));
+        // Mode 6 reads the predictions' phases (SPEC.md 10.6).
+        let phased = c.version >= levels::PHASE_VERSION && payload.first() == Some(&6);
+        let (predictions, phases) = match lazy {
+            true => {
+                let (p, ph) = sqrt2::predictions_with(&level, &x, phased);
+                (Some(p), ph)
+            }
+            false => (None, None),
+        };
         let plan = (is_sqrt2 && w == Wavelet::Sqrt2Sym).then(|| sqrt2::Plan::new(&level, w));
         // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
-        let tangent = c.version >= 7 && payload.first() == Some(&2);
+        let tangent = (c.version >= 7 && payload.first() == Some(&2))
+            || (c.version >= levels::PHASE_VERSION && payload.first() == Some(&7));
         let targets = (is_sqrt2 && tangent).then(|| match &predictions {
             Some(pr) => sqrt2::tangent_targets_from(&level, &x, pr),
             None => sqrt2::tangent_targets_from(&level, &x, &sqrt2::predictions(&level, &x)),
         });
+        // A Catmull-Clark level's stencils, for its phases and its synthesis.
+        let st = (!is_sqrt2).then(|| transform::Stencils::new(&level, w));
+        let phaser = match &st {
+            Some(st) if phased && h.poles.is_empty() => transform::Phaser::new(&level, w, st),
+            _ => None,
+        };
+        let phasing = match (&phases, &phaser) {
+            (Some(p), _) => Some(levels::Phasing::Ready(p)),
+            (None, Some(p)) => Some(levels::Phasing::Cc(p)),
+            (None, None) => None,
+        };
         levels::decode(
             payload,
             &level,
@@ -998,7 +1033,9 @@ fn synthesise_levels(
             &mut act,
             &mut models,
             targets.as_deref(),
+            phasing,
         )?;
+        drop(phaser);
         if l + 1 == upto as usize {
             // The last level read: its activities and magnitudes serve no later level.
             act = Vec::new();
@@ -1018,7 +1055,7 @@ fn synthesise_levels(
             }
         } else {
             let (discs, owned) = discs::discs(&level, &h.poles, l as u32, h.disc);
-            let st = transform::Stencils::new(&level, w);
+            let st = st.unwrap_or_else(|| transform::Stencils::new(&level, w));
             for xs in x.iter_mut() {
                 transform::synthesise_with(&level, w, &st, xs, &owned);
                 for d in discs.iter().rev() {

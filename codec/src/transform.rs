@@ -739,6 +739,13 @@ impl Interp4 {
 /// 16]` with both beyond vertices, else `[(x_a + x_b) / 2]`.
 #[inline]
 fn interp4_edge<T: Sample>(level: &Level, st: &Interp4, x: &[T], e: usize) -> T {
+    let (s, d) = interp4_edge_sum(level, st, x, e);
+    T::round(s, d)
+}
+
+/// [`interp4_edge`] before its rounding: the sum and its divisor.
+#[inline]
+fn interp4_edge_sum<T: Sample>(level: &Level, st: &Interp4, x: &[T], e: usize) -> (T::Acc, i128) {
     let [a, b] = level.edges[e];
     let (a, b) = (a as usize, b as usize);
     match st.edge[e] {
@@ -747,12 +754,12 @@ fn interp4_edge<T: Sample>(level: &Level, st: &Interp4, x: &[T], e: usize) -> T 
             s += x[b].weighted(9);
             s += x[a2 as usize].weighted(-1);
             s += x[b2 as usize].weighted(-1);
-            T::round(s, 16)
+            (s, 16)
         }
         _ => {
             let mut s = x[a].acc();
             s += x[b].acc();
-            T::round(s, 2)
+            (s, 2)
         }
     }
 }
@@ -763,6 +770,13 @@ fn interp4_edge<T: Sample>(level: &Level, st: &Interp4, x: &[T], e: usize) -> T 
 /// lazy rule `[(2 sum of edge points - sum of corners) / k]`.
 #[inline]
 fn interp4_face<T: Sample>(level: &Level, st: &Interp4, x: &[T], f: usize) -> T {
+    let (s, d) = interp4_face_sum(level, st, x, f);
+    T::round(s, d)
+}
+
+/// [`interp4_face`] before its rounding: the sum and its divisor.
+#[inline]
+fn interp4_face_sum<T: Sample>(level: &Level, st: &Interp4, x: &[T], f: usize) -> (T::Acc, i128) {
     let e0 = level.nv;
     let fe = level.f_edges(f);
     if fe.len() == 4 {
@@ -783,7 +797,7 @@ fn interp4_face<T: Sample>(level: &Level, st: &Interp4, x: &[T], f: usize) -> T 
                 }
             }
         }
-        return T::round(s, 32);
+        return (s, 32);
     }
     let mut s = T::Acc::default();
     for &e in fe {
@@ -792,7 +806,74 @@ fn interp4_face<T: Sample>(level: &Level, st: &Interp4, x: &[T], f: usize) -> T 
     for &v in level.coarse.face(f) {
         s += x[v as usize].weighted(-1);
     }
-    T::round(s, fe.len() as i128)
+    (s, fe.len() as i128)
+}
+
+/// The predictions of a predict-only Catmull-Clark transform (lazy or interp4) on one
+/// level and their phases (SPEC.md 10.6), which mode 6 reads. Its edge points are
+/// predicted from the coarse values, its face points also from the fine edge points.
+pub struct Phaser<'a> {
+    level: &'a Level,
+    interp4: Option<std::borrow::Cow<'a, Interp4>>,
+}
+
+impl<'a> Phaser<'a> {
+    /// The phaser of `w` on `level` with its stencils `st`; `None` for a transform with
+    /// an update step (no phases).
+    pub fn new(level: &'a Level, w: Wavelet, st: &'a Stencils) -> Option<Phaser<'a>> {
+        match w {
+            Wavelet::Lazy => Some(Phaser {
+                level,
+                interp4: None,
+            }),
+            Wavelet::Interp4 => Some(Phaser {
+                level,
+                interp4: Some(st.interp4(level)),
+            }),
+            _ => None,
+        }
+    }
+
+    /// Detail `i`'s (edge points `0..ne`, then face points) correction and phase on one
+    /// axis, from the values `x` (the coarse values and, for a face point, the fine
+    /// edge points): the fine value is the detail plus the correction.
+    pub fn predict(&self, x: &[i64], i: usize) -> (i64, u8) {
+        let level = self.level;
+        let ne = level.ne();
+        let (n, d, sign) = match &self.interp4 {
+            Some(st) if i < ne => {
+                let (s, d) = interp4_edge_sum(level, st, x, i);
+                (s, d, 1)
+            }
+            Some(st) => {
+                let (s, d) = interp4_face_sum(level, st, x, i - ne);
+                (s, d, 1)
+            }
+            // The lazy w-lift (SPEC.md 9.2, a = -1/2) adds `[N / D]` in analysis: for an
+            // edge point `N = -(x_a + x_b)`, `D = 2`; for a face point of k corners
+            // `N = 4 (sum of corners) - 8 (sum of edge points)`, `D = 4 k`.
+            None if i < ne => {
+                let [a, b] = level.edges[i];
+                (-(x[a as usize] as i128 + x[b as usize] as i128), 2, -1)
+            }
+            None => {
+                let f = i - ne;
+                let corners = level.coarse.face(f);
+                let sv: i128 = corners.iter().map(|&v| x[v as usize] as i128).sum();
+                let se: i128 = level
+                    .f_edges(f)
+                    .iter()
+                    .map(|&e| x[level.nv + e as usize] as i128)
+                    .sum();
+                (4 * sv - 8 * se, 4 * corners.len() as i128, -1)
+            }
+        };
+        let p = round_div(n, d);
+        let r = n - p as i128 * d;
+        // The detail is `x - [N / D]` (interp4) or `x + [N / D]` (lazy): the unrounded
+        // prediction lies `r / D` above (or below) the rounded one.
+        (sign * p, crate::levels::phase(sign as i128 * r, d))
+    }
 }
 
 /// The 4-point interpolating transform and its inverse (SPEC.md 9.11): details are the
@@ -917,6 +998,46 @@ mod tests {
         t.push(&[0, 2, 3, 4]);
         t.push(&[0, 4, 5, 6, 1]);
         t
+    }
+
+    #[test]
+    fn phaser_gives_the_synthesis_and_the_rounding_offsets() {
+        // For lazy and interp4: a detail plus the phaser's correction is the fine value,
+        // and the phase is where the unrounded prediction lies (the integer detail less
+        // the same analysis on floating point values), on closed, open and mixed meshes.
+        let mut seen = [0usize; 8];
+        for (n, t) in [grid(6), mixed(), open_mixed()].into_iter().enumerate() {
+            let level = Level::new(&t).unwrap();
+            let t2 = level.fine();
+            let level2 = Level::new(&t2).unwrap();
+            for level in [&level, &level2] {
+                for w in [Wavelet::Lazy, Wavelet::Interp4] {
+                    let st = Stencils::new(level, w);
+                    let p = Phaser::new(level, w, &st).unwrap();
+                    let x = crate::hierarchy::fixtures::pseudo(n as u64 + 3, level.fine_nv(), 12);
+                    let mut d = x.clone();
+                    analyse(level, w, &mut d);
+                    let mut e: Vec<f64> = x.iter().map(|&v| v as f64).collect();
+                    analyse(level, w, &mut e);
+                    for i in 0..level.ne() + level.nf() {
+                        let j = level.nv + i;
+                        let (c, q) = p.predict(&x, i);
+                        assert_eq!(d[j] + c, x[j], "{w:?} detail {i}");
+                        if let Some(want) = crate::levels::expected_phase(d[j], e[j]) {
+                            assert_eq!(q, want, "{w:?} detail {i}: {} vs {}", d[j], e[j]);
+                            seen[q as usize] += 1;
+                        }
+                    }
+                }
+            }
+        }
+        for q in [0, 1, 2, 4, 5, 6] {
+            assert!(seen[q] > 0, "phase {q} never seen: {seen:?}");
+        }
+        // No phases for transforms with an update step.
+        let level = Level::new(&grid(2)).unwrap();
+        let st = Stencils::new(&level, Wavelet::Bicubic);
+        assert!(Phaser::new(&level, Wavelet::Bicubic, &st).is_none());
     }
 
     proptest! {

@@ -29,7 +29,7 @@ use std::fmt;
 pub const MAGIC: [u8; 8] = [0x89, b'S', b'W', b'V', b'\r', b'\n', 0x1a, b'\n'];
 
 /// The format version this crate writes and the newest it reads.
-pub const FORMAT_VERSION: u16 = 17;
+pub const FORMAT_VERSION: u16 = 18;
 
 /// Bytes before the first section: magic, version, reserved.
 pub const PREAMBLE_LEN: usize = 12;

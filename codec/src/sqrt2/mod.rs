@@ -16,6 +16,7 @@ pub mod solve;
 pub mod tables;
 
 use crate::hierarchy::{Level, Topo, NONE};
+use crate::levels::{phase, Phases};
 use crate::transform::{Sample, Wavelet};
 use solve::Rings;
 
@@ -413,22 +414,42 @@ fn predict_rows(level: &Level, nb: &Neighbours<'_>) -> Rows {
 /// and its analysis subtracts them ([`apply_predictions`]); the tangent targets
 /// subtract them from the centroids ([`tangent_targets_from`]).
 pub fn predictions(level: &Level, x: &[Vec<i64>; 3]) -> [Vec<i64>; 3] {
+    predictions_with(level, x, false).0
+}
+
+/// [`predictions`], and when `phases`, each prediction's phase (SPEC.md 10.6): where the
+/// unrounded prediction lies between its rounded value's neighbours, which mode 6 reads.
+pub fn predictions_with(
+    level: &Level,
+    x: &[Vec<i64>; 3],
+    phases: bool,
+) -> ([Vec<i64>; 3], Option<Phases>) {
     let rings = Rings::from_level(level);
     let nb = Neighbours {
         rings: &rings,
         topo: &level.coarse,
     };
     let small = small_values(x, level.nv);
-    let mut out: [Vec<i64>; 3] = std::array::from_fn(|_| Vec::with_capacity(level.nf()));
-    for f in 0..level.nf() {
-        for (o, p) in out
-            .iter_mut()
-            .zip(face_prediction(&level.coarse, &nb, f, x, small))
-        {
-            o.push(p);
+    let nf = level.nf();
+    let mut out: [Vec<i64>; 3] = std::array::from_fn(|_| Vec::with_capacity(nf));
+    let mut ph: Option<Phases> = phases.then(|| std::array::from_fn(|_| Vec::with_capacity(nf)));
+    for f in 0..nf {
+        if let Some(ph) = &mut ph {
+            let (p, q) = face_prediction::<true>(&level.coarse, &nb, f, x, small);
+            for (o, p) in out.iter_mut().zip(p) {
+                o.push(p);
+            }
+            for (o, q) in ph.iter_mut().zip(q) {
+                o.push(q);
+            }
+        } else {
+            let (p, _) = face_prediction::<false>(&level.coarse, &nb, f, x, small);
+            for (o, p) in out.iter_mut().zip(p) {
+                o.push(p);
+            }
         }
     }
-    out
+    (out, ph)
 }
 
 /// Whether every coarse value `x[k][..nv]` is below 2^40 in magnitude: then a face of
@@ -442,17 +463,18 @@ fn small_values(x: &[Vec<i64>; 3], nv: usize) -> bool {
 }
 
 /// `P_f` of face f on the three axes (SPEC.md 9.7, eq. 1), from the coarse values
-/// `x[k][..nv]`; `small` from [`small_values`] of the same values (the same numbers in
-/// 64-bit sums).
-fn face_prediction(
+/// `x[k][..nv]`, and with `PHASES` their phases (10.6; else zeros); `small` from
+/// [`small_values`] of the same values (the same numbers in 64-bit sums).
+fn face_prediction<const PHASES: bool>(
     topo: &Topo,
     nb: &Neighbours<'_>,
     f: usize,
     x: &[Vec<i64>; 3],
     small: bool,
-) -> [i64; 3] {
+) -> ([i64; 3], [u8; 3]) {
     let s = topo.starts[f] as usize;
     let k = topo.starts[f + 1] as usize - s;
+    let d = k as i128 * ONE;
     if small && k <= 8 {
         let mut acc = [0i64; 3];
         corner_terms(topo, nb, s..s + k, |u, w| {
@@ -460,7 +482,13 @@ fn face_prediction(
                 *a += w as i64 * xa[u];
             }
         });
-        return acc.map(|a| crate::transform::round_div(a as i128, k as i128 * ONE));
+        let p = acc.map(|a| crate::transform::round_div(a as i128, d));
+        if !PHASES {
+            return (p, [0; 3]);
+        }
+        // |a| < 2^61 and |p d| <= |a| + d: the remainder fits 64 bits.
+        let q = std::array::from_fn(|i| phase((acc[i] - p[i] * d as i64) as i128, d));
+        return (p, q);
     }
     let mut acc = [0i128; 3];
     corner_terms(topo, nb, s..s + k, |u, w| {
@@ -468,7 +496,12 @@ fn face_prediction(
             *a += w as i128 * xa[u] as i128;
         }
     });
-    acc.map(|a| crate::transform::round_div(a, k as i128 * ONE))
+    let p = acc.map(|a| crate::transform::round_div(a, d));
+    if !PHASES {
+        return (p, [0; 3]);
+    }
+    let q = std::array::from_fn(|i| phase(acc[i] - p[i] as i128 * d, d));
+    (p, q)
 }
 
 /// The terms (vertex, weight) of eq. 1 at the corners `cs` of a face: `2^15` at a
@@ -660,7 +693,7 @@ pub fn ir2w_synthesise(level: &Level, x: &mut [Vec<i64>; 3]) {
     drop(acc);
     let small = small_values(x, nv);
     for f in 0..level.nf() {
-        let p = face_prediction(&level.coarse, &nb, f, x, small);
+        let (p, _) = face_prediction::<false>(&level.coarse, &nb, f, x, small);
         for (xk, p) in x.iter_mut().zip(p) {
             xk[nv + f] = xk[nv + f].plus(p);
         }
@@ -671,6 +704,56 @@ pub fn ir2w_synthesise(level: &Level, x: &mut [Vec<i64>; 3]) {
 mod prediction_tests {
     use super::*;
     use crate::hierarchy::fixtures::prism_with_triangles;
+
+    #[test]
+    fn phases_tell_where_the_unrounded_prediction_lies() {
+        // sqrt2-lazy's details less their unrounded counterparts (the same analysis on
+        // floating point values) are the predictions' rounding offsets: the phase is
+        // their sign and size. Two depths, values from 2^10 to 2^41 (64 and 128-bit sums).
+        let mut t = prism_with_triangles();
+        let mut s = 7u64;
+        let mut seen = [0usize; 8];
+        for bits in [10, 41, 10, 56] {
+            if bits == 41 {
+                t = fine(&Level::new(&t).unwrap());
+            }
+            let level = Level::new(&t).unwrap();
+            let x: [Vec<i64>; 3] = std::array::from_fn(|_| {
+                (0..fine_nv(&level))
+                    .map(|_| {
+                        s ^= s << 13;
+                        s ^= s >> 7;
+                        s ^= s << 17;
+                        (s % (1 << bits)) as i64 - (1 << (bits - 1))
+                    })
+                    .collect()
+            });
+            let (p, ph) = predictions_with(&level, &x, true);
+            let ph = ph.unwrap();
+            assert_eq!(predictions(&level, &x), p);
+            let plan = Plan::new(&level, Wavelet::Sqrt2Lazy);
+            for k in 0..3 {
+                let mut d = x[k].clone();
+                plan.analyse(&mut d);
+                let mut e: Vec<f64> = x[k].iter().map(|&v| v as f64).collect();
+                plan.analyse(&mut e);
+                for f in 0..level.nf() {
+                    let i = level.nv + f;
+                    if bits > 41 {
+                        continue; // beyond f64's exact integers
+                    }
+                    if let Some(want) = crate::levels::expected_phase(d[i], e[i]) {
+                        assert_eq!(ph[k][f], want, "face {f} axis {k}: {} vs {}", d[i], e[i]);
+                        seen[want as usize] += 1;
+                    }
+                }
+            }
+        }
+        // Every sign and bin occurs (bins 0..=2, bit 2 the sign).
+        for q in [0, 1, 2, 4, 5, 6] {
+            assert!(seen[q] > 0, "phase {q} never seen: {seen:?}");
+        }
+    }
 
     #[test]
     fn one_pass_predictions_are_the_plans() {
