@@ -336,37 +336,108 @@ fn every_truncation_of_a_hierarchy_is_rejected_or_a_correct_coarser_level() {
     );
 }
 
-#[test]
-fn tangent_mode_on_a_catmull_clark_level_is_corrupt() {
-    // Mode 2 (SPEC.md 10.3) exists for sqrt(2) levels only; rewrite a Catmull-Clark
-    // container's first level to claim it, checksums kept valid.
-    let obj = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/mixed_cc2.obj")).unwrap();
-    let m = subwave::load(&obj, None).unwrap();
-    let enc = subwave::encode_to_vec(&m.mesh, &m.quantization, &EncodeOptions::default()).unwrap();
-    assert_eq!(enc.header.family, subwave::Family::Cc);
-    let c = subwave_container::Container::parse(&enc.bytes, &Limits::default()).unwrap();
+/// `bytes` with the payload of LEVL section number `level` rewritten by `edit`, every
+/// checksum valid.
+fn with_level(bytes: &[u8], level: usize, edit: impl FnOnce(&mut Vec<u8>)) -> Vec<u8> {
+    let c = subwave_container::Container::parse(bytes, &Limits::default()).unwrap();
     let mut w = ContainerWriter::new();
-    let mut first = true;
+    let mut edit = Some(edit);
+    let mut n = 0;
     for s in &c.sections {
         if s.kind == SectionKind::END {
             continue;
         }
         let mut p = s.payload.to_vec();
-        if s.kind == SectionKind::LEVEL && first {
-            assert!(p[0] <= 1);
-            p[0] = 2;
-            first = false;
+        if s.kind == SectionKind::LEVEL {
+            if n == level {
+                (edit.take().unwrap())(&mut p);
+            }
+            n += 1;
         }
         w.section(s.kind, &p);
     }
-    assert!(!first);
-    match subwave::decode_slice(&w.finish()) {
-        Err(Error::CorruptStream {
-            section: "LEVL",
-            what,
-        }) => assert!(what.contains("tangent"), "{what}"),
-        other => panic!("expected a corrupt level, got {other:?}"),
+    assert!(edit.is_none(), "no level {level}");
+    w.finish()
+}
+
+/// The modes of a container's LEVL sections, in order.
+fn level_modes(bytes: &[u8]) -> Vec<u8> {
+    let c = subwave_container::Container::parse(bytes, &Limits::default()).unwrap();
+    c.sections
+        .iter()
+        .filter(|s| s.kind == SectionKind::LEVEL)
+        .map(|s| s.payload[0])
+        .collect()
+}
+
+#[test]
+fn modes_a_level_cannot_have_are_corrupt() {
+    // Modes 2 and 7 (SPEC.md 10.3, 10.7) exist for sqrt(2) levels only, mode 6 (10.6)
+    // for levels with phases: a bicubic Catmull-Clark level claims each of them,
+    // checksums kept valid.
+    let obj = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/mixed_cc2.obj")).unwrap();
+    let m = subwave::load(&obj, None).unwrap();
+    let enc = subwave::encode_to_vec(&m.mesh, &m.quantization, &EncodeOptions::default()).unwrap();
+    assert_eq!(enc.header.family, subwave::Family::Cc);
+    assert_eq!(
+        enc.header.transform,
+        subwave::Transform::Wavelet(subwave::Wavelet::Bicubic)
+    );
+    for (mode, want) in [(2, "tangent"), (7, "tangent"), (6, "phase"), (8, "unknown")] {
+        let b = with_level(&enc.bytes, 0, |p| {
+            assert!(p[0] <= 1);
+            p[0] = mode;
+        });
+        match subwave::decode_slice(&b) {
+            Err(Error::CorruptStream {
+                section: "LEVL",
+                what,
+            }) => assert!(what.contains(want), "mode {mode}: {what}"),
+            other => panic!("mode {mode}: expected a corrupt level, got {other:?}"),
+        }
     }
+}
+
+#[test]
+fn every_bit_flip_inside_a_phased_level_is_an_error_or_a_valid_mesh() {
+    // The frozen containers with a level in mode 6 (Catmull-Clark, interp4) and mode 7
+    // (sqrt(2)): every bit of those levels' payloads flipped, checksums made valid, so
+    // the phases, shifts and their bounds meet hostile values.
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/golden/");
+    let mut tried = 0;
+    for (file, mode) in [("open_cc2.v18.swv", 6u8), ("prism_sqrt2_5.v18.swv", 7)] {
+        let b = std::fs::read(format!("{dir}{file}")).unwrap();
+        let modes = level_modes(&b);
+        let level = modes
+            .iter()
+            .position(|&m| m == mode)
+            .expect("a phased level");
+        let len = {
+            let c = subwave_container::Container::parse(&b, &Limits::default()).unwrap();
+            c.sections
+                .iter()
+                .filter(|s| s.kind == SectionKind::LEVEL)
+                .nth(level)
+                .unwrap()
+                .payload
+                .len()
+        };
+        for bit in 8..len * 8 {
+            let x = with_level(&b, level, |p| p[bit / 8] ^= 1 << (bit % 8));
+            if let Ok(d) = subwave::decode_slice(&x) {
+                d.mesh.validate().unwrap();
+            }
+            tried += 1;
+        }
+        // And the mode byte turned into every other value.
+        for m in 0..=255u8 {
+            let x = with_level(&b, level, |p| p[0] = m);
+            if let Ok(d) = subwave::decode_slice(&x) {
+                d.mesh.validate().unwrap();
+            }
+        }
+    }
+    assert!(tried > 1000, "{tried}");
 }
 
 /// The sphere_polar3 container with its header rewritten by `edit` (checksums valid).

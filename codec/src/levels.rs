@@ -1979,7 +1979,14 @@ mod tests {
             v
         });
         let two = forced(&level, true, &x, &coarse, None, Mode::Tangent(&targets));
-        let seven = forced(&level, true, &x, &coarse, None, Mode::TangentPhased(&targets));
+        let seven = forced(
+            &level,
+            true,
+            &x,
+            &coarse,
+            None,
+            Mode::TangentPhased(&targets),
+        );
         assert_ne!(two[1..], seven[1..]);
         for (bytes, targets, version, ok) in [
             (&seven, Some(&targets[..]), PHASE_VERSION, true),
@@ -1990,7 +1997,9 @@ mod tests {
             let mut y = coarse.clone();
             let mut act = vec![UNKNOWN; nv];
             let mut dm = LevelModels::new(version);
-            let r = decode(bytes, &level, true, &mut y, &mut act, &mut dm, targets, None);
+            let r = decode(
+                bytes, &level, true, &mut y, &mut act, &mut dm, targets, None,
+            );
             assert_eq!(r.is_ok(), ok);
             if ok {
                 assert_eq!(y, x);
