@@ -782,7 +782,12 @@ impl TanTerms {
         let mut u = [0i128; 3];
         for (k, uk) in u.iter_mut().enumerate() {
             let x = &coarse[k];
-            let s: i128 = face.iter().map(|&v| x[v as usize] as i128).sum();
+            // Values below 2^52 (9.3): a face of up to 2^10 corners sums in 64 bits.
+            let s = if face.len() <= 1 << 10 {
+                face.iter().map(|&v| x[v as usize]).sum::<i64>() as i128
+            } else {
+                face.iter().map(|&v| x[v as usize] as i128).sum()
+            };
             let rho = s - c * crate::transform::round_div(s, c) as i128;
             *uk = rho + c * (g[k] as i128 - t[k] as i128);
         }
@@ -1103,7 +1108,9 @@ pub enum Phasing<'a> {
     /// values).
     Ready(&'a Phases),
     /// A Catmull-Clark level of a predict-only transform: the edge points' from the
-    /// coarse values, the face points' once the edge points are read.
+    /// coarse values, the face points' once the edge points are read. The decoder then
+    /// synthesises the level as it reads it: [`decode`] leaves the fine values, not the
+    /// details.
     Cc(&'a crate::transform::Phaser<'a>),
 }
 
@@ -1316,20 +1323,22 @@ pub fn decode(
     for xs in x.iter_mut() {
         xs.resize(nv + nd, 0);
     }
-    // Mode 6: the phases, given or (a Catmull-Clark level's) made as the level is read.
+    // Mode 6: the phases, given, or a Catmull-Clark level's made as it is read: the edge
+    // points' from the coarse values now, the face points' from the fine edge points, so
+    // such a level is synthesised as it is read (see [`Phasing::Cc`]).
     let phasing = phasing.filter(|_| matches!(mode, Mode::Phased));
-    let mut made: Phases = Default::default();
+    let ne = level.ne();
+    let mut edge_phases: Phases = Default::default();
     if let Some(Phasing::Cc(p)) = &phasing {
-        for (k, mk) in made.iter_mut().enumerate() {
-            mk.resize(nd, 0);
-            for (e, q) in mk[..level.ne()].iter_mut().enumerate() {
-                *q = p.predict(&x[k], e).1;
-            }
+        for (k, ek) in edge_phases.iter_mut().enumerate() {
+            *ek = (0..ne.min(nd)).map(|e| p.predict(&x[k], e).1).collect();
         }
     }
     for i in 0..nd {
-        if let (Some(Phasing::Cc(p)), true) = (&phasing, i == level.ne()) {
-            face_phases(p, level, x, &mut made);
+        // What a Catmull-Clark level in mode 6 adds to the detail: its prediction.
+        let mut fine = [0i64; 3];
+        if let (Some(Phasing::Cc(p)), true) = (&phasing, i == ne) {
+            synthesise_edges(p, level, x);
         }
         let (class, bins, fd) = contexts(level, act, mags, sqrt2, m.bins, i);
         let fr = if framed {
@@ -1348,7 +1357,16 @@ pub fn decode(
         let offset = mode.offset(i, fr);
         let ph = match (&phasing, mode, offset) {
             (Some(Phasing::Ready(p)), ..) => Phased::Axes([p[0][i], p[1][i], p[2][i]]),
-            (Some(Phasing::Cc(_)), ..) => Phased::Axes([made[0][i], made[1][i], made[2][i]]),
+            (Some(Phasing::Cc(_)), ..) if i < ne => {
+                Phased::Axes([edge_phases[0][i], edge_phases[1][i], edge_phases[2][i]])
+            }
+            (Some(Phasing::Cc(p)), ..) => {
+                let mut q = [0u8; 3];
+                for k in 0..3 {
+                    (fine[k], q[k]) = p.predict(&x[k], i);
+                }
+                Phased::Axes(q)
+            }
             (None, Mode::TangentPhased(t), Some(c)) => {
                 Phased::Tangent(TanTerms::new(level, x, i, t[i], c))
             }
@@ -1371,35 +1389,26 @@ pub fn decode(
             d = in_range(plus(r, c))?;
         }
         for k in 0..3 {
-            x[k][nv + i] = d[k];
+            x[k][nv + i] = d[k].wrapping_add(fine[k]);
         }
         act[nv + i] = activity(r);
+    }
+    if let (Some(Phasing::Cc(p)), true) = (&phasing, nd <= ne) {
+        synthesise_edges(p, level, x);
     }
     models.last = Some(m);
     Ok(())
 }
 
-/// The phases of a Catmull-Clark level's face points into `ph[k][ne..]` (SPEC.md 10.6),
-/// once its edge points' details `x[k][nv..nv + ne]` are read: they are predicted from
-/// the fine edge points, so those are synthesised for the purpose and then restored.
-fn face_phases(
-    p: &crate::transform::Phaser<'_>,
-    level: &Level,
-    x: &mut [Vec<i64>; 3],
-    ph: &mut Phases,
-) {
-    let (nv, ne) = (level.nv, level.ne());
-    for (xk, pk) in x.iter_mut().zip(ph.iter_mut()) {
-        // The corrections are from the coarse values alone: the same before and after.
-        let c: Vec<i64> = (0..ne).map(|e| p.predict(xk, e).0).collect();
-        for (v, c) in xk[nv..nv + ne].iter_mut().zip(&c) {
-            *v = v.wrapping_add(*c);
-        }
-        for (f, q) in pk[ne..].iter_mut().enumerate() {
-            *q = p.predict(xk, ne + f).1;
-        }
-        for (v, c) in xk[nv..nv + ne].iter_mut().zip(&c) {
-            *v = v.wrapping_sub(*c);
+/// Synthesises a Catmull-Clark level's edge points `x[k][nv..nv + ne]` in place (their
+/// details plus predictions from the coarse values), for mode 6's face points.
+fn synthesise_edges(p: &crate::transform::Phaser<'_>, level: &Level, x: &mut [Vec<i64>; 3]) {
+    let nv = level.nv;
+    for xk in x.iter_mut() {
+        for e in 0..level.ne() {
+            // Predicted from the coarse values alone: unchanged as the edge points change.
+            let c = p.predict(xk, e).0;
+            xk[nv + e] = xk[nv + e].wrapping_add(c);
         }
     }
 }
@@ -1916,8 +1925,8 @@ mod tests {
 
     /// Mode 6 on Catmull-Clark levels of lazy and interp4: the encoder's phases (from
     /// the fine values) are the decoder's (the edge points' from the coarse values, the
-    /// face points' once the edge points are read), so the details come back exactly;
-    /// a mode 6 level without phases is corrupt.
+    /// face points' once the edge points are read), so the fine values come back
+    /// exactly; a mode 6 level without phases is corrupt.
     #[test]
     fn phase_mode_round_trips_on_catmull_clark_levels() {
         use crate::transform::{analyse, synthesise, Phaser, Stencils, Wavelet};
@@ -1946,7 +1955,8 @@ mod tests {
             let mut dm = LevelModels::new(PHASE_VERSION);
             let ph = Some(Phasing::Cc(&p));
             decode(&bytes, &level, false, &mut y, &mut act, &mut dm, None, ph).unwrap();
-            assert_eq!(y, x, "{w:?}");
+            // Read with the decoder's phases, the level comes back synthesised.
+            assert_eq!(y, fine, "{w:?}");
             let mut y = coarse.clone();
             let mut act = vec![UNKNOWN; nv];
             let mut dm = LevelModels::new(PHASE_VERSION);

@@ -1035,6 +1035,8 @@ fn synthesise_levels(
             targets.as_deref(),
             phasing,
         )?;
+        // A Catmull-Clark level in mode 6 is synthesised as it is read.
+        let synthesised = phaser.is_some();
         drop(phaser);
         if l + 1 == upto as usize {
             // The last level read: its activities and magnitudes serve no later level.
@@ -1053,7 +1055,7 @@ fn synthesise_levels(
             for (xs, pk) in x.iter_mut().zip(predictions.iter().flatten()) {
                 sqrt2::apply_predictions(xs, level.nv, pk, false);
             }
-        } else {
+        } else if !synthesised {
             let (discs, owned) = discs::discs(&level, &h.poles, l as u32, h.disc);
             let st = st.unwrap_or_else(|| transform::Stencils::new(&level, w));
             for xs in x.iter_mut() {
