@@ -1429,6 +1429,33 @@ mod tests {
         encode(level, false, x, coarse, act, models, None, None, usize::MAX).unwrap()
     }
 
+    /// [`super::decode`] of one level from fresh format `version` models and activities:
+    /// the coarse values with the level read into them.
+    fn decode_fresh(
+        bytes: &[u8],
+        level: &Level,
+        sqrt2: bool,
+        coarse: &[Vec<i64>; 3],
+        version: u16,
+        targets: Option<&[[i64; 3]]>,
+        phasing: Option<Phasing<'_>>,
+    ) -> Result<[Vec<i64>; 3]> {
+        let mut y = coarse.clone();
+        let mut act = vec![UNKNOWN; level.nv];
+        let mut models = LevelModels::new(version);
+        decode(
+            bytes,
+            level,
+            sqrt2,
+            &mut y,
+            &mut act,
+            &mut models,
+            targets,
+            phasing,
+        )?;
+        Ok(y)
+    }
+
     fn refined(times: usize) -> Level {
         let mut t = prism_with_triangles();
         for _ in 0..times {
@@ -1586,20 +1613,7 @@ mod tests {
             let mut act = vec![UNKNOWN; nv];
             let mut models = LevelModels::new(version);
             let bytes = encode_fresh(&level, &x, &coarse, &mut act, &mut models);
-            let mut y = coarse.clone();
-            let mut act = vec![UNKNOWN; nv];
-            let mut models = LevelModels::new(version);
-            decode(
-                &bytes,
-                &level,
-                false,
-                &mut y,
-                &mut act,
-                &mut models,
-                None,
-                None,
-            )
-            .unwrap();
+            let y = decode_fresh(&bytes, &level, false, &coarse, version, None, None).unwrap();
             assert_eq!(y, x, "version {version} round trip");
             sizes.push(bytes.len());
         }
@@ -1743,21 +1757,8 @@ mod tests {
         let body = body_in_mode(level, coarse, x, mode).expect("in range");
         let mut payload = mode.bytes();
         payload.extend_from_slice(&body);
-        let mut y = coarse.clone();
-        let mut act = vec![UNKNOWN; level.nv];
-        let mut models = LevelModels::new(ROTATED_VERSION);
-        decode(
-            &payload,
-            level,
-            false,
-            &mut y,
-            &mut act,
-            &mut models,
-            None,
-            None,
-        )
-        .unwrap();
-        assert_eq!(&y, x, "round trip");
+        let y = decode_fresh(&payload, level, false, coarse, ROTATED_VERSION, None, None);
+        assert_eq!(&y.unwrap(), x, "round trip");
         payload.len()
     }
 
@@ -1862,11 +1863,8 @@ mod tests {
                 models.only.as_ref().map(|o| o.as_slice()),
                 Some(&[plan][..])
             );
-            let mut y = coarse.clone();
-            let mut act = vec![UNKNOWN; nv];
-            let mut dm = LevelModels::new(ROTATED_VERSION);
-            decode(&bytes, &level, false, &mut y, &mut act, &mut dm, None, None).unwrap();
-            assert_eq!(y, x, "planned {plan}");
+            let y = decode_fresh(&bytes, &level, false, &coarse, ROTATED_VERSION, None, None);
+            assert_eq!(y.unwrap(), x, "planned {plan}");
         }
     }
 
@@ -1950,17 +1948,11 @@ mod tests {
             }
             let coarse: [Vec<i64>; 3] = std::array::from_fn(|k| x[k][..nv].to_vec());
             let bytes = forced(&level, false, &x, &coarse, Some(&phases), Mode::Phased);
-            let mut y = coarse.clone();
-            let mut act = vec![UNKNOWN; nv];
-            let mut dm = LevelModels::new(PHASE_VERSION);
             let ph = Some(Phasing::Cc(&p));
-            decode(&bytes, &level, false, &mut y, &mut act, &mut dm, None, ph).unwrap();
+            let y = decode_fresh(&bytes, &level, false, &coarse, PHASE_VERSION, None, ph);
             // Read with the decoder's phases, the level comes back synthesised.
-            assert_eq!(y, fine, "{w:?}");
-            let mut y = coarse.clone();
-            let mut act = vec![UNKNOWN; nv];
-            let mut dm = LevelModels::new(PHASE_VERSION);
-            let err = decode(&bytes, &level, false, &mut y, &mut act, &mut dm, None, None);
+            assert_eq!(y.unwrap(), fine, "{w:?}");
+            let err = decode_fresh(&bytes, &level, false, &coarse, PHASE_VERSION, None, None);
             assert!(err.unwrap_err().to_string().contains("phase"), "{w:?}");
         }
     }
@@ -2004,15 +1996,10 @@ mod tests {
             (&seven, None, PHASE_VERSION, false),
             (&seven, Some(&targets[..]), ROTATED_VERSION, false),
         ] {
-            let mut y = coarse.clone();
-            let mut act = vec![UNKNOWN; nv];
-            let mut dm = LevelModels::new(version);
-            let r = decode(
-                bytes, &level, true, &mut y, &mut act, &mut dm, targets, None,
-            );
+            let r = decode_fresh(bytes, &level, true, &coarse, version, targets, None);
             assert_eq!(r.is_ok(), ok);
             if ok {
-                assert_eq!(y, x);
+                assert_eq!(r.unwrap(), x);
             }
         }
     }
@@ -2062,20 +2049,7 @@ mod tests {
         let run = |version: u16, head: &[u8]| {
             let mut payload = head.to_vec();
             payload.extend_from_slice(&body);
-            let mut y = coarse.clone();
-            let mut act = vec![UNKNOWN; level.nv];
-            let mut models = LevelModels::new(version);
-            decode(
-                &payload,
-                &level,
-                false,
-                &mut y,
-                &mut act,
-                &mut models,
-                None,
-                None,
-            )
-            .map(|_| y)
+            decode_fresh(&payload, &level, false, &coarse, version, None, None)
         };
         assert_eq!(run(17, &[5, 0x25]).unwrap(), x);
         for (version, head) in [
@@ -2090,20 +2064,7 @@ mod tests {
             assert!(err.contains("LEVL"), "{version} {head:?}: {err}");
         }
         // Mode 5 without its weights.
-        let mut y = coarse.clone();
-        let mut act = vec![UNKNOWN; level.nv];
-        let mut models = LevelModels::new(17);
-        let err = decode(
-            &[5],
-            &level,
-            false,
-            &mut y,
-            &mut act,
-            &mut models,
-            None,
-            None,
-        )
-        .unwrap_err();
+        let err = decode_fresh(&[5], &level, false, &coarse, 17, None, None).unwrap_err();
         assert!(err.to_string().contains("shift weights"), "{err}");
     }
 }

@@ -705,6 +705,21 @@ mod prediction_tests {
     use super::*;
     use crate::hierarchy::fixtures::prism_with_triangles;
 
+    /// Pseudo-random fine values of `level` in `-2^(bits - 1)..2^(bits - 1)` (xorshift
+    /// from the state `s`).
+    fn values(level: &Level, bits: u32, s: &mut u64) -> [Vec<i64>; 3] {
+        std::array::from_fn(|_| {
+            (0..fine_nv(level))
+                .map(|_| {
+                    *s ^= *s << 13;
+                    *s ^= *s >> 7;
+                    *s ^= *s << 17;
+                    (*s % (1 << bits)) as i64 - (1 << (bits - 1))
+                })
+                .collect()
+        })
+    }
+
     #[test]
     fn phases_tell_where_the_unrounded_prediction_lies() {
         // sqrt2-lazy's details less their unrounded counterparts (the same analysis on
@@ -718,16 +733,7 @@ mod prediction_tests {
                 t = fine(&Level::new(&t).unwrap());
             }
             let level = Level::new(&t).unwrap();
-            let x: [Vec<i64>; 3] = std::array::from_fn(|_| {
-                (0..fine_nv(&level))
-                    .map(|_| {
-                        s ^= s << 13;
-                        s ^= s >> 7;
-                        s ^= s << 17;
-                        (s % (1 << bits)) as i64 - (1 << (bits - 1))
-                    })
-                    .collect()
-            });
+            let x = values(&level, bits, &mut s);
             let (p, ph) = predictions_with(&level, &x, true);
             let ph = ph.unwrap();
             assert_eq!(predictions(&level, &x), p);
@@ -766,16 +772,7 @@ mod prediction_tests {
                 t = fine(&Level::new(&t).unwrap());
             }
             let level = Level::new(&t).unwrap();
-            let x: [Vec<i64>; 3] = std::array::from_fn(|_| {
-                (0..fine_nv(&level))
-                    .map(|_| {
-                        s ^= s << 13;
-                        s ^= s >> 7;
-                        s ^= s << 17;
-                        (s % (1 << bits)) as i64 - (1 << (bits - 1))
-                    })
-                    .collect()
-            });
+            let x = values(&level, bits, &mut s);
             assert_eq!(small_values(&x, level.nv), bits == 41);
             let p = predictions(&level, &x);
             let plan = Plan::new(&level, Wavelet::Sqrt2Lazy);
