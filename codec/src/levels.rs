@@ -958,14 +958,13 @@ pub fn encode(
         models.last = Some(m);
         return Some(body);
     }
-    // The mode asked for this level, if any. A mode with or without phases (0 and 6, 2
-    // and 7) count as one: a plan made with a transform without phases leaves a
-    // transform with them free to use them, and the other way round.
+    // The mode asked for this level, if any. Plain axes with or without phases (modes 0
+    // and 6) count as one: a plan made with a transform without phases leaves a
+    // transform with them free to use them, and the other way round. (Modes 2 and 7 are
+    // open to the same levels: a plan names the one to use.)
     let only = models.only.as_mut().and_then(Iterator::next);
     let plain = |m: u8| matches!(m, 0 | 6);
-    let tangent = |m: u8| matches!(m, 2 | 7);
-    let open =
-        |m: u8| only.is_none_or(|o| o == m || (plain(o) && plain(m)) || (tangent(o) && tangent(m)));
+    let open = |m: u8| only.is_none_or(|o| o == m || (plain(o) && plain(m)));
     let mut modes = vec![Mode::Plain, Mode::Framed];
     if let Some(t) = targets.filter(|_| version >= 7) {
         modes.push(Mode::Tangent(t));
