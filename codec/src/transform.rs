@@ -532,15 +532,7 @@ pub fn analyse_with<T: Sample>(
     x: &mut [T],
     skip: &[bool],
 ) {
-    if w == Wavelet::DyadicSym {
-        return dyadic_sym(level, x, true, skip);
-    }
-    if w == Wavelet::Interp4 {
-        return interp4(level, &st.interp4(level), x, true, skip);
-    }
-    for &s in w.steps() {
-        step(level, x, s, true, skip);
-    }
+    lift(level, w, st, x, skip, true);
 }
 
 /// Synthesis of one level, in place: the exact inverse of [`analyse`].
@@ -561,14 +553,24 @@ pub fn synthesise_with<T: Sample>(
     x: &mut [T],
     skip: &[bool],
 ) {
-    if w == Wavelet::DyadicSym {
-        return dyadic_sym(level, x, false, skip);
-    }
-    if w == Wavelet::Interp4 {
-        return interp4(level, &st.interp4(level), x, false, skip);
-    }
-    for &s in w.steps().iter().rev() {
-        step(level, x, s, false, skip);
+    lift(level, w, st, x, skip, false);
+}
+
+/// One level's analysis (`forward`) or synthesis: the steps of `w` in order, or their
+/// inverses in reverse order.
+fn lift<T: Sample>(
+    level: &Level,
+    w: Wavelet,
+    st: &Stencils,
+    x: &mut [T],
+    skip: &[bool],
+    forward: bool,
+) {
+    match w {
+        Wavelet::DyadicSym => dyadic_sym(level, x, forward, skip),
+        Wavelet::Interp4 => interp4(level, &st.interp4(level), x, forward, skip),
+        _ if forward => w.steps().iter().for_each(|&s| step(level, x, s, true, skip)),
+        _ => w.steps().iter().rev().for_each(|&s| step(level, x, s, false, skip)),
     }
 }
 
