@@ -44,31 +44,11 @@ enum Command {
         input: String,
         /// Output container, or - for standard output.
         output: String,
-        /// Quantise to Draco's Q-bit grid (1..=30) instead of keeping the exact values.
-        #[arg(long, value_name = "Q", value_parser = clap::value_parser!(u8).range(1..=30))]
-        bits: Option<u8>,
         /// Store the input's vertex and face order so decompression restores it.
         #[arg(long)]
         keep_order: bool,
-        /// Wavelet for subdivision levels: auto (smallest file); Catmull-Clark: lazy,
-        /// bilinear, bicubic, biquintic, dyadic-sym, interp4 (4-point interpolating), or
-        /// fit (the subdivision fit, for subdivided models); sqrt(2): sqrt2-lazy, ir2w,
-        /// sqrt2-sym.
-        #[arg(long, default_value = "auto", value_parser = parse_transform)]
-        transform: TransformChoice,
-        /// Look for at most N refinement levels (0: code the mesh flat).
-        #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u8).range(0..=16))]
-        levels: u8,
-        /// Polar hierarchies: the poles' discs take auto (smallest file), none (the
-        /// Catmull-Clark transform everywhere), lazy (the lazy polar wavelet, circular
-        /// analysis first), lazy-radial (radial first), lifted (the lifted polar
-        /// wavelet, circular first) or lifted-radial (radial first).
-        #[arg(long, default_value = "auto", value_parser = parse_disc)]
-        polar_disc: DiscArg,
-        /// Per-axis value maps: auto (map the axes whose values are sparse in their
-        /// range when that makes the file smaller), on (map every axis) or off.
-        #[arg(long, default_value = "auto", value_parser = parse_value_map)]
-        value_map: ValueMapArg,
+        #[command(flatten)]
+        coding: Coding,
     },
     /// Decompress a .swv container into a mesh file.
     #[command(after_help = EXAMPLES)]
@@ -99,25 +79,52 @@ enum Command {
     Verify {
         /// Input mesh file, or - for standard input.
         input: String,
-        /// Quantise to Draco's Q-bit grid first.
-        #[arg(long, value_name = "Q", value_parser = clap::value_parser!(u8).range(1..=30))]
-        bits: Option<u8>,
-        /// Wavelet for subdivision levels (as for compress).
-        #[arg(long, default_value = "auto", value_parser = parse_transform)]
-        transform: TransformChoice,
-        /// Look for at most N refinement levels.
-        #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u8).range(0..=16))]
-        levels: u8,
-        /// Polar hierarchies' disc transform (as for compress).
-        #[arg(long, default_value = "auto", value_parser = parse_disc)]
-        polar_disc: DiscArg,
-        /// Per-axis value maps (as for compress).
-        #[arg(long, default_value = "auto", value_parser = parse_value_map)]
-        value_map: ValueMapArg,
+        #[command(flatten)]
+        coding: Coding,
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
     },
+}
+
+/// How `compress` and `verify` code a mesh.
+#[derive(clap::Args)]
+struct Coding {
+    /// Quantise to Draco's Q-bit grid (1..=30) instead of keeping the exact values.
+    #[arg(long, value_name = "Q", value_parser = clap::value_parser!(u8).range(1..=30))]
+    bits: Option<u8>,
+    /// Wavelet for subdivision levels: auto (smallest file); Catmull-Clark: lazy,
+    /// bilinear, bicubic, biquintic, dyadic-sym, interp4 (4-point interpolating), or
+    /// fit (the subdivision fit, for subdivided models); sqrt(2): sqrt2-lazy, ir2w,
+    /// sqrt2-sym.
+    #[arg(long, default_value = "auto", value_parser = parse_transform)]
+    transform: TransformChoice,
+    /// Look for at most N refinement levels (0: code the mesh flat).
+    #[arg(long, value_name = "N", default_value_t = 16, value_parser = clap::value_parser!(u8).range(0..=16))]
+    levels: u8,
+    /// Polar hierarchies: the poles' discs take auto (smallest file), none (the
+    /// Catmull-Clark transform everywhere), lazy (the lazy polar wavelet, circular
+    /// analysis first), lazy-radial (radial first), lifted (the lifted polar
+    /// wavelet, circular first) or lifted-radial (radial first).
+    #[arg(long, default_value = "auto", value_parser = parse_disc)]
+    polar_disc: DiscArg,
+    /// Per-axis value maps: auto (map the axes whose values are sparse in their
+    /// range when that makes the file smaller), on (map every axis) or off.
+    #[arg(long, default_value = "auto", value_parser = parse_value_map)]
+    value_map: ValueMapArg,
+}
+
+impl Coding {
+    /// The encoder options these arguments ask for (the input's order not kept).
+    fn options(&self) -> EncodeOptions {
+        EncodeOptions {
+            transform: self.transform,
+            max_levels: self.levels,
+            disc: self.polar_disc.0,
+            value_map: self.value_map.0,
+            ..Default::default()
+        }
+    }
 }
 
 fn parse_transform(s: &str) -> Result<TransformChoice, String> {
@@ -276,26 +283,19 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
         Command::Compress {
             input,
             output,
-            bits,
             keep_order,
-            transform,
-            levels,
-            polar_disc,
-            value_map,
+            coding,
         } => {
             let progress = Progress::new();
             progress.stage("reading");
             let bytes = read_input(input)?;
-            let loaded = subwave::load(&bytes, *bits).map_err(|e| fail(input, e))?;
+            let loaded = subwave::load(&bytes, coding.bits).map_err(|e| fail(input, e))?;
             warn_dropped(cli.quiet, input, &loaded);
             progress.stage("encoding");
             let opts = EncodeOptions {
                 keep_order: *keep_order,
                 source: loaded.source(),
-                transform: *transform,
-                max_levels: *levels,
-                disc: polar_disc.0,
-                value_map: value_map.0,
+                ..coding.options()
             };
             let enc = subwave::encode_to_vec(&loaded.mesh, &loaded.quantization, &opts)
                 .map_err(|e| fail(input, e))?;
@@ -355,22 +355,9 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
         }
         Command::Verify {
             input,
-            bits,
-            transform,
-            levels,
-            polar_disc,
-            value_map,
+            coding,
             json,
-        } => {
-            let opts = EncodeOptions {
-                transform: *transform,
-                max_levels: *levels,
-                disc: polar_disc.0,
-                value_map: value_map.0,
-                ..Default::default()
-            };
-            verify(cli, input, *bits, &opts, *json)
-        }
+        } => verify(cli, input, coding.bits, &coding.options(), *json),
     }
 }
 
