@@ -11,12 +11,9 @@ use crate::mesh::MAX_COORD;
 
 const SECTION: &str = "VMAP";
 
-/// An axis is a candidate when its values span at least `SPARSE.0 / SPARSE.1` times as
-/// many integers as it has distinct values (a fifth of the span empty). 5/4 rather than 2: heights in whole metres
-/// on a grid step a little under a metre (jacksboro_grid33 at `--bits 12`, a span of
-/// 1.56 times its values) map to smoother ranks, 4 % smaller; `auto` still keeps the map
-/// only when the container comes out smaller.
-const SPARSE: (u64, u64) = (5, 4);
+/// An axis is a candidate when its values span at least this many times as many
+/// integers as it has distinct values (one bit of saving per vertex at most otherwise).
+const SPARSE: u64 = 2;
 
 /// The sorted distinct values of the mapped axes; `None` axes are coded as they are.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -40,7 +37,7 @@ impl ValueMap {
             let v = distinct(positions, k);
             let (&lo, &hi) = (v.first()?, v.last()?);
             let span = (hi - lo) as u64 + 1;
-            (span * SPARSE.1 >= v.len() as u64 * SPARSE.0).then_some(v)
+            (span / v.len() as u64 >= SPARSE).then_some(v)
         });
         let m = ValueMap { axes };
         m.axes.iter().any(Option::is_some).then_some(m)
@@ -185,18 +182,6 @@ mod tests {
         assert!(back.values(&mut bad.clone(), true).is_err());
         back.values(&mut bad, false).unwrap();
         assert_eq!(bad[0][1], *m.axes[1].as_ref().unwrap().last().unwrap());
-    }
-
-    #[test]
-    fn an_axis_a_fifth_empty_is_a_candidate() {
-        // z spans 5 integers with 4 values (5/4: a candidate), y 6 with 5 (6/5: not).
-        let pos: Vec<[i64; 3]> = (0..20)
-            .map(|i| [0, [0, 1, 2, 3, 5][i % 5], [0, 1, 2, 4][i % 4]])
-            .collect();
-        let m = ValueMap::candidate(&pos).unwrap();
-        assert_eq!(m.axes[0], None);
-        assert_eq!(m.axes[1], None);
-        assert_eq!(m.axes[2].as_deref(), Some(&[0, 1, 2, 4][..]));
     }
 
     #[test]
