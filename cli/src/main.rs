@@ -109,7 +109,8 @@ struct Coding {
     #[arg(long, default_value = "auto", value_parser = parse_disc)]
     polar_disc: DiscArg,
     /// Per-axis value maps: auto (map the axes whose values are sparse in their
-    /// range when that makes the file smaller), on (map every axis) or off.
+    /// range and lie apart, as on a lattice, when that makes the file smaller), on
+    /// (map every axis) or off.
     #[arg(long, default_value = "auto", value_parser = parse_value_map)]
     value_map: ValueMapArg,
 }
