@@ -569,8 +569,16 @@ fn lift<T: Sample>(
     match w {
         Wavelet::DyadicSym => dyadic_sym(level, x, forward, skip),
         Wavelet::Interp4 => interp4(level, &st.interp4(level), x, forward, skip),
-        _ if forward => w.steps().iter().for_each(|&s| step(level, x, s, true, skip)),
-        _ => w.steps().iter().rev().for_each(|&s| step(level, x, s, false, skip)),
+        _ if forward => {
+            for &s in w.steps() {
+                step(level, x, s, true, skip);
+            }
+        }
+        _ => {
+            for &s in w.steps().iter().rev() {
+                step(level, x, s, false, skip);
+            }
+        }
     }
 }
 

@@ -45,7 +45,7 @@ impl ValueMap {
             let (&lo, &hi) = (v.first()?, v.last()?);
             let span = (hi - lo) as u64 + 1;
             let unit = v.windows(2).filter(|w| w[1] - w[0] == 1).count();
-            (span / v.len() as u64 >= SPARSE && unit * LATTICE <= v.len() - 1).then_some(v)
+            (span / v.len() as u64 >= SPARSE && unit * LATTICE < v.len()).then_some(v)
         });
         let m = ValueMap { axes };
         m.axes.iter().any(Option::is_some).then_some(m)
