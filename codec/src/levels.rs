@@ -442,10 +442,8 @@ fn frame(level: &Level, normals: &[[i128; 3]], detail: usize) -> Option<(usize, 
 fn plan(fr: Option<(usize, [i64; 3])>) -> ([usize; 3], Option<[i64; 3]>) {
     match fr {
         None => ([0, 1, 2], None),
-        Some((k, n)) => {
-            let o: Vec<usize> = (0..3).filter(|&d| d != k).collect();
-            ([k, o[0], o[1]], Some(n))
-        }
+        // The first component, then the other two in axis order.
+        Some((k, n)) => ([[0, 1, 2], [1, 0, 2], [2, 0, 1]][k], Some(n)),
     }
 }
 
@@ -800,6 +798,12 @@ impl TanTerms {
     /// `n_k < 0`) is its expected value; the shift is `[A / D]`, the phase that of the
     /// remainder. `None` when the shift's magnitude passes 2^52.
     fn shift(&self, n: [i64; 3], k: usize, j: usize, rk: i64, pred: i64) -> Option<(i64, u8)> {
+        self.shift_64(n, k, j, rk, pred)
+            .unwrap_or_else(|| self.shift_128(n, k, j, rk, pred))
+    }
+
+    /// [`TanTerms::shift`] in 128-bit arithmetic.
+    fn shift_128(&self, n: [i64; 3], k: usize, j: usize, rk: i64, pred: i64) -> Option<(i64, u8)> {
         let (nk, nj) = (n[k] as i128, n[j] as i128);
         let mut a =
             nk * self.u[j] - nj * self.u[k] + self.c * (rk as i128 * nj - nk * pred as i128);
@@ -817,6 +821,44 @@ impl TanTerms {
             return None;
         }
         Some((q as i64, phase(a - q * d, d)))
+    }
+
+    /// [`TanTerms::shift`] in 64-bit arithmetic, the same integers exactly; `None`
+    /// when a term would overflow (then 128 bits decide).
+    #[inline]
+    fn shift_64(
+        &self,
+        n: [i64; 3],
+        k: usize,
+        j: usize,
+        rk: i64,
+        pred: i64,
+    ) -> Option<Option<(i64, u8)>> {
+        let (nk, nj) = (n[k], n[j]);
+        let (uj, uk, c) = (
+            i64::try_from(self.u[j]).ok()?,
+            i64::try_from(self.u[k]).ok()?,
+            i64::try_from(self.c).ok()?,
+        );
+        let inner = rk.checked_mul(nj)?.checked_sub(nk.checked_mul(pred)?)?;
+        let mut a = nk
+            .checked_mul(uj)?
+            .checked_sub(nj.checked_mul(uk)?)?
+            .checked_add(c.checked_mul(inner)?)?;
+        let mut d = c.checked_mul(nk)?;
+        if d < 0 {
+            a = a.checked_neg()?;
+            d = d.checked_neg()?;
+        }
+        let q = a
+            .checked_mul(2)?
+            .checked_add(d)?
+            .div_euclid(d.checked_mul(2)?);
+        if q.abs() > MAX_LIFTED {
+            return Some(None);
+        }
+        let r = a.checked_sub(q.checked_mul(d)?)?;
+        Some(Some((q, phase(r as i128, d as i128))))
     }
 }
 
@@ -1918,6 +1960,34 @@ mod tests {
         }
         // Divisor 2 (lazy edge points): remainders 0 and -1.
         assert_eq!((phase(0, 2), phase(-1, 2)), (0, 0b110));
+    }
+
+    proptest::proptest! {
+        /// Mode 7's shift in 64 bits is the 128-bit one wherever it answers, from small
+        /// values to ones whose products overflow 64 bits (then it must not answer).
+        #[test]
+        fn tangent_shift_in_64_bits_is_the_128_bit_one(
+            n in proptest::array::uniform3(-(1i64 << 24)..(1i64 << 24)),
+            u in proptest::array::uniform3(proptest::num::i64::ANY),
+            c in 3i128..9,
+            (rk, pred) in (-MAX_LIFTED..=MAX_LIFTED, -MAX_LIFTED..=MAX_LIFTED),
+            scale in 0u32..63,
+            n_scale in 0u32..24,
+            (k, j) in (0usize..3, 1usize..3),
+        ) {
+            let j = (k + j) % 3;
+            // Scale the values down so that every size of product occurs, and small
+            // divisors, where the rounding's edges are often met.
+            let t = TanTerms { u: u.map(|v| (v >> scale) as i128), c };
+            let (rk, pred) = (rk >> scale.min(52), pred >> scale.min(52));
+            let n = n.map(|v| v >> n_scale);
+            let n = if n[k] == 0 { [1, 1, 1] } else { n };
+            let wide = t.shift_128(n, k, j, rk, pred);
+            if let Some(fast) = t.shift_64(n, k, j, rk, pred) {
+                proptest::prop_assert_eq!(fast, wide);
+            }
+            proptest::prop_assert_eq!(t.shift(n, k, j, rk, pred), wide);
+        }
     }
 
     /// Mode 6 on Catmull-Clark levels of lazy and interp4: the encoder's phases (from
