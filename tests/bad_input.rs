@@ -360,13 +360,13 @@ fn with_level(bytes: &[u8], level: usize, edit: impl FnOnce(&mut Vec<u8>)) -> Ve
     w.finish()
 }
 
-/// The modes of a container's LEVL sections, in order.
-fn level_modes(bytes: &[u8]) -> Vec<u8> {
+/// The payloads of a container's LEVL sections, in order.
+fn level_payloads(bytes: &[u8]) -> Vec<Vec<u8>> {
     let c = subwave_container::Container::parse(bytes, &Limits::default()).unwrap();
     c.sections
         .iter()
         .filter(|s| s.kind == SectionKind::LEVEL)
-        .map(|s| s.payload[0])
+        .map(|s| s.payload.to_vec())
         .collect()
 }
 
@@ -407,21 +407,12 @@ fn every_bit_flip_inside_a_phased_level_is_an_error_or_a_valid_mesh() {
     let mut tried = 0;
     for (file, mode) in [("open_cc2.v18.swv", 6u8), ("prism_sqrt2_5.v18.swv", 7)] {
         let b = std::fs::read(format!("{dir}{file}")).unwrap();
-        let modes = level_modes(&b);
-        let level = modes
+        let payloads = level_payloads(&b);
+        let level = payloads
             .iter()
-            .position(|&m| m == mode)
+            .position(|p| p[0] == mode)
             .expect("a phased level");
-        let len = {
-            let c = subwave_container::Container::parse(&b, &Limits::default()).unwrap();
-            c.sections
-                .iter()
-                .filter(|s| s.kind == SectionKind::LEVEL)
-                .nth(level)
-                .unwrap()
-                .payload
-                .len()
-        };
+        let len = payloads[level].len();
         for bit in 8..len * 8 {
             let x = with_level(&b, level, |p| p[bit / 8] ^= 1 << (bit % 8));
             if let Ok(d) = subwave::decode_slice(&x) {

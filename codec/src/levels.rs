@@ -62,6 +62,11 @@ const PHASE_BINS: usize = 3;
 /// when the remainder is negative, bits 0 and 1 its bin.
 pub type Phases = [Vec<u8>; 3];
 
+/// Detail `i`'s phases on the three axes.
+fn phases_at(p: &Phases, i: usize) -> [u8; 3] {
+    [p[0][i], p[1][i], p[2][i]]
+}
+
 /// The phase of a prediction `[n / d]` (9.1 rounding, `d > 0`) from its remainder
 /// `r = n - d [n / d]` (so `-d / 2 <= r < d / 2`): the sign of `r`, and how many of
 /// `d, 2d` are at most `6 |r|`.
@@ -174,20 +179,12 @@ impl Models {
         if self.ph.is_empty() {
             self.ph = vec![None; self.m.len() * PHASE_BINS];
             self.ph_parents = (0..6 * PHASE_BINS)
-                .map(|j| {
-                    let mut m = self.parents[j / PHASE_BINS].clone();
-                    m.reseed(SHARED_SEED);
-                    m
-                })
+                .map(|j| seeded(&self.parents[j / PHASE_BINS]))
                 .collect();
         }
-        let p = if slot == 0 { 0 } else { prev_bin(prev) };
-        let i = (((class * 3 + slot) * 3 + p) * self.bins + nbr) * PHASE_BINS + bin;
-        self.ph[i].get_or_insert_with(|| {
-            let mut m = self.ph_parents[(class * 3 + slot) * PHASE_BINS + bin].clone();
-            m.reseed(SHARED_SEED);
-            m
-        })
+        let i = self.context(class, slot, prev, nbr) * PHASE_BINS + bin;
+        let shared = &self.ph_parents[(class * 3 + slot) * PHASE_BINS + bin];
+        self.ph[i].get_or_insert_with(|| seeded(shared))
     }
 
     /// Format 18: the shared model of `class`, `slot` and phase bin `bin` learns `v`.
@@ -200,14 +197,18 @@ impl Models {
         }
     }
 
+    /// The index in `m` of the context of a value of `class` in `slot` after a value of
+    /// class `prev`, with neighbour bin `nbr`.
+    fn context(&self, class: usize, slot: usize, prev: usize, nbr: usize) -> usize {
+        let p = if slot == 0 { 0 } else { prev_bin(prev) };
+        ((class * 3 + slot) * 3 + p) * self.bins + nbr
+    }
+
     fn get(&mut self, class: usize, axis: usize, prev: usize, nbr: usize) -> &mut IntModel {
-        let p = if axis == 0 { 0 } else { prev_bin(prev) };
-        let i = ((class * 3 + axis) * 3 + p) * self.bins + nbr;
+        let i = self.context(class, axis, prev, nbr);
         if !self.used[i] {
             self.used[i] = true;
-            let mut m = self.parents[class * 3 + axis].clone();
-            m.reseed(SHARED_SEED);
-            self.m[i] = m;
+            self.m[i] = seeded(&self.parents[class * 3 + axis]);
         }
         &mut self.m[i]
     }
@@ -218,6 +219,14 @@ impl Models {
             p.observe(v);
         }
     }
+}
+
+/// A context model's start from its shared model (format 16 on, SPEC.md 10.1): a copy,
+/// reseeded.
+fn seeded(shared: &IntModel) -> IntModel {
+    let mut m = shared.clone();
+    m.reseed(SHARED_SEED);
+    m
 }
 
 fn e_context(level: &Level, act: &[u8], e: usize) -> usize {
@@ -1250,7 +1259,7 @@ fn encode_mode(
             }
         }
         let ph = match (mode, phases, fr) {
-            (_, Some(p), _) => Phased::Axes([p[0][i], p[1][i], p[2][i]]),
+            (_, Some(p), _) => Phased::Axes(phases_at(p, i)),
             (Mode::TangentPhased(t), _, Some(_)) => {
                 Phased::Tangent(TanTerms::new(level, coarse, i, t[i], offset?))
             }
@@ -1369,12 +1378,10 @@ pub fn decode(
     // such a level is synthesised as it is read (see [`Phasing::Cc`]).
     let phasing = phasing.filter(|_| matches!(mode, Mode::Phased));
     let ne = level.ne();
-    let mut edge_phases: Phases = Default::default();
-    if let Some(Phasing::Cc(p)) = &phasing {
-        for (k, ek) in edge_phases.iter_mut().enumerate() {
-            *ek = (0..ne.min(nd)).map(|e| p.predict(&x[k], e).1).collect();
-        }
-    }
+    let edge_phases = match &phasing {
+        Some(Phasing::Cc(p)) => p.phases(x, ne.min(nd)),
+        _ => Phases::default(),
+    };
     for i in 0..nd {
         // What a Catmull-Clark level in mode 6 adds to the detail: its prediction.
         let mut fine = [0i64; 3];
@@ -1397,10 +1404,8 @@ pub fn decode(
         };
         let offset = mode.offset(i, fr);
         let ph = match (&phasing, mode, offset) {
-            (Some(Phasing::Ready(p)), ..) => Phased::Axes([p[0][i], p[1][i], p[2][i]]),
-            (Some(Phasing::Cc(_)), ..) if i < ne => {
-                Phased::Axes([edge_phases[0][i], edge_phases[1][i], edge_phases[2][i]])
-            }
+            (Some(Phasing::Ready(p)), ..) => Phased::Axes(phases_at(p, i)),
+            (Some(Phasing::Cc(_)), ..) if i < ne => Phased::Axes(phases_at(&edge_phases, i)),
             (Some(Phasing::Cc(p)), ..) => {
                 let mut q = [0u8; 3];
                 for k in 0..3 {
@@ -2009,8 +2014,7 @@ mod tests {
             });
             let st = Stencils::new(&level, w);
             let p = Phaser::new(&level, w, &st).unwrap();
-            let phases: Phases =
-                std::array::from_fn(|k| (0..nd).map(|i| p.predict(&fine[k], i).1).collect());
+            let phases = p.phases(&fine, nd);
             let mut x = fine.clone();
             for xk in x.iter_mut() {
                 analyse(&level, w, xk);

@@ -217,10 +217,7 @@ fn code_hierarchy(
             // values (the decoder makes them as it reads the level).
             if canon.poles.is_empty() {
                 if let Some(p) = transform::Phaser::new(level, w, &st) {
-                    let nd = level.ne() + level.nf();
-                    phases[l] = Some(std::array::from_fn(|k| {
-                        (0..nd).map(|i| p.predict(&x[k], i).1).collect()
-                    }));
+                    phases[l] = Some(p.phases(&x, level.ne() + level.nf()));
                 }
             }
             for xs in x.iter_mut() {

@@ -844,6 +844,12 @@ impl<'a> Phaser<'a> {
         }
     }
 
+    /// The phases of details `0..n` on the three axes of `x` (for face points, the
+    /// values must hold the fine edge points).
+    pub fn phases(&self, x: &[Vec<i64>; 3], n: usize) -> crate::levels::Phases {
+        std::array::from_fn(|k| (0..n).map(|i| self.predict(&x[k], i).1).collect())
+    }
+
     /// Detail `i`'s (edge points `0..ne`, then face points) correction and phase on one
     /// axis, from the values `x` (the coarse values and, for a face point, the fine
     /// edge points): the fine value is the detail plus the correction.
