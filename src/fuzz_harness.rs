@@ -110,8 +110,10 @@ pub fn container_parse(data: &[u8]) {
     }
     if let Ok(c) = subwave_container::Container::parse_prefix(data, &limits) {
         for s in &c.sections {
-            let start = s.offset as usize + 8;
+            // The payload sits between the kind and length and the 4-byte CRC.
+            let start = s.offset as usize + s.overhead - 4;
             assert_eq!(&data[start..start + s.payload.len()], s.payload);
+            assert!(s.offset as usize + s.total_len() <= data.len());
         }
     }
 }

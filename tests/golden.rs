@@ -101,6 +101,8 @@ fn frozen_containers_still_decode() {
         ("mixed_cc2.v17.swv", "mixed_cc2.obj"),
         ("prism_sqrt2_5.v18.swv", "prism_sqrt2_5.obj"),
         ("open_cc2.v18.swv", "open_cc2.obj"),
+        ("cube_cc4.v19.swv", "cube_cc4.obj"),
+        ("terrain_grid33.vmap.v19.swv", "terrain_grid33.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

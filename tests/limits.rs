@@ -169,12 +169,15 @@ fn small_containers_stay_within_64_mib_and_one_second() {
         cases.push((format!("{levels} levels over a real base"), c));
     }
     // A section claiming more bytes than there are.
-    let mut long = container(
-        &header([8, 6, 24, 8, 6, 24], 0, 0, 0),
-        &[(SectionKind::BASE, noise(200, 7))],
-    );
-    let at = subwave_container::PREAMBLE_LEN + subwave_container::SECTION_OVERHEAD + 20 + 4;
-    long[at..at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
+    let head = header([8, 6, 24, 8, 6, 24], 0, 0, 0);
+    let mut long = container(&head, &[(SectionKind::BASE, noise(200, 7))]);
+    // The BASE section's length, a two-byte varint (200), becomes 2^32 - 1.
+    let at = subwave_container::PREAMBLE_LEN
+        + head.len()
+        + subwave_container::section_overhead(subwave::FORMAT_VERSION, head.len())
+        + 1;
+    assert_eq!(long[at..at + 2], [0xc8, 0x01]);
+    long.splice(at..at + 2, [0xff, 0xff, 0xff, 0xff, 0x0f]);
     cases.push(("section length 4 GiB".into(), long));
     let mut checked = 0;
     for (name, bytes) in &cases {

@@ -663,7 +663,8 @@ fn encode_with(
         w.section(kind, payload);
         sections.push(SectionInfo {
             kind: kind.to_string(),
-            bytes: payload.len() + subwave_container::SECTION_OVERHEAD,
+            bytes: payload.len()
+                + subwave_container::section_overhead(FORMAT_VERSION, payload.len()),
             mode: level_mode(kind, FORMAT_VERSION, payload),
         });
         Ok(())
@@ -682,7 +683,7 @@ fn encode_with(
     let bytes = w.finish();
     sections.push(SectionInfo {
         kind: SectionKind::END.to_string(),
-        bytes: subwave_container::SECTION_OVERHEAD,
+        bytes: subwave_container::section_overhead(FORMAT_VERSION, 0),
         mode: None,
     });
     Ok(Encoded {

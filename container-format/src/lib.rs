@@ -29,13 +29,36 @@ use std::fmt;
 pub const MAGIC: [u8; 8] = [0x89, b'S', b'W', b'V', b'\r', b'\n', 0x1a, b'\n'];
 
 /// The format version this crate writes and the newest it reads.
-pub const FORMAT_VERSION: u16 = 18;
+pub const FORMAT_VERSION: u16 = 19;
+
+/// From this version a section is framed by a one-byte kind and a varint length
+/// ([`section_overhead`]); before it, by a four-byte kind and a `u32` length.
+pub const COMPACT_VERSION: u16 = 19;
 
 /// Bytes before the first section: magic, version, reserved.
 pub const PREAMBLE_LEN: usize = 12;
 
-/// Bytes a section adds around its payload: kind, length, CRC.
+/// Bytes a section adds around its payload in versions 1 to 18: kind, length, CRC.
 pub const SECTION_OVERHEAD: usize = 12;
+
+/// Longest varint of a compact section's length (lengths are below 2^32).
+const MAX_LENGTH_BYTES: usize = 5;
+
+/// Bytes a section of `payload_len` bytes adds around its payload in format `version`
+/// (SPEC.md 2.2): from version 19 one kind byte, the length's varint bytes and the CRC;
+/// before, [`SECTION_OVERHEAD`].
+pub fn section_overhead(version: u16, payload_len: usize) -> usize {
+    if version < COMPACT_VERSION {
+        return SECTION_OVERHEAD;
+    }
+    let mut n = 1;
+    let mut v = payload_len >> 7;
+    while v > 0 {
+        n += 1;
+        v >>= 7;
+    }
+    1 + n + 4
+}
 
 /// Errors from reading a container. Sorted by who is at fault.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -113,6 +136,32 @@ impl SectionKind {
     pub const ORDER: SectionKind = SectionKind(*b"ORDR");
     /// Marks the end of a complete container.
     pub const END: SectionKind = SectionKind(*b"SEND");
+
+    /// Every kind, with its one-byte code from version 19 on (SPEC.md 2.2).
+    const CODES: [(SectionKind, u8); 6] = [
+        (SectionKind::HEADER, b'H'),
+        (SectionKind::VALUE_MAP, b'V'),
+        (SectionKind::BASE, b'B'),
+        (SectionKind::LEVEL, b'L'),
+        (SectionKind::ORDER, b'O'),
+        (SectionKind::END, b'E'),
+    ];
+
+    /// The one-byte code of a known kind (version 19 on), or `None`.
+    pub fn code(self) -> Option<u8> {
+        Self::CODES
+            .iter()
+            .find(|(k, _)| *k == self)
+            .map(|&(_, c)| c)
+    }
+
+    /// The kind of a one-byte code (version 19 on), or `None` if no kind has it.
+    pub fn from_code(code: u8) -> Option<SectionKind> {
+        Self::CODES
+            .iter()
+            .find(|(_, c)| *c == code)
+            .map(|&(k, _)| k)
+    }
 }
 
 impl fmt::Display for SectionKind {
@@ -143,12 +192,14 @@ pub struct Section<'a> {
     pub offset: u64,
     /// The payload, checksum verified.
     pub payload: &'a [u8],
+    /// Bytes of framing around the payload: kind, length and CRC.
+    pub overhead: usize,
 }
 
 impl Section<'_> {
     /// Bytes the section occupies in the container, overhead included.
     pub fn total_len(&self) -> usize {
-        self.payload.len() + SECTION_OVERHEAD
+        self.payload.len() + self.overhead
     }
 }
 
@@ -230,16 +281,19 @@ impl<'a> Container<'a> {
                 });
             }
             let rest = &bytes[pos..];
-            if rest.len() < 8 {
+            let frame = if version >= COMPACT_VERSION {
+                compact_frame(rest, pos)?
+            } else {
+                legacy_frame(rest)
+            };
+            let Some((kind, len, head)) = frame else {
                 if lenient {
                     break;
                 }
                 return Err(Error::Truncated {
                     what: format!("section header at byte {pos} is cut off"),
                 });
-            }
-            let kind = SectionKind([rest[0], rest[1], rest[2], rest[3]]);
-            let len = u32::from_le_bytes([rest[4], rest[5], rest[6], rest[7]]) as u64;
+            };
             if len > limits.max_section_bytes {
                 return Err(Error::Limit {
                     what: "section length",
@@ -247,8 +301,8 @@ impl<'a> Container<'a> {
                     limit: limits.max_section_bytes,
                 });
             }
-            // len <= u32::MAX, so this cannot overflow u64.
-            let needed = len + SECTION_OVERHEAD as u64;
+            // len < 2^32, so this cannot overflow u64.
+            let needed = len + head as u64 + 4;
             if needed > rest.len() as u64 {
                 if lenient {
                     break;
@@ -256,15 +310,15 @@ impl<'a> Container<'a> {
                 return Err(Error::Truncated {
                     what: format!(
                         "section {kind} at byte {pos} declares {len} payload bytes, only {} remain",
-                        rest.len().saturating_sub(SECTION_OVERHEAD)
+                        rest.len().saturating_sub(head + 4)
                     ),
                 });
             }
             let len = len as usize;
-            let payload = &rest[8..8 + len];
-            let crc_stored =
-                u32::from_le_bytes([rest[8 + len], rest[9 + len], rest[10 + len], rest[11 + len]]);
-            if section_crc(version, &rest[..8 + len]) != crc_stored {
+            let payload = &rest[head..head + len];
+            let c = head + len;
+            let crc_stored = u32::from_le_bytes([rest[c], rest[c + 1], rest[c + 2], rest[c + 3]]);
+            if section_crc(version, &rest[..c]) != crc_stored {
                 return Err(Error::Checksum {
                     kind,
                     offset: pos as u64,
@@ -274,6 +328,7 @@ impl<'a> Container<'a> {
                 kind,
                 offset: pos as u64,
                 payload,
+                overhead: head + 4,
             });
             pos += needed as usize;
             if kind == SectionKind::END {
@@ -301,8 +356,54 @@ impl<'a> Container<'a> {
     }
 }
 
-/// A section's checksum (SPEC.md 2.2): CRC-32 of its kind, length and payload, preceded
-/// from format version 3 on by the version (two bytes, little-endian), so that no bit
+/// A section's kind, payload length and header length in versions 1 to 18: four kind
+/// bytes and a `u32`; `None` if the header is cut off.
+fn legacy_frame(rest: &[u8]) -> Option<(SectionKind, u64, usize)> {
+    let h = rest.get(..8)?;
+    let kind = SectionKind([h[0], h[1], h[2], h[3]]);
+    Some((kind, u32::from_le_bytes([h[4], h[5], h[6], h[7]]) as u64, 8))
+}
+
+/// [`legacy_frame`] from version 19 on: one kind byte and a canonical varint length
+/// below 2^32 (SPEC.md 2.2); `Ok(None)` if the header is cut off, an error if it is
+/// malformed (`pos`: the section's offset).
+fn compact_frame(rest: &[u8], pos: usize) -> Result<Option<(SectionKind, u64, usize)>, Error> {
+    let Some(&code) = rest.first() else {
+        return Ok(None);
+    };
+    let kind = SectionKind::from_code(code).ok_or_else(|| {
+        Error::malformed(pos as u64, format!("unknown section kind byte {code:#04x}"))
+    })?;
+    let mut len = 0u64;
+    for i in 0..MAX_LENGTH_BYTES {
+        let Some(&b) = rest.get(1 + i) else {
+            return Ok(None);
+        };
+        len |= ((b & 0x7f) as u64) << (7 * i);
+        if b & 0x80 == 0 {
+            if i > 0 && b == 0 {
+                return Err(Error::malformed(
+                    pos as u64 + 1,
+                    format!("section {kind}: overlong length varint"),
+                ));
+            }
+            if len > u32::MAX as u64 {
+                return Err(Error::malformed(
+                    pos as u64 + 1,
+                    format!("section {kind}: length {len} is 4 GiB or more"),
+                ));
+            }
+            return Ok(Some((kind, len, 2 + i)));
+        }
+    }
+    Err(Error::malformed(
+        pos as u64 + 1,
+        format!("section {kind}: length varint longer than {MAX_LENGTH_BYTES} bytes"),
+    ))
+}
+
+/// A section's checksum (SPEC.md 2.2): CRC-32 of its kind, length and payload (as
+/// framed in that version), preceded from format version 3 on by the version (two bytes, little-endian), so that no bit
 /// flip in the preamble's version can pass for another readable version.
 pub fn section_crc(version: u16, section: &[u8]) -> u32 {
     let mut h = crc32fast::Hasher::new();
@@ -339,12 +440,15 @@ impl ContainerWriter {
     ///
     /// # Panics
     /// If the payload is 4 GiB or more (no encoder output comes near that; the codec
-    /// checks its inputs against [`Limits`] first).
+    /// checks its inputs against [`Limits`] first), or the kind is not one of
+    /// [`SectionKind`]'s constants.
     pub fn section(&mut self, kind: SectionKind, payload: &[u8]) {
         let len = u32::try_from(payload.len()).expect("section payload under 4 GiB");
         let start = self.out.len();
-        self.out.extend_from_slice(&kind.0);
-        self.out.extend_from_slice(&len.to_le_bytes());
+        self.out.push(kind.code().expect("a known section kind"));
+        let mut length = ByteWriter::new();
+        length.varint(len as u64);
+        self.out.extend_from_slice(&length.out);
         self.out.extend_from_slice(payload);
         let crc = section_crc(FORMAT_VERSION, &self.out[start..]);
         self.out.extend_from_slice(&crc.to_le_bytes());
@@ -402,7 +506,7 @@ mod tests {
     #[test]
     fn prefix_keeps_whole_sections() {
         let b = sample();
-        let cut = PREAMBLE_LEN + SECTION_OVERHEAD + 3 + 5;
+        let cut = PREAMBLE_LEN + section_overhead(FORMAT_VERSION, 3) + 3 + 5;
         let c = Container::parse_prefix(&b[..cut], &Limits::default()).unwrap();
         assert!(!c.complete);
         assert_eq!(c.sections.len(), 1);
@@ -423,8 +527,9 @@ mod tests {
             Container::parse(&x, &Limits::default()),
             Err(Error::NewerVersion { found, .. }) if found == FORMAT_VERSION + 1
         ));
-        let mut x = b.clone();
-        x[PREAMBLE_LEN + 4..PREAMBLE_LEN + 8].copy_from_slice(&u32::MAX.to_le_bytes());
+        // A section declaring 2^32 - 1 payload bytes.
+        let mut x = b[..PREAMBLE_LEN].to_vec();
+        x.extend_from_slice(&[b'B', 0xff, 0xff, 0xff, 0xff, 0x0f, 1, 2, 3]);
         let limits = Limits {
             max_section_bytes: 1 << 20,
             ..Limits::default()
@@ -442,6 +547,97 @@ mod tests {
             Container::parse(&x, &Limits::default()),
             Err(Error::Malformed { .. })
         ));
+    }
+
+    /// A container in the framing of versions 1 to 18: four-byte kinds, `u32` lengths.
+    fn legacy(version: u16, sections: &[(SectionKind, &[u8])]) -> Vec<u8> {
+        let mut out = MAGIC.to_vec();
+        out.extend_from_slice(&version.to_le_bytes());
+        out.extend_from_slice(&[0, 0]);
+        for &(kind, payload) in sections.iter().chain([&(SectionKind::END, &[][..])]) {
+            let start = out.len();
+            out.extend_from_slice(&kind.0);
+            out.extend_from_slice(&(payload.len() as u32).to_le_bytes());
+            out.extend_from_slice(payload);
+            let crc = section_crc(version, &out[start..]);
+            out.extend_from_slice(&crc.to_le_bytes());
+        }
+        out
+    }
+
+    #[test]
+    fn versions_before_19_keep_their_framing() {
+        let payload = [7u8; 130];
+        for version in [1, 2, 3, 18] {
+            let b = legacy(
+                version,
+                &[
+                    (SectionKind::HEADER, &[1, 2]),
+                    (SectionKind::LEVEL, &payload),
+                ],
+            );
+            let c = Container::parse(&b, &Limits::default()).unwrap();
+            assert_eq!(c.version, version);
+            assert_eq!(c.sections.len(), 3);
+            assert_eq!(c.sections[1].payload, &payload[..]);
+            assert_eq!(c.sections[1].total_len(), 130 + SECTION_OVERHEAD);
+            assert_eq!(
+                c.sections[1].offset,
+                (PREAMBLE_LEN + 2 + SECTION_OVERHEAD) as u64
+            );
+            // The compact framing is not read in an older version, nor the reverse.
+            let mut older = sample();
+            older[8..10].copy_from_slice(&version.to_le_bytes());
+            assert!(Container::parse(&older, &Limits::default()).is_err());
+        }
+        let mut newer = legacy(18, &[(SectionKind::HEADER, &[1, 2])]);
+        newer[8..10].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
+        assert!(Container::parse(&newer, &Limits::default()).is_err());
+    }
+
+    #[test]
+    fn compact_sections_take_their_overhead() {
+        for n in [0usize, 1, 127, 128, 16_383, 16_384, 2_097_152] {
+            let mut w = ContainerWriter::new();
+            w.section(SectionKind::LEVEL, &vec![3; n]);
+            let b = w.finish();
+            let c = Container::parse(&b, &Limits::default()).unwrap();
+            let s = &c.sections[0];
+            assert_eq!(s.payload.len(), n);
+            assert_eq!(s.total_len(), n + section_overhead(FORMAT_VERSION, n));
+            assert_eq!(b.len(), PREAMBLE_LEN + s.total_len() + 6, "{n}");
+        }
+        assert_eq!(section_overhead(FORMAT_VERSION, 127), 6);
+        assert_eq!(section_overhead(FORMAT_VERSION, 128), 7);
+        assert_eq!(section_overhead(18, 128), SECTION_OVERHEAD);
+    }
+
+    #[test]
+    fn malformed_compact_headers() {
+        let pre = &sample()[..PREAMBLE_LEN];
+        let parse = |tail: &[u8]| {
+            let mut b = pre.to_vec();
+            b.extend_from_slice(tail);
+            Container::parse(&b, &Limits::default()).map(|c| c.sections.len())
+        };
+        let malformed = |r: Result<usize, Error>, what: &str| match r {
+            Err(Error::Malformed { what: w, .. }) => assert!(w.contains(what), "{w}"),
+            other => panic!("{what}: {other:?}"),
+        };
+        malformed(parse(&[b'X', 0, 0, 0, 0, 0]), "unknown section kind");
+        malformed(parse(&[b'h', 0, 0, 0, 0, 0]), "unknown section kind");
+        malformed(parse(&[b'L', 0x80, 0x00, 0, 0, 0, 0]), "overlong");
+        malformed(parse(&[b'L', 0x80, 0x80, 0x80, 0x80, 0x10, 0]), "4 GiB");
+        malformed(
+            parse(&[b'L', 0x80, 0x80, 0x80, 0x80, 0x80, 0]),
+            "longer than",
+        );
+        // Cut off inside the length: truncated, and a prefix ends before it.
+        assert!(matches!(parse(&[b'L', 0x80]), Err(Error::Truncated { .. })));
+        let mut b = pre.to_vec();
+        b.extend_from_slice(&[b'L', 0x80]);
+        let c = Container::parse_prefix(&b, &Limits::default()).unwrap();
+        assert!(c.sections.is_empty() && !c.complete);
     }
 
     proptest::proptest! {
