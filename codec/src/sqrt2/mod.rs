@@ -434,18 +434,16 @@ pub fn predictions_with(
     let mut out: [Vec<i64>; 3] = std::array::from_fn(|_| Vec::with_capacity(nf));
     let mut ph: Option<Phases> = phases.then(|| std::array::from_fn(|_| Vec::with_capacity(nf)));
     for f in 0..nf {
+        let (p, q) = match ph {
+            Some(_) => face_prediction::<true>(&level.coarse, &nb, f, x, small),
+            None => face_prediction::<false>(&level.coarse, &nb, f, x, small),
+        };
+        for (o, p) in out.iter_mut().zip(p) {
+            o.push(p);
+        }
         if let Some(ph) = &mut ph {
-            let (p, q) = face_prediction::<true>(&level.coarse, &nb, f, x, small);
-            for (o, p) in out.iter_mut().zip(p) {
-                o.push(p);
-            }
             for (o, q) in ph.iter_mut().zip(q) {
                 o.push(q);
-            }
-        } else {
-            let (p, _) = face_prediction::<false>(&level.coarse, &nb, f, x, small);
-            for (o, p) in out.iter_mut().zip(p) {
-                o.push(p);
             }
         }
     }
