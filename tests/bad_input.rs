@@ -383,7 +383,7 @@ fn modes_a_level_cannot_have_are_corrupt() {
         enc.header.transform,
         subwave::Transform::Wavelet(subwave::Wavelet::Bicubic)
     );
-    for (mode, want) in [(2, "tangent"), (7, "tangent"), (6, "phase"), (8, "unknown")] {
+    for (mode, want) in [(2, "tangent"), (7, "tangent"), (6, "phase"), (9, "unknown")] {
         let b = with_level(&enc.bytes, 0, |p| {
             assert!(p[0] <= 1);
             p[0] = mode;
@@ -400,12 +400,17 @@ fn modes_a_level_cannot_have_are_corrupt() {
 
 #[test]
 fn every_bit_flip_inside_a_phased_level_is_an_error_or_a_valid_mesh() {
-    // The frozen containers with a level in mode 6 (Catmull-Clark, interp4) and mode 7
-    // (sqrt(2)): every bit of those levels' payloads flipped, checksums made valid, so
-    // the phases, shifts and their bounds meet hostile values.
+    // The frozen containers with a level in mode 6 (Catmull-Clark, interp4), mode 7
+    // (sqrt(2)) and mode 8 (its weights included): every bit of those levels' payloads
+    // flipped, checksums made valid, so the phases, shifts, corrections and their bounds
+    // meet hostile values.
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/golden/");
     let mut tried = 0;
-    for (file, mode) in [("open_cc2.v18.swv", 6u8), ("prism_sqrt2_5.v18.swv", 7)] {
+    for (file, mode) in [
+        ("open_cc2.v18.swv", 6u8),
+        ("prism_sqrt2_5.v18.swv", 7),
+        ("terrain_grid33.interp4.v20.swv", 8),
+    ] {
         let b = std::fs::read(format!("{dir}{file}")).unwrap();
         let payloads = level_payloads(&b);
         let level = payloads

@@ -103,6 +103,7 @@ fn frozen_containers_still_decode() {
         ("open_cc2.v18.swv", "open_cc2.obj"),
         ("cube_cc4.v19.swv", "cube_cc4.obj"),
         ("terrain_grid33.vmap.v19.swv", "terrain_grid33.obj"),
+        ("terrain_grid33.interp4.v20.swv", "terrain_grid33.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

@@ -77,6 +77,160 @@ pub fn phase(r: i128, d: i128) -> u8 {
     ((r < 0) as u8) << 2 | bin
 }
 
+/// From format 20 a Catmull-Clark level may code its details in mode 8: plain axes,
+/// each value less a weighted sum of the level's earlier details nearby (SPEC.md 10.8).
+pub const CORRECTED_VERSION: u16 = 20;
+
+/// Mode 8's weights are in 32nds, at most 2 in magnitude.
+const CORR_DIV: i128 = 32;
+const CORR_MAX: i8 = 64;
+/// Mode 8's features per detail (SPEC.md 10.8).
+const NFEAT: usize = 2;
+
+/// Mode 8's weights: per class (edge points, face points) and axis, those of the
+/// features of [`corr_features`].
+type Weights = [[[i8; NFEAT]; 3]; 2];
+
+/// Mode 8's features of detail `i` of a Catmull-Clark level, per axis, from the details
+/// `x[k][nv + j]` of the details `j < i` (SPEC.md 10.8). An edge point: the sum of its
+/// ends' earlier edges that share no face with it (the edge's continuation on a regular
+/// grid), and of the earlier edges opposite it in its quadrilateral faces. A face point: the sum of the earlier faces
+/// beside its edges, and of its own edge points.
+fn corr_features(level: &Level, x: &[Vec<i64>; 3], i: usize) -> [[i128; 3]; NFEAT] {
+    use crate::hierarchy::NONE;
+    let nv = level.nv;
+    let mut f = [[0i128; 3]; NFEAT];
+    let mut add = |which: usize, j: usize| {
+        for k in 0..3 {
+            f[which][k] += x[k][nv + j] as i128;
+        }
+    };
+    let ne = level.ne();
+    if i < ne {
+        let faces = level.edge_faces[i];
+        let beside = |g: u32| {
+            let gf = level.edge_faces[g as usize];
+            gf.iter().any(|&h| h != NONE && faces.contains(&h))
+        };
+        for v in level.edges[i] {
+            for &g in level.v_edges(v as usize) {
+                if (g as usize) < i && !beside(g) {
+                    add(0, g as usize);
+                }
+            }
+        }
+        for h in faces {
+            if h == NONE {
+                continue;
+            }
+            let fe = level.f_edges(h as usize);
+            if fe.len() == 4 {
+                if let Some(p) = fe.iter().position(|&g| g as usize == i) {
+                    let g = fe[(p + 2) % 4] as usize;
+                    if g < i {
+                        add(1, g);
+                    }
+                }
+            }
+        }
+    } else {
+        let fi = i - ne;
+        for &g in level.f_edges(fi) {
+            for h in level.edge_faces[g as usize] {
+                if h != NONE && (h as usize) < fi {
+                    add(0, ne + h as usize);
+                }
+            }
+            add(1, g as usize);
+        }
+    }
+    f
+}
+
+/// Mode 8's correction of detail `i`: per axis `[sum w_j F_j / 32]`; `None` beyond the
+/// bound of a detail.
+fn correction(level: &Level, x: &[Vec<i64>; 3], w: &Weights, i: usize) -> Option<[i64; 3]> {
+    let class = (i >= level.ne()) as usize;
+    let f = corr_features(level, x, i);
+    let mut c = [0i64; 3];
+    for k in 0..3 {
+        let wk = w[class][k];
+        if wk == [0; NFEAT] {
+            continue;
+        }
+        let n: i128 = (0..NFEAT).map(|j| wk[j] as i128 * f[j][k]).sum();
+        let q = (2 * n + CORR_DIV).div_euclid(2 * CORR_DIV);
+        c[k] = i64::try_from(q).ok().filter(|q| q.abs() <= MAX_LIFTED)?;
+    }
+    Some(c)
+}
+
+/// The encoder's mode 8 weights for a level whose details are `x[k][nv..]`: per class and
+/// axis, the least-squares fit of the details by their features, in 32nds; `None` when
+/// every weight rounds to 0.
+fn corr_weights(level: &Level, x: &[Vec<i64>; 3]) -> Option<Weights> {
+    let nd = level.ne() + level.nf();
+    // Per class and axis: the normal equations, F^T F and F^T y.
+    let mut a = [[[[0f64; NFEAT]; NFEAT]; 3]; 2];
+    let mut b = [[[0f64; NFEAT]; 3]; 2];
+    for i in 0..nd {
+        let class = (i >= level.ne()) as usize;
+        let f = corr_features(level, x, i);
+        for k in 0..3 {
+            let y = x[k][level.nv + i] as f64;
+            for p in 0..NFEAT {
+                let fp = f[p][k] as f64;
+                b[class][k][p] += fp * y;
+                for q in 0..NFEAT {
+                    a[class][k][p][q] += fp * f[q][k] as f64;
+                }
+            }
+        }
+    }
+    let mut w: Weights = [[[0; NFEAT]; 3]; 2];
+    for c in 0..2 {
+        for k in 0..3 {
+            if let Some(sol) = solve(a[c][k], b[c][k]) {
+                w[c][k] = sol.map(|v| {
+                    (v * CORR_DIV as f64)
+                        .round()
+                        .clamp(-(CORR_MAX as f64), CORR_MAX as f64) as i8
+                });
+            }
+        }
+    }
+    (w != [[[0; NFEAT]; 3]; 2]).then_some(w)
+}
+
+/// The least-squares solution of `a w = b` by Gaussian elimination, with a small ridge
+/// that keeps a feature that is (nearly) always 0 out of the fit.
+fn solve(mut a: [[f64; NFEAT]; NFEAT], mut b: [f64; NFEAT]) -> Option<[f64; NFEAT]> {
+    for (p, row) in a.iter_mut().enumerate() {
+        row[p] = row[p] * 1.0001 + 1.0;
+    }
+    for p in 0..NFEAT {
+        let piv = (p..NFEAT).max_by(|&i, &j| a[i][p].abs().total_cmp(&a[j][p].abs()))?;
+        a.swap(p, piv);
+        b.swap(p, piv);
+        if a[p][p].abs() < 1e-12 || !a[p][p].is_finite() {
+            return None;
+        }
+        for r in p + 1..NFEAT {
+            let m = a[r][p] / a[p][p];
+            for q in p..NFEAT {
+                a[r][q] -= m * a[p][q];
+            }
+            b[r] -= m * b[p];
+        }
+    }
+    let mut w = [0f64; NFEAT];
+    for p in (0..NFEAT).rev() {
+        let s: f64 = (p + 1..NFEAT).map(|q| a[p][q] * w[q]).sum();
+        w[p] = (b[p] - s) / a[p][p];
+    }
+    w.iter().all(|v| v.is_finite()).then_some(w)
+}
+
 /// Format 16 on: context models start from their class and slot's shared model.
 pub const SHARED_START_VERSION: u16 = 16;
 const SHARED_SEED: u32 = 256;
@@ -1026,6 +1180,11 @@ pub fn encode(
     if phases.is_some() && version >= PHASE_VERSION {
         modes.push(Mode::Phased);
     }
+    if !sqrt2 && version >= CORRECTED_VERSION && open(8) {
+        if let Some(w) = corr_weights(level, x) {
+            modes.push(Mode::Corrected(w));
+        }
+    }
     let rotated = version >= ROTATED_VERSION && models.rotated && (open(4) || open(5));
     let frames = if rotated {
         modes.push(Mode::Rotated);
@@ -1136,6 +1295,9 @@ enum Mode<'a> {
     /// Mode 2 with the values after the first shifted by their expected parts and
     /// phased (format 18 on).
     TangentPhased(&'a [[i64; 3]]),
+    /// x, y, z less weighted sums of the level's earlier details nearby (format 20 on,
+    /// Catmull-Clark levels).
+    Corrected(Weights),
 }
 
 /// Test helper: the phase (SPEC.md 10.6) of an integer detail `d` whose unrounded
@@ -1169,6 +1331,16 @@ impl Mode<'_> {
     fn bytes(self) -> Vec<u8> {
         match self {
             Mode::Shifted(a, b) => vec![5, a << 4 | b],
+            Mode::Corrected(w) => {
+                let mut out = vec![8, 0];
+                for (j, p) in w.iter().flatten().enumerate() {
+                    if *p != [0; NFEAT] {
+                        out[1] |= 1 << j;
+                        out.extend(p.map(|v| v as u8));
+                    }
+                }
+                out
+            }
             _ => vec![self.byte()],
         }
     }
@@ -1182,11 +1354,12 @@ impl Mode<'_> {
             Mode::Shifted(..) => 5,
             Mode::Phased => 6,
             Mode::TangentPhased(_) => 7,
+            Mode::Corrected(_) => 8,
         }
     }
 
     fn framed(self) -> bool {
-        !matches!(self, Mode::Plain | Mode::Phased)
+        !matches!(self, Mode::Plain | Mode::Phased | Mode::Corrected(_))
     }
 
     /// What is subtracted from detail `i` before coding it in frame `fr`.
@@ -1241,7 +1414,10 @@ fn encode_mode(
         } else {
             None
         };
-        let offset = mode.offset(i, fr);
+        let offset = match mode {
+            Mode::Corrected(w) => Some(correction(level, x, &w, i)?),
+            _ => mode.offset(i, fr),
+        };
         if let Some(c) = offset {
             d = std::array::from_fn(|k| d[k] - c[k]);
             if d.iter().any(|v| v.abs() > MAX_LIFTED) {
@@ -1352,6 +1528,25 @@ pub fn decode(
                 }
                 _ => return Err(Error::corrupt("LEVL", "bad shift weights")),
             },
+            Some((8, rest)) if version >= CORRECTED_VERSION && !sqrt2 => {
+                let bad = || Error::corrupt("LEVL", "bad correction weights");
+                let (&mask, mut rest) = rest.split_first().ok_or_else(bad)?;
+                if mask >> 6 != 0 {
+                    return Err(bad());
+                }
+                let mut w: Weights = [[[0; NFEAT]; 3]; 2];
+                for (j, p) in w.iter_mut().flatten().enumerate() {
+                    if mask >> j & 1 == 1 {
+                        let (c, r) = rest.split_first_chunk::<NFEAT>().ok_or_else(bad)?;
+                        *p = c.map(|v| v as i8);
+                        if p.iter().any(|v| v.abs() > CORR_MAX) {
+                            return Err(bad());
+                        }
+                        rest = r;
+                    }
+                }
+                (Mode::Corrected(w), rest)
+            }
             Some((m, _)) => return Err(Error::corrupt("LEVL", format!("unknown level mode {m}"))),
             None => return Err(Error::corrupt("LEVL", "empty level section")),
         }
@@ -1402,7 +1597,13 @@ pub fn decode(
             }
             _ => None,
         };
-        let offset = mode.offset(i, fr);
+        let offset = match mode {
+            Mode::Corrected(w) => Some(
+                correction(level, x, &w, i)
+                    .ok_or_else(|| Error::corrupt("LEVL", "detail out of range"))?,
+            ),
+            _ => mode.offset(i, fr),
+        };
         let ph = match (&phasing, mode, offset) {
             (Some(Phasing::Ready(p)), ..) => Phased::Axes(phases_at(p, i)),
             (Some(Phasing::Cc(_)), ..) if i < ne => Phased::Axes(phases_at(&edge_phases, i)),
@@ -2139,5 +2340,200 @@ mod tests {
         // Mode 5 without its weights.
         let err = decode_fresh(&[5], &level, false, &coarse, 17, None, None).unwrap_err();
         assert!(err.to_string().contains("shift weights"), "{err}");
+    }
+
+    /// A level over a regular `n` x `n` grid of quads, with each coarse vertex's (x, y).
+    fn grid_level(n: u32) -> (Level, Vec<[i64; 2]>) {
+        use crate::hierarchy::Topo;
+        let mut t = Topo::new((n * n) as usize);
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let v = j * n + i;
+                t.push(&[v, v + 1, v + n + 1, v + n]);
+            }
+        }
+        let xy = (0..n * n)
+            .map(|v| [(v % n) as i64, (v / n) as i64])
+            .collect();
+        (Level::new(&t).unwrap(), xy)
+    }
+
+    /// Mode 8's features on a grid, checked against the geometry: an edge point's first
+    /// feature is the earlier edge point one step along its line, its second the earlier
+    /// parallel ones one step across; a face point's first the earlier face points one
+    /// step away, its second its four edge points.
+    #[test]
+    fn corrected_features_follow_the_grid() {
+        let (level, xy) = grid_level(5);
+        let (nv, ne, nd) = (level.nv, level.ne(), level.ne() + level.nf());
+        // Twice each detail's position (edge midpoints and face centres are then integer).
+        let at: Vec<[i64; 2]> = (0..nd)
+            .map(|i| {
+                let corners: Vec<u32> = if i < ne {
+                    level.edges[i].to_vec()
+                } else {
+                    level.coarse.face(i - ne).to_vec()
+                };
+                let k = corners.len() as i64;
+                let s = corners.iter().fold([0, 0], |s, &v| {
+                    [s[0] + xy[v as usize][0], s[1] + xy[v as usize][1]]
+                });
+                [2 * s[0] / k, 2 * s[1] / k]
+            })
+            .collect();
+        let x: [Vec<i64>; 3] = std::array::from_fn(|k| {
+            let mut v = vec![0; nv];
+            v.extend(pseudo(70 + k as u64, nd, 20));
+            v
+        });
+        for i in 0..nd {
+            let mut want = [[0i128; 3]; 2];
+            for j in 0..i {
+                let d = [at[j][0] - at[i][0], at[j][1] - at[i][1]];
+                let feature = if i < ne && j < ne {
+                    // Along the edge (its direction: where its midpoint's coordinate is
+                    // odd), or across it.
+                    let along = if at[i][0] % 2 != 0 { 0 } else { 1 };
+                    if d[1 - along] == 0 && d[along].abs() == 2 {
+                        Some(0)
+                    } else if d[along] == 0 && d[1 - along].abs() == 2 {
+                        Some(1)
+                    } else {
+                        None
+                    }
+                } else if i >= ne && j >= ne {
+                    (d[0].abs() + d[1].abs() == 2).then_some(0)
+                } else if i >= ne {
+                    (d[0].abs() + d[1].abs() == 1).then_some(1)
+                } else {
+                    None
+                };
+                if let Some(f) = feature {
+                    for k in 0..3 {
+                        want[f][k] += x[k][nv + j] as i128;
+                    }
+                }
+            }
+            assert_eq!(corr_features(&level, &x, i), want, "detail {i}");
+        }
+    }
+
+    /// Details that follow their earlier neighbours: the encoder fits weights near the
+    /// generating ones and codes the level in mode 8, smaller than in mode 0; the level
+    /// decodes exactly.
+    #[test]
+    fn corrected_mode_round_trips_and_pays_where_details_correlate() {
+        let (level, _) = grid_level(17);
+        let (nv, nd) = (level.nv, level.ne() + level.nf());
+        let mut x: [Vec<i64>; 3] = std::array::from_fn(|_| vec![0; nv + nd]);
+        let noise: [Vec<i64>; 3] = std::array::from_fn(|k| pseudo(80 + k as u64, nd, 6));
+        let gen: Weights = [[[-16, 8], [0, 0], [-12, 6]], [[-4, 8], [0, 0], [-6, 4]]];
+        for i in 0..nd {
+            let c = correction(&level, &x, &gen, i).unwrap();
+            for k in 0..3 {
+                x[k][nv + i] = noise[k][i] + c[k];
+            }
+        }
+        let fit = corr_weights(&level, &x).unwrap();
+        for (c, class) in fit.iter().enumerate() {
+            for (k, w) in class.iter().enumerate() {
+                for f in 0..NFEAT {
+                    let want = gen[c][k][f] as i32;
+                    assert!(
+                        (w[f] as i32 - want).abs() <= 4,
+                        "{c} {k} {f}: {w:?} for {want}"
+                    );
+                }
+            }
+        }
+        let coarse: [Vec<i64>; 3] = std::array::from_fn(|_| vec![0; nv]);
+        let mut act = vec![UNKNOWN; nv];
+        let mut models = LevelModels::new(CORRECTED_VERSION);
+        let bytes = encode_fresh(&level, &x, &coarse, &mut act, &mut models);
+        assert_eq!(bytes[0], 8);
+        let plain = forced(&level, false, &x, &coarse, None, Mode::Plain);
+        assert!(bytes.len() < plain.len(), "{} {}", bytes.len(), plain.len());
+        let y = decode_fresh(
+            &bytes,
+            &level,
+            false,
+            &coarse,
+            CORRECTED_VERSION,
+            None,
+            None,
+        );
+        assert_eq!(y.unwrap(), x);
+        // With the generating weights too.
+        let bytes = forced(&level, false, &x, &coarse, None, Mode::Corrected(gen));
+        let y = decode_fresh(
+            &bytes,
+            &level,
+            false,
+            &coarse,
+            CORRECTED_VERSION,
+            None,
+            None,
+        );
+        assert_eq!(y.unwrap(), x);
+        // Format 19 does not try it.
+        let mut models = LevelModels::new(CORRECTED_VERSION - 1);
+        let mut act = vec![UNKNOWN; nv];
+        assert_ne!(
+            encode_fresh(&level, &x, &coarse, &mut act, &mut models)[0],
+            8
+        );
+    }
+
+    #[test]
+    fn corrected_mode_needs_format_20_valid_weights_and_a_catmull_clark_level() {
+        let (level, _) = grid_level(5);
+        let (nv, nd) = (level.nv, level.ne() + level.nf());
+        let x: [Vec<i64>; 3] = std::array::from_fn(|k| {
+            let mut v = vec![0; nv];
+            v.extend(pseudo(90 + k as u64, nd, 8));
+            v
+        });
+        let coarse: [Vec<i64>; 3] = std::array::from_fn(|_| vec![0; nv]);
+        let w: Weights = [[[0, 0], [0, 0], [-10, 5]], [[64, -64], [0, 0], [0, 0]]];
+        let bytes = forced(&level, false, &x, &coarse, None, Mode::Corrected(w));
+        assert_eq!(&bytes[..6], &[8, 0b1100, 246, 5, 64, 192]);
+        let body = &bytes[6..];
+        let run = |version: u16, head: &[u8]| {
+            let mut payload = head.to_vec();
+            payload.extend_from_slice(body);
+            decode_fresh(&payload, &level, false, &coarse, version, None, None)
+        };
+        assert_eq!(run(20, &bytes[..6]).unwrap(), x);
+        for (version, head) in [
+            (19, &bytes[..6]),
+            (20, &[8, 0b1000100, 246, 5, 64, 192][..]),
+            (20, &[8, 0b1100, 246, 5, 65, 192]),
+            (20, &[8, 0b1100, 246, 5, 64, 191]),
+        ] {
+            let err = run(version, head).unwrap_err().to_string();
+            assert!(err.contains("LEVL"), "{version} {head:?}: {err}");
+        }
+        // Weights cut short.
+        for cut in 1..6 {
+            let err = decode_fresh(&bytes[..cut], &level, false, &coarse, 20, None, None);
+            assert!(err.unwrap_err().to_string().contains("LEVL"), "{cut}");
+        }
+        // A sqrt(2) level has no mode 8.
+        let t = prism_with_triangles();
+        let sq = Level::new(&t).unwrap();
+        let sx: [Vec<i64>; 3] = std::array::from_fn(|_| vec![0; sq.nv + sq.nf()]);
+        let sc: [Vec<i64>; 3] = std::array::from_fn(|_| vec![0; sq.nv]);
+        let mut payload = vec![8, 0];
+        payload.extend(forced(&sq, true, &sx, &sc, None, Mode::Plain).split_off(1));
+        let err = decode_fresh(&payload, &sq, true, &sc, 20, None, None).unwrap_err();
+        assert!(err.to_string().contains("unknown level mode 8"), "{err}");
+        // A correction beyond a detail's bound is corrupt, not a panic or a wrap.
+        let mut big = x.clone();
+        for k in 0..3 {
+            big[k][nv] = MAX_LIFTED;
+        }
+        let w: Weights = [[[64, 64]; 3]; 2];
+        let over = (0..nd).any(|i| correction(&level, &big, &w, i).is_none());
+        assert!(over);
     }
 }
