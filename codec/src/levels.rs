@@ -2453,28 +2453,12 @@ mod tests {
         assert_eq!(bytes[0], 8);
         let plain = forced(&level, false, &x, &coarse, None, Mode::Plain);
         assert!(bytes.len() < plain.len(), "{} {}", bytes.len(), plain.len());
-        let y = decode_fresh(
-            &bytes,
-            &level,
-            false,
-            &coarse,
-            CORRECTED_VERSION,
-            None,
-            None,
-        );
-        assert_eq!(y.unwrap(), x);
-        // With the generating weights too.
-        let bytes = forced(&level, false, &x, &coarse, None, Mode::Corrected(gen));
-        let y = decode_fresh(
-            &bytes,
-            &level,
-            false,
-            &coarse,
-            CORRECTED_VERSION,
-            None,
-            None,
-        );
-        assert_eq!(y.unwrap(), x);
+        // As the encoder chose, and with the generating weights.
+        let gen_bytes = forced(&level, false, &x, &coarse, None, Mode::Corrected(gen));
+        for b in [bytes, gen_bytes] {
+            let y = decode_fresh(&b, &level, false, &coarse, CORRECTED_VERSION, None, None);
+            assert_eq!(y.unwrap(), x);
+        }
         // Format 19 does not try it.
         let mut models = LevelModels::new(CORRECTED_VERSION - 1);
         let mut act = vec![UNKNOWN; nv];
