@@ -372,8 +372,8 @@ fn level_payloads(bytes: &[u8]) -> Vec<Vec<u8>> {
 
 #[test]
 fn modes_a_level_cannot_have_are_corrupt() {
-    // Modes 2 and 7 (SPEC.md 10.3, 10.7) exist for sqrt(2) levels only, mode 6 (10.6)
-    // for levels with phases: a bicubic Catmull-Clark level claims each of them,
+    // Modes 2 and 7 (SPEC.md 10.3, 10.7) exist for sqrt(2) levels only, modes 6 and 9
+    // (10.6, 10.9) for levels with phases: a bicubic Catmull-Clark level claims each of them,
     // checksums kept valid.
     let obj = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/mixed_cc2.obj")).unwrap();
     let m = subwave::load(&obj, None).unwrap();
@@ -383,7 +383,13 @@ fn modes_a_level_cannot_have_are_corrupt() {
         enc.header.transform,
         subwave::Transform::Wavelet(subwave::Wavelet::Bicubic)
     );
-    for (mode, want) in [(2, "tangent"), (7, "tangent"), (6, "phase"), (9, "unknown")] {
+    for (mode, want) in [
+        (2, "tangent"),
+        (7, "tangent"),
+        (6, "phase"),
+        (9, "phase"),
+        (10, "unknown"),
+    ] {
         let b = with_level(&enc.bytes, 0, |p| {
             assert!(p[0] <= 1);
             p[0] = mode;
@@ -398,10 +404,52 @@ fn modes_a_level_cannot_have_are_corrupt() {
     }
 }
 
+/// `corpus/terrain_grid33.obj` at 16 bits with the lazy transform, in its own order: the
+/// input, and a container with a level in mode 9 (SPEC.md 10.9).
+fn grid_in_mode_9() -> (subwave::Loaded, Vec<u8>) {
+    let obj = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/corpus/terrain_grid33.obj"
+    ))
+    .unwrap();
+    let m = subwave::load(&obj, Some(16)).unwrap();
+    let enc = subwave::encode_to_vec(
+        &m.mesh,
+        &m.quantization,
+        &EncodeOptions {
+            keep_order: true,
+            transform: subwave::TransformChoice::Fixed(subwave::Wavelet::Lazy),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    (m, enc.bytes)
+}
+
+#[test]
+fn corrected_phased_levels_round_trip() {
+    let (m, bytes) = grid_in_mode_9();
+    assert!(level_payloads(&bytes).iter().any(|p| p[0] == 9));
+    let dec = subwave::decode_slice(&bytes).unwrap();
+    assert!(dec.mesh == m.mesh);
+    // Mode 9 read as mode 8 (the same weights, no phases) or as mode 6 (phases, no
+    // weights): an error or another mesh, never this one.
+    let level = level_payloads(&bytes)
+        .iter()
+        .position(|p| p[0] == 9)
+        .unwrap();
+    for other in [8u8, 6] {
+        let x = with_level(&bytes, level, |p| p[0] = other);
+        if let Ok(d) = subwave::decode_slice(&x) {
+            assert!(d.mesh != m.mesh, "mode 9 read as {other}");
+        }
+    }
+}
+
 #[test]
 fn every_bit_flip_inside_a_phased_level_is_an_error_or_a_valid_mesh() {
     // The frozen containers with a level in mode 6 (Catmull-Clark, interp4), mode 7
-    // (sqrt(2)) and mode 8 (its weights included): every bit of those levels' payloads
+    // (sqrt(2)), mode 8 (its weights included) and mode 9: every bit of those levels' payloads
     // flipped, checksums made valid, so the phases, shifts, corrections and their bounds
     // meet hostile values.
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/golden/");
@@ -410,6 +458,7 @@ fn every_bit_flip_inside_a_phased_level_is_an_error_or_a_valid_mesh() {
         ("open_cc2.v18.swv", 6u8),
         ("prism_sqrt2_5.v18.swv", 7),
         ("terrain_grid33.interp4.v20.swv", 8),
+        ("terrain_grid33.lazy.q16.v21.swv", 9),
     ] {
         let b = std::fs::read(format!("{dir}{file}")).unwrap();
         let payloads = level_payloads(&b);

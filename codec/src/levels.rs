@@ -81,6 +81,10 @@ pub fn phase(r: i128, d: i128) -> u8 {
 /// each value less a weighted sum of the level's earlier details nearby (SPEC.md 10.8).
 pub const CORRECTED_VERSION: u16 = 20;
 
+/// From format 21 a level open to modes 6 and 8 may code its details in mode 9: mode 8's
+/// corrected values, phased as mode 6's (SPEC.md 10.9).
+pub const CORRECTED_PHASED_VERSION: u16 = 21;
+
 /// Mode 8's weights are in 32nds, at most 2 in magnitude.
 const CORR_DIV: i128 = 32;
 const CORR_MAX: i8 = 64;
@@ -163,6 +167,27 @@ fn correction(level: &Level, x: &[Vec<i64>; 3], w: &Weights, i: usize) -> Option
         c[k] = i64::try_from(q).ok().filter(|q| q.abs() <= MAX_LIFTED)?;
     }
     Some(c)
+}
+
+/// Modes 8 and 9's weights after the mode byte (SPEC.md 10.8), and the stream after them.
+fn read_weights(rest: &[u8]) -> Result<(Weights, &[u8])> {
+    let bad = || Error::corrupt("LEVL", "bad correction weights");
+    let (&mask, mut rest) = rest.split_first().ok_or_else(bad)?;
+    if mask >> 6 != 0 {
+        return Err(bad());
+    }
+    let mut w: Weights = [[[0; NFEAT]; 3]; 2];
+    for (j, p) in w.iter_mut().flatten().enumerate() {
+        if mask >> j & 1 == 1 {
+            let (c, r) = rest.split_first_chunk::<NFEAT>().ok_or_else(bad)?;
+            *p = c.map(|v| v as i8);
+            if p.iter().any(|v| v.abs() > CORR_MAX) {
+                return Err(bad());
+            }
+            rest = r;
+        }
+    }
+    Ok((w, rest))
 }
 
 /// The encoder's mode 8 weights for a level whose details are `x[k][nv..]`: per class and
@@ -1180,9 +1205,12 @@ pub fn encode(
     if phases.is_some() && version >= PHASE_VERSION {
         modes.push(Mode::Phased);
     }
-    if !sqrt2 && version >= CORRECTED_VERSION && open(8) {
+    if !sqrt2 && version >= CORRECTED_VERSION && (open(8) || open(9)) {
         if let Some(w) = corr_weights(level, x) {
             modes.push(Mode::Corrected(w));
+            if phases.is_some() && version >= CORRECTED_PHASED_VERSION {
+                modes.push(Mode::CorrectedPhased(w));
+            }
         }
     }
     let rotated = version >= ROTATED_VERSION && models.rotated && (open(4) || open(5));
@@ -1298,6 +1326,8 @@ enum Mode<'a> {
     /// x, y, z less weighted sums of the level's earlier details nearby (format 20 on,
     /// Catmull-Clark levels).
     Corrected(Weights),
+    /// Mode 8's values, phased as mode 6's (format 21 on).
+    CorrectedPhased(Weights),
 }
 
 /// Test helper: the phase (SPEC.md 10.6) of an integer detail `d` whose unrounded
@@ -1331,8 +1361,8 @@ impl Mode<'_> {
     fn bytes(self) -> Vec<u8> {
         match self {
             Mode::Shifted(a, b) => vec![5, a << 4 | b],
-            Mode::Corrected(w) => {
-                let mut out = vec![8, 0];
+            Mode::Corrected(w) | Mode::CorrectedPhased(w) => {
+                let mut out = vec![self.byte(), 0];
                 for (j, p) in w.iter().flatten().enumerate() {
                     if *p != [0; NFEAT] {
                         out[1] |= 1 << j;
@@ -1355,11 +1385,15 @@ impl Mode<'_> {
             Mode::Phased => 6,
             Mode::TangentPhased(_) => 7,
             Mode::Corrected(_) => 8,
+            Mode::CorrectedPhased(_) => 9,
         }
     }
 
     fn framed(self) -> bool {
-        !matches!(self, Mode::Plain | Mode::Phased | Mode::Corrected(_))
+        !matches!(
+            self,
+            Mode::Plain | Mode::Phased | Mode::Corrected(_) | Mode::CorrectedPhased(_)
+        )
     }
 
     /// What is subtracted from detail `i` before coding it in frame `fr`.
@@ -1394,8 +1428,9 @@ fn encode_mode(
         return None;
     }
     let framed = mode.framed() && !rotated;
-    let phases = phases.filter(|_| matches!(mode, Mode::Phased));
-    if matches!(mode, Mode::Phased) && !phases.is_some_and(|p| p.iter().all(|p| p.len() == nd)) {
+    let phased = matches!(mode, Mode::Phased | Mode::CorrectedPhased(_));
+    let phases = phases.filter(|_| phased);
+    if phased && !phases.is_some_and(|p| p.iter().all(|p| p.len() == nd)) {
         return None;
     }
     act.resize(nv + nd, 0);
@@ -1415,7 +1450,7 @@ fn encode_mode(
             None
         };
         let offset = match mode {
-            Mode::Corrected(w) => Some(correction(level, x, &w, i)?),
+            Mode::Corrected(w) | Mode::CorrectedPhased(w) => Some(correction(level, x, &w, i)?),
             _ => mode.offset(i, fr),
         };
         if let Some(c) = offset {
@@ -1529,24 +1564,21 @@ pub fn decode(
                 _ => return Err(Error::corrupt("LEVL", "bad shift weights")),
             },
             Some((8, rest)) if version >= CORRECTED_VERSION && !sqrt2 => {
-                let bad = || Error::corrupt("LEVL", "bad correction weights");
-                let (&mask, mut rest) = rest.split_first().ok_or_else(bad)?;
-                if mask >> 6 != 0 {
-                    return Err(bad());
-                }
-                let mut w: Weights = [[[0; NFEAT]; 3]; 2];
-                for (j, p) in w.iter_mut().flatten().enumerate() {
-                    if mask >> j & 1 == 1 {
-                        let (c, r) = rest.split_first_chunk::<NFEAT>().ok_or_else(bad)?;
-                        *p = c.map(|v| v as i8);
-                        if p.iter().any(|v| v.abs() > CORR_MAX) {
-                            return Err(bad());
-                        }
-                        rest = r;
-                    }
-                }
+                let (w, rest) = read_weights(rest)?;
                 (Mode::Corrected(w), rest)
             }
+            Some((9, rest)) if version >= CORRECTED_PHASED_VERSION && !sqrt2 => match &phasing {
+                Some(Phasing::Cc(_)) => {
+                    let (w, rest) = read_weights(rest)?;
+                    (Mode::CorrectedPhased(w), rest)
+                }
+                _ => {
+                    return Err(Error::corrupt(
+                        "LEVL",
+                        "phase mode on a level without prediction phases",
+                    ))
+                }
+            },
             Some((m, _)) => return Err(Error::corrupt("LEVL", format!("unknown level mode {m}"))),
             None => return Err(Error::corrupt("LEVL", "empty level section")),
         }
@@ -1568,20 +1600,52 @@ pub fn decode(
     for xs in x.iter_mut() {
         xs.resize(nv + nd, 0);
     }
-    // Mode 6: the phases, given, or a Catmull-Clark level's made as it is read: the edge
-    // points' from the coarse values now, the face points' from the fine edge points, so
-    // such a level is synthesised as it is read (see [`Phasing::Cc`]).
-    let phasing = phasing.filter(|_| matches!(mode, Mode::Phased));
+    // Modes 6 and 9: the phases, given, or a Catmull-Clark level's made as it is read:
+    // the edge points' from the coarse values now, the face points' from the fine edge
+    // points, so such a level is synthesised as it is read (see [`Phasing::Cc`]). Mode 9
+    // makes every face point's phases once its edge points are read, then reads the face
+    // points with the edge points' details in place (its corrections read details), and
+    // synthesises the level after, from the predictions it kept.
+    let corr_phased = matches!(mode, Mode::CorrectedPhased(_));
+    let phasing = phasing.filter(|_| matches!(mode, Mode::Phased) || corr_phased);
     let ne = level.ne();
-    let edge_phases = match &phasing {
-        Some(Phasing::Cc(p)) => p.phases(x, ne.min(nd)),
-        _ => Phases::default(),
-    };
+    // Mode 9: every detail's prediction on each axis (the edge points' now, the face
+    // points' once the edge points are read), and its phase.
+    let mut preds: [Vec<i64>; 3] = Default::default();
+    let mut cc_phases = Phases::default();
+    if let Some(Phasing::Cc(p)) = &phasing {
+        if corr_phased {
+            for k in 0..3 {
+                (preds[k], cc_phases[k]) = (0..ne.min(nd)).map(|e| p.predict(&x[k], e)).unzip();
+            }
+        } else {
+            cc_phases = p.phases(x, ne.min(nd));
+        }
+    }
     for i in 0..nd {
         // What a Catmull-Clark level in mode 6 adds to the detail: its prediction.
         let mut fine = [0i64; 3];
-        if let (Some(Phasing::Cc(p)), true) = (&phasing, i == ne) {
-            synthesise_edges(p, level, x);
+        match &phasing {
+            Some(Phasing::Cc(p)) if i == ne && corr_phased => {
+                // The face points' predictions from the fine edge points; then the edge
+                // points' details again.
+                for k in 0..3 {
+                    let xk = &mut x[k];
+                    for e in 0..ne {
+                        xk[nv + e] = xk[nv + e].wrapping_add(preds[k][e]);
+                    }
+                    for f in ne..nd {
+                        let (c, q) = p.predict(xk, f);
+                        preds[k].push(c);
+                        cc_phases[k].push(q);
+                    }
+                    for e in 0..ne {
+                        xk[nv + e] = xk[nv + e].wrapping_sub(preds[k][e]);
+                    }
+                }
+            }
+            Some(Phasing::Cc(p)) if i == ne => synthesise_edges(p, level, x),
+            _ => {}
         }
         let (class, bins, fd) = contexts(level, act, mags, sqrt2, m.bins, i);
         let fr = if framed {
@@ -1598,7 +1662,7 @@ pub fn decode(
             _ => None,
         };
         let offset = match mode {
-            Mode::Corrected(w) => Some(
+            Mode::Corrected(w) | Mode::CorrectedPhased(w) => Some(
                 correction(level, x, &w, i)
                     .ok_or_else(|| Error::corrupt("LEVL", "detail out of range"))?,
             ),
@@ -1606,7 +1670,9 @@ pub fn decode(
         };
         let ph = match (&phasing, mode, offset) {
             (Some(Phasing::Ready(p)), ..) => Phased::Axes(phases_at(p, i)),
-            (Some(Phasing::Cc(_)), ..) if i < ne => Phased::Axes(phases_at(&edge_phases, i)),
+            (Some(Phasing::Cc(_)), ..) if i < ne || corr_phased => {
+                Phased::Axes(phases_at(&cc_phases, i))
+            }
             (Some(Phasing::Cc(p)), ..) => {
                 let mut q = [0u8; 3];
                 for k in 0..3 {
@@ -1640,8 +1706,17 @@ pub fn decode(
         }
         act[nv + i] = activity(r);
     }
-    if let (Some(Phasing::Cc(p)), true) = (&phasing, nd <= ne) {
-        synthesise_edges(p, level, x);
+    match &phasing {
+        Some(Phasing::Cc(_)) if corr_phased => {
+            // Mode 9: the details plus their predictions.
+            for (xk, pk) in x.iter_mut().zip(&preds) {
+                for (v, &c) in xk[nv..].iter_mut().zip(pk) {
+                    *v = v.wrapping_add(c);
+                }
+            }
+        }
+        Some(Phasing::Cc(p)) if nd <= ne => synthesise_edges(p, level, x),
+        _ => {}
     }
     models.last = Some(m);
     Ok(())
@@ -2200,27 +2275,40 @@ mod tests {
     /// the fine values) are the decoder's (the edge points' from the coarse values, the
     /// face points' once the edge points are read), so the fine values come back
     /// exactly; a mode 6 level without phases is corrupt.
+    /// Fine values of `level`, small details (of `bits` bits) on a coarse shape,
+    /// synthesised with `w`; their analysis; its coarse values.
+    fn synthesised(
+        level: &Level,
+        w: crate::transform::Wavelet,
+        seed: u64,
+        bits: u32,
+    ) -> [[Vec<i64>; 3]; 3] {
+        use crate::transform::{analyse, synthesise};
+        let (nv, nd) = (level.nv, level.ne() + level.nf());
+        let fine: [Vec<i64>; 3] = std::array::from_fn(|k| {
+            let mut v = pseudo(seed + k as u64, nv, 12);
+            v.extend(pseudo(seed + 10 + k as u64, nd, bits));
+            synthesise(level, w, &mut v);
+            v
+        });
+        let mut x = fine.clone();
+        for xk in x.iter_mut() {
+            analyse(level, w, xk);
+        }
+        let coarse = std::array::from_fn(|k| x[k][..nv].to_vec());
+        [fine, x, coarse]
+    }
+
     #[test]
     fn phase_mode_round_trips_on_catmull_clark_levels() {
-        use crate::transform::{analyse, synthesise, Phaser, Stencils, Wavelet};
+        use crate::transform::{Phaser, Stencils, Wavelet};
         let level = refined(2);
-        let (nv, nd) = (level.nv, level.ne() + level.nf());
+        let nd = level.ne() + level.nf();
         for w in [Wavelet::Lazy, Wavelet::Interp4] {
-            // Fine values: small details on a coarse shape, synthesised.
-            let fine: [Vec<i64>; 3] = std::array::from_fn(|k| {
-                let mut v = pseudo(40 + k as u64, nv, 12);
-                v.extend(pseudo(50 + k as u64, nd, 2));
-                synthesise(&level, w, &mut v);
-                v
-            });
+            let [fine, x, coarse] = synthesised(&level, w, 40, 2);
             let st = Stencils::new(&level, w);
             let p = Phaser::new(&level, w, &st).unwrap();
             let phases = p.phases(&fine, nd);
-            let mut x = fine.clone();
-            for xk in x.iter_mut() {
-                analyse(&level, w, xk);
-            }
-            let coarse: [Vec<i64>; 3] = std::array::from_fn(|k| x[k][..nv].to_vec());
             let bytes = forced(&level, false, &x, &coarse, Some(&phases), Mode::Phased);
             let ph = Some(Phasing::Cc(&p));
             let y = decode_fresh(&bytes, &level, false, &coarse, PHASE_VERSION, None, ph);
@@ -2519,5 +2607,48 @@ mod tests {
         let w: Weights = [[[64, 64]; 3]; 2];
         let over = (0..nd).any(|i| correction(&level, &big, &w, i).is_none());
         assert!(over);
+    }
+
+    /// Mode 9 on lazy and interp4 levels: read with the decoder's phases, the level
+    /// comes back synthesised; without phases, before format 21, or read as mode 8 it
+    /// does not.
+    #[test]
+    fn corrected_phased_mode_round_trips_on_catmull_clark_levels() {
+        use crate::transform::{Phaser, Stencils, Wavelet};
+        let (level, _) = grid_level(9);
+        let nd = level.ne() + level.nf();
+        for w in [Wavelet::Lazy, Wavelet::Interp4] {
+            let [fine, x, coarse] = synthesised(&level, w, 60, 3);
+            let st = Stencils::new(&level, w);
+            let p = Phaser::new(&level, w, &st).unwrap();
+            let phases = p.phases(&fine, nd);
+            let wts: Weights = [[[-12, 6], [5, -3], [64, -64]], [[-4, 9], [0, 0], [-64, 64]]];
+            let mode = Mode::CorrectedPhased(wts);
+            let bytes = forced(&level, false, &x, &coarse, Some(&phases), mode);
+            assert_eq!(bytes[0], 9);
+            let v = CORRECTED_PHASED_VERSION;
+            let y = decode_fresh(
+                &bytes,
+                &level,
+                false,
+                &coarse,
+                v,
+                None,
+                Some(Phasing::Cc(&p)),
+            );
+            assert_eq!(y.unwrap(), fine, "{w:?}");
+            let err = decode_fresh(&bytes, &level, false, &coarse, v, None, None).unwrap_err();
+            assert!(err.to_string().contains("phase"), "{w:?}: {err}");
+            let old = decode_fresh(&bytes, &level, false, &coarse, v - 1, None, None);
+            assert!(old
+                .unwrap_err()
+                .to_string()
+                .contains("unknown level mode 9"));
+            // The same weights unphased (mode 8) is another stream.
+            let plain = forced(&level, false, &x, &coarse, None, Mode::Corrected(wts));
+            assert_ne!(plain[1..], bytes[1..]);
+            let y = decode_fresh(&plain, &level, false, &coarse, v, None, None);
+            assert_eq!(y.unwrap(), x, "{w:?}");
+        }
     }
 }

@@ -995,8 +995,9 @@ fn synthesise_levels(
         }
         // (Made before the details are decoded: while the coarse values alone are in
         // memory, which is smaller than making them after.)
-        // Mode 6 reads the predictions' phases (SPEC.md 10.6).
-        let phased = c.version >= levels::PHASE_VERSION && payload.first() == Some(&6);
+        // Modes 6 and 9 read the predictions' phases (SPEC.md 10.6, 10.9).
+        let phased = (c.version >= levels::PHASE_VERSION && payload.first() == Some(&6))
+            || (c.version >= levels::CORRECTED_PHASED_VERSION && payload.first() == Some(&9));
         let (predictions, phases) = match lazy {
             true => {
                 let (p, ph) = sqrt2::predictions_with(&level, &x, phased);
@@ -1033,7 +1034,7 @@ fn synthesise_levels(
             targets.as_deref(),
             phasing,
         )?;
-        // A Catmull-Clark level in mode 6 is synthesised as it is read.
+        // A Catmull-Clark level in mode 6 or 9 is synthesised as it is read.
         let synthesised = phaser.is_some();
         drop(phaser);
         if l + 1 == upto as usize {
