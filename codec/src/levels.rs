@@ -95,11 +95,12 @@ const NFEAT: usize = 2;
 /// features of [`corr_features`].
 type Weights = [[[i8; NFEAT]; 3]; 2];
 
-/// Mode 8's features of detail `i` of a Catmull-Clark level, per axis, from the details
-/// `x[k][nv + j]` of the details `j < i` (SPEC.md 10.8). An edge point: the sum of its
-/// ends' earlier edges that share no face with it (the edge's continuation on a regular
-/// grid), and of the earlier edges opposite it in its quadrilateral faces. A face point: the sum of the earlier faces
-/// beside its edges, and of its own edge points.
+/// Mode 8's (and 9's) features of detail `i` of a Catmull-Clark level, per axis, from
+/// the details `x[k][nv + j]` of the details `j < i` (SPEC.md 10.8). An edge point: the
+/// sum of its ends' earlier edges that share no face with it (the edge's continuation on
+/// a regular grid), and of the earlier edges opposite it in its quadrilateral faces. A
+/// face point: the sum of the earlier faces beside its edges, and of its own edge
+/// points.
 fn corr_features(level: &Level, x: &[Vec<i64>; 3], i: usize) -> [[i128; 3]; NFEAT] {
     use crate::hierarchy::NONE;
     let nv = level.nv;
