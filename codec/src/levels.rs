@@ -170,6 +170,23 @@ fn correction(level: &Level, x: &[Vec<i64>; 3], w: &Weights, i: usize) -> Option
     Some(c)
 }
 
+/// Modes 8 and 9's corrections of every detail of the level whose details are
+/// `x[k][nv..]`; `None` if one is beyond the bound of a detail.
+fn corrections(level: &Level, x: &[Vec<i64>; 3], w: &Weights) -> Option<Vec<[i64; 3]>> {
+    (0..level.ne() + level.nf())
+        .map(|i| correction(level, x, w, i))
+        .collect()
+}
+
+/// What [`encode`] makes once per level for the modes that read it.
+#[derive(Default)]
+struct Prepared {
+    /// The rotated modes' frames (normals included), per detail.
+    frames: Vec<Option<RotFrame>>,
+    /// Modes 8 and 9's corrections, per detail (from the level's one set of weights).
+    corrections: Vec<[i64; 3]>,
+}
+
 /// Modes 8 and 9's weights after the mode byte (SPEC.md 10.8), and the stream after them.
 fn read_weights(rest: &[u8]) -> Result<(Weights, &[u8])> {
     let bad = || Error::corrupt("LEVL", "bad correction weights");
@@ -1176,7 +1193,7 @@ pub fn encode(
             sqrt2,
             x,
             coarse,
-            &[],
+            &Prepared::default(),
             None,
             act,
             &mut mags,
@@ -1206,26 +1223,26 @@ pub fn encode(
     if phases.is_some() && version >= PHASE_VERSION {
         modes.push(Mode::Phased);
     }
+    let mut prep = Prepared::default();
     if !sqrt2 && version >= CORRECTED_VERSION && (open(8) || open(9)) {
-        if let Some(w) = corr_weights(level, x) {
+        let made = corr_weights(level, x).and_then(|w| Some((w, corrections(level, x, &w)?)));
+        if let Some((w, c)) = made {
             modes.push(Mode::Corrected(w));
             if phases.is_some() && version >= CORRECTED_PHASED_VERSION {
                 modes.push(Mode::CorrectedPhased(w));
             }
+            prep.corrections = c;
         }
     }
     let rotated = version >= ROTATED_VERSION && models.rotated && (open(4) || open(5));
-    let frames = if rotated {
+    if rotated {
         modes.push(Mode::Rotated);
-        let frames = rot_frames(level, coarse, sqrt2);
-        match shift_weights(level, x, &frames) {
+        prep.frames = rot_frames(level, coarse, sqrt2);
+        match shift_weights(level, x, &prep.frames) {
             (0, 0) => {}
             (a, b) => modes.push(Mode::Shifted(a, b)),
         }
-        frames
-    } else {
-        Vec::new()
-    };
+    }
     if modes.iter().any(|m| open(m.byte())) {
         modes.retain(|m| open(m.byte()));
     }
@@ -1263,7 +1280,7 @@ pub fn encode(
         let mut mg = models.mags.clone();
         let mut m = start.clone();
         let Some(body) = encode_mode(
-            level, sqrt2, x, coarse, &frames, phases, &mut a, &mut mg, mode, &mut m, room,
+            level, sqrt2, x, coarse, &prep, phases, &mut a, &mut mg, mode, &mut m, room,
         ) else {
             continue;
         };
@@ -1412,7 +1429,7 @@ fn encode_mode(
     sqrt2: bool,
     x: &[Vec<i64>; 3],
     coarse: &[Vec<i64>; 3],
-    frames: &[Option<RotFrame>],
+    prep: &Prepared,
     phases: Option<&Phases>,
     act: &mut Vec<u8>,
     mags: &mut Vec<[u8; 3]>,
@@ -1422,10 +1439,12 @@ fn encode_mode(
 ) -> Option<Vec<u8>> {
     let mut enc = Encoder::new();
     let (nv, nd) = (level.nv, details(level, sqrt2));
-    // The rotated modes take their frames (normals included) from `frames`, made once
-    // per level; the normal-frame modes compute the normals here.
+    // The rotated modes take their frames (normals included), modes 8 and 9 their
+    // corrections, from `prep`, made once per level; the normal-frame modes compute the
+    // normals here.
     let rotated = matches!(mode, Mode::Rotated | Mode::Shifted(..));
-    if rotated && frames.len() != nd {
+    let corrected = matches!(mode, Mode::Corrected(_) | Mode::CorrectedPhased(_));
+    if (rotated && prep.frames.len() != nd) || (corrected && prep.corrections.len() != nd) {
         return None;
     }
     let framed = mode.framed() && !rotated;
@@ -1450,9 +1469,9 @@ fn encode_mode(
         } else {
             None
         };
-        let offset = match mode {
-            Mode::Corrected(w) | Mode::CorrectedPhased(w) => Some(correction(level, x, &w, i)?),
-            _ => mode.offset(i, fr),
+        let offset = match corrected {
+            true => Some(prep.corrections[i]),
+            false => mode.offset(i, fr),
         };
         if let Some(c) = offset {
             d = std::array::from_fn(|k| d[k] - c[k]);
@@ -1460,7 +1479,12 @@ fn encode_mode(
                 return None;
             }
         }
-        if let Some(f) = frames.get(i).and_then(Option::as_ref).filter(|_| rotated) {
+        if let Some(f) = prep
+            .frames
+            .get(i)
+            .and_then(Option::as_ref)
+            .filter(|_| rotated)
+        {
             let (r, pred) = (f.rot.forward(d), f.pred(mode));
             if r.iter().any(|v| v.abs() > MAX_LIFTED) {
                 return None;
@@ -2051,7 +2075,10 @@ mod tests {
         x: &[Vec<i64>; 3],
         mode: Mode<'_>,
     ) -> Option<Vec<u8>> {
-        let frames = rot_frames(level, coarse, false);
+        let prep = Prepared {
+            frames: rot_frames(level, coarse, false),
+            ..Default::default()
+        };
         let mut m = Models::new(ROTATED_VERSION);
         let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
         encode_mode(
@@ -2059,7 +2086,7 @@ mod tests {
             false,
             x,
             coarse,
-            &frames,
+            &prep,
             None,
             &mut act,
             &mut mags,
@@ -2202,12 +2229,20 @@ mod tests {
     ) -> Vec<u8> {
         let mut m = Models::new(PHASE_VERSION);
         let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
+        let corrections = match mode {
+            Mode::Corrected(w) | Mode::CorrectedPhased(w) => corrections(level, x, &w).unwrap(),
+            _ => Vec::new(),
+        };
+        let prep = Prepared {
+            corrections,
+            ..Default::default()
+        };
         let body = encode_mode(
             level,
             sqrt2,
             x,
             coarse,
-            &[],
+            &prep,
             phases,
             &mut act,
             &mut mags,
@@ -2390,13 +2425,16 @@ mod tests {
             // Plain and framed coded in full, then each refused under its own size.
             for mode in [Mode::Plain, Mode::Framed] {
                 let full = body_in_mode(&level, &coarse, &x, mode).unwrap();
-                let frames = rot_frames(&level, &coarse, false);
+                let prep = Prepared {
+                    frames: rot_frames(&level, &coarse, false),
+                    ..Default::default()
+                };
                 let run = |limit: usize| {
                     let mut m = Models::new(ROTATED_VERSION);
                     let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
                     encode_mode(
-                        &level, false, &x, &coarse, &frames, None, &mut act, &mut mags, mode,
-                        &mut m, limit,
+                        &level, false, &x, &coarse, &prep, None, &mut act, &mut mags, mode, &mut m,
+                        limit,
                     )
                 };
                 assert_eq!(run(full.len()).as_ref(), Some(&full));
