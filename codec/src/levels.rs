@@ -1549,38 +1549,25 @@ pub fn decode(
             format!("{} bytes cannot hold {} details", payload.len(), nd),
         ));
     }
+    let no_targets = || Error::corrupt("LEVL", "tangent mode on a level without tangent targets");
+    let no_phases = || Error::corrupt("LEVL", "phase mode on a level without prediction phases");
     let (mode, payload) = if version >= 3 {
         match payload.split_first() {
             Some((0, rest)) => (Mode::Plain, rest),
             Some((1, rest)) => (Mode::Framed, rest),
             Some((2, rest)) if version >= 7 => match targets {
                 Some(t) if t.len() == nd => (Mode::Tangent(t), rest),
-                _ => {
-                    return Err(Error::corrupt(
-                        "LEVL",
-                        "tangent mode on a level without tangent targets",
-                    ))
-                }
+                _ => return Err(no_targets()),
             },
             Some((7, rest)) if version >= PHASE_VERSION => match targets {
                 Some(t) if t.len() == nd => (Mode::TangentPhased(t), rest),
-                _ => {
-                    return Err(Error::corrupt(
-                        "LEVL",
-                        "tangent mode on a level without tangent targets",
-                    ))
-                }
+                _ => return Err(no_targets()),
             },
             Some((4, rest)) if version >= ROTATED_VERSION => (Mode::Rotated, rest),
             Some((6, rest)) if version >= PHASE_VERSION => match &phasing {
                 Some(Phasing::Ready(p)) if p.iter().all(|p| p.len() == nd) => (Mode::Phased, rest),
                 Some(Phasing::Cc(_)) if !sqrt2 => (Mode::Phased, rest),
-                _ => {
-                    return Err(Error::corrupt(
-                        "LEVL",
-                        "phase mode on a level without prediction phases",
-                    ))
-                }
+                _ => return Err(no_phases()),
             },
             Some((5, rest)) if version >= ROTATED_VERSION => match rest.split_first() {
                 Some((&w, rest)) if w >> 4 <= 8 && w & 15 <= 8 => {
@@ -1597,12 +1584,7 @@ pub fn decode(
                     let (w, rest) = read_weights(rest)?;
                     (Mode::CorrectedPhased(w), rest)
                 }
-                _ => {
-                    return Err(Error::corrupt(
-                        "LEVL",
-                        "phase mode on a level without prediction phases",
-                    ))
-                }
+                _ => return Err(no_phases()),
             },
             Some((m, _)) => return Err(Error::corrupt("LEVL", format!("unknown level mode {m}"))),
             None => return Err(Error::corrupt("LEVL", "empty level section")),
@@ -2307,10 +2289,6 @@ mod tests {
         }
     }
 
-    /// Mode 6 on Catmull-Clark levels of lazy and interp4: the encoder's phases (from
-    /// the fine values) are the decoder's (the edge points' from the coarse values, the
-    /// face points' once the edge points are read), so the fine values come back
-    /// exactly; a mode 6 level without phases is corrupt.
     /// Fine values of `level`, small details (of `bits` bits) on a coarse shape,
     /// synthesised with `w`; their analysis; its coarse values.
     fn synthesised(
@@ -2335,6 +2313,10 @@ mod tests {
         [fine, x, coarse]
     }
 
+    /// Mode 6 on Catmull-Clark levels of lazy and interp4: the encoder's phases (from
+    /// the fine values) are the decoder's (the edge points' from the coarse values, the
+    /// face points' once the edge points are read), so the fine values come back
+    /// exactly; a mode 6 level without phases is corrupt.
     #[test]
     fn phase_mode_round_trips_on_catmull_clark_levels() {
         use crate::transform::{Phaser, Stencils, Wavelet};
