@@ -404,15 +404,15 @@ fn modes_a_level_cannot_have_are_corrupt() {
     }
 }
 
-/// `corpus/terrain_grid33.obj` at 16 bits with the lazy transform, in its own order: the
-/// input, and a container with a level in mode 9 (SPEC.md 10.9).
-fn grid_in_mode_9() -> (subwave::Loaded, Vec<u8>) {
+/// `corpus/subdivided_open_cc3.obj` at 12 bits with the lazy transform, in its own order:
+/// the input, and a container with a level in mode 9 (SPEC.md 10.9), unbinned (10.1).
+fn mesh_in_mode_9() -> (subwave::Loaded, Vec<u8>) {
     let obj = std::fs::read(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/corpus/terrain_grid33.obj"
+        "/corpus/subdivided_open_cc3.obj"
     ))
     .unwrap();
-    let m = subwave::load(&obj, Some(16)).unwrap();
+    let m = subwave::load(&obj, Some(12)).unwrap();
     let enc = subwave::encode_to_vec(
         &m.mesh,
         &m.quantization,
@@ -428,20 +428,21 @@ fn grid_in_mode_9() -> (subwave::Loaded, Vec<u8>) {
 
 #[test]
 fn corrected_phased_levels_round_trip() {
-    let (m, bytes) = grid_in_mode_9();
-    assert!(level_payloads(&bytes).iter().any(|p| p[0] == 9));
+    let (m, bytes) = mesh_in_mode_9();
+    // (Format 22: the mode byte's top bit is the unbinned flag, SPEC.md 10.1.)
+    assert!(level_payloads(&bytes).iter().any(|p| p[0] == 0x89));
     let dec = subwave::decode_slice(&bytes).unwrap();
     assert!(dec.mesh == m.mesh);
-    // Mode 9 read as mode 8 (the same weights, no phases) or as mode 6 (phases, no
-    // weights): an error or another mesh, never this one.
     let level = level_payloads(&bytes)
         .iter()
-        .position(|p| p[0] == 9)
+        .position(|p| p[0] == 0x89)
         .unwrap();
-    for other in [8u8, 6] {
+    // Binned (0x09), or read as mode 8 (the same weights, no phases) or as mode 6
+    // (phases, no weights), binned or not: an error or another mesh, never this one.
+    for other in [0x09u8, 0x88, 0x86, 0x08, 0x06] {
         let x = with_level(&bytes, level, |p| p[0] = other);
         if let Ok(d) = subwave::decode_slice(&x) {
-            assert!(d.mesh != m.mesh, "mode 9 read as {other}");
+            assert!(d.mesh != m.mesh, "mode 9 read as {other:#x}");
         }
     }
 }
@@ -449,9 +450,9 @@ fn corrected_phased_levels_round_trip() {
 #[test]
 fn every_bit_flip_inside_a_phased_level_is_an_error_or_a_valid_mesh() {
     // The frozen containers with a level in mode 6 (Catmull-Clark, interp4), mode 7
-    // (sqrt(2)), mode 8 (its weights included) and mode 9: every bit of those levels' payloads
-    // flipped, checksums made valid, so the phases, shifts, corrections and their bounds
-    // meet hostile values.
+    // (sqrt(2)), mode 8 (its weights included), mode 9, and mode 9 unbinned (format 22):
+    // every bit of those levels' payloads flipped, checksums made valid, so the phases,
+    // shifts, corrections and their bounds meet hostile values.
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/golden/");
     let mut tried = 0;
     for (file, mode) in [
@@ -459,6 +460,7 @@ fn every_bit_flip_inside_a_phased_level_is_an_error_or_a_valid_mesh() {
         ("prism_sqrt2_5.v18.swv", 7),
         ("terrain_grid33.interp4.v20.swv", 8),
         ("terrain_grid33.lazy.q16.v21.swv", 9),
+        ("subdivided_open_cc3.lazy.q12.v22.swv", 0x89),
     ] {
         let b = std::fs::read(format!("{dir}{file}")).unwrap();
         let payloads = level_payloads(&b);

@@ -105,6 +105,10 @@ fn frozen_containers_still_decode() {
         ("terrain_grid33.vmap.v19.swv", "terrain_grid33.obj"),
         ("terrain_grid33.interp4.v20.swv", "terrain_grid33.obj"),
         ("terrain_grid33.lazy.q16.v21.swv", "terrain_grid33.obj"),
+        (
+            "subdivided_open_cc3.lazy.q12.v22.swv",
+            "subdivided_open_cc3.obj",
+        ),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);
@@ -114,8 +118,13 @@ fn frozen_containers_still_decode() {
                 .join(obj),
         )
         .unwrap();
-        // A ".q16." container holds the mesh on Draco's 16-bit grid: it decodes to that.
-        let bits = swv.contains(".q16.").then_some(16);
+        // A ".q16." (".q12.") container holds the mesh on Draco's 16-bit (12-bit) grid:
+        // it decodes to that.
+        let bits = if swv.contains(".q16.") {
+            Some(16)
+        } else {
+            swv.contains(".q12.").then_some(12)
+        };
         let m = subwave::load(&source, bits).unwrap();
         if !path.exists() && std::env::var_os("SUBWAVE_BLESS").is_some() {
             // A ".flat." container is coded without levels (the flat path), a ".disc."

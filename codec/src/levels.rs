@@ -85,6 +85,32 @@ pub const CORRECTED_VERSION: u16 = 20;
 /// corrected values, phased as mode 6's (SPEC.md 10.9).
 pub const CORRECTED_PHASED_VERSION: u16 = 21;
 
+/// From format 22 a level's mode byte may have its top bit set: the level is *unbinned*,
+/// every value coded with the neighbourhood bin of a detail without neighbours (SPEC.md
+/// 10.1), for levels whose details hardly depend on their neighbours' sizes.
+pub const UNBINNED_VERSION: u16 = 22;
+/// The mode byte's unbinned flag (format 22 on).
+const UNBINNED: u8 = 0x80;
+/// The neighbour bin of an unbinned level's values: they are coded with the shared
+/// model of their class and slot (and phase bin) itself.
+const SHARED_BIN: usize = usize::MAX;
+
+/// A LEVL payload's mode (SPEC.md 10.1): its first byte, without format 22's unbinned
+/// flag; `None` for an empty payload or before format 3.
+pub fn mode_of(version: u16, payload: &[u8]) -> Option<u8> {
+    let &b = payload.first().filter(|_| version >= 3)?;
+    Some(if version >= UNBINNED_VERSION {
+        b & !UNBINNED
+    } else {
+        b
+    })
+}
+
+/// Whether a LEVL payload is unbinned (format 22 on, SPEC.md 10.1).
+pub fn unbinned(version: u16, payload: &[u8]) -> bool {
+    version >= UNBINNED_VERSION && payload.first().is_some_and(|b| b & UNBINNED != 0)
+}
+
 /// Mode 8's weights are in 32nds, at most 2 in magnitude.
 const CORR_DIV: i128 = 32;
 const CORR_MAX: i8 = 64;
@@ -305,6 +331,9 @@ pub struct LevelModels {
     pub only: Option<std::vec::IntoIter<u8>>,
     /// The mode the encoder chose for the previous level (not part of the format).
     prev_mode: Option<u8>,
+    /// Whether the previous level was coded in a phased mode (6, 7 or 9): from format
+    /// 22 only such a level hands its phased models on (SPEC.md 10.6).
+    last_phased: bool,
 }
 
 impl LevelModels {
@@ -317,7 +346,19 @@ impl LevelModels {
             rotated: true,
             only: None,
             prev_mode: None,
+            last_phased: false,
         }
+    }
+
+    /// From format 22 a phased level after one that was not starts its phased models
+    /// afresh, from the shared models as they are then (SPEC.md 10.6): `start`, the
+    /// models from [`Self::start`], made ready for a level in `mode`.
+    fn ready(&self, mut start: Models, mode: Mode<'_>) -> Models {
+        if self.version >= UNBINNED_VERSION && mode.phased() && !self.last_phased {
+            start.ph.clear();
+            start.ph_parents.clear();
+        }
+        start
     }
 
     fn start(&self) -> Models {
@@ -379,8 +420,12 @@ impl Models {
                 .map(|j| seeded(&self.parents[j / PHASE_BINS]))
                 .collect();
         }
+        let j = (class * 3 + slot) * PHASE_BINS + bin;
+        if nbr == SHARED_BIN {
+            return &mut self.ph_parents[j];
+        }
         let i = self.context(class, slot, prev, nbr) * PHASE_BINS + bin;
-        let shared = &self.ph_parents[(class * 3 + slot) * PHASE_BINS + bin];
+        let shared = &self.ph_parents[j];
         self.ph[i].get_or_insert_with(|| seeded(shared))
     }
 
@@ -402,6 +447,9 @@ impl Models {
     }
 
     fn get(&mut self, class: usize, axis: usize, prev: usize, nbr: usize) -> &mut IntModel {
+        if nbr == SHARED_BIN {
+            return &mut self.parents[class * 3 + axis];
+        }
         let i = self.context(class, axis, prev, nbr);
         if !self.used[i] {
             self.used[i] = true;
@@ -410,12 +458,47 @@ impl Models {
         &mut self.m[i]
     }
 
+    /// The model a value in context `c` is coded with (SPEC.md 10.1, 10.6): its context
+    /// model, or in an unbinned level its shared model.
+    fn model(&mut self, c: Ctx) -> &mut IntModel {
+        let nbr = if c.unbinned { SHARED_BIN } else { c.nbr };
+        match c.bin {
+            Some(b) => self.get_phased(c.class, c.slot, c.prev, nbr, b),
+            None => self.get(c.class, c.slot, c.prev, nbr),
+        }
+    }
+
+    /// After `v` was coded with [`Self::model`]: in a binned level its shared model
+    /// learns it, in an unbinned one its context model.
+    fn learn(&mut self, c: Ctx, v: i64) {
+        match (c.unbinned, c.bin) {
+            (true, Some(b)) => self
+                .get_phased(c.class, c.slot, c.prev, c.nbr, b)
+                .observe(v),
+            (true, None) => self.get(c.class, c.slot, c.prev, c.nbr).observe(v),
+            (false, Some(b)) => self.observe_phased(c.class, c.slot, b, v),
+            (false, None) => self.observe(c.class, c.slot, v),
+        }
+    }
+
     /// Format 16: the shared model of `class` and `slot` learns `v`.
     fn observe(&mut self, class: usize, slot: usize, v: i64) {
         if let Some(p) = self.parents.get_mut(class * 3 + slot) {
             p.observe(v);
         }
     }
+}
+
+/// A coded value's context: class, slot, the previous value's class, neighbour bin,
+/// phase bin (modes 6, 7 and 9) and whether its level is unbinned (format 22).
+#[derive(Clone, Copy)]
+struct Ctx {
+    class: usize,
+    slot: usize,
+    prev: usize,
+    nbr: usize,
+    bin: Option<usize>,
+    unbinned: bool,
 }
 
 /// A context model's start from its shared model (format 16 on, SPEC.md 10.1): a copy,
@@ -1071,6 +1154,7 @@ impl TanTerms {
 /// Codes detail `d` (components in the order of frame `fr`, each with its neighbour bin
 /// `nbr[slot]`; phased as `ph` says); returns the magnitude classes of the coded values,
 /// or `None` when mode 7's shift is out of range.
+#[allow(clippy::too_many_arguments)]
 fn put(
     enc: &mut Encoder,
     m: &mut Models,
@@ -1079,6 +1163,7 @@ fn put(
     d: [i64; 3],
     fr: Option<(usize, [i64; 3])>,
     ph: Phased,
+    unbinned: bool,
 ) -> Option<[u8; 3]> {
     let (order, n) = plan(fr);
     let mut prev = 0;
@@ -1098,17 +1183,19 @@ fn put(
             }
             _ => None,
         };
-        if let Some(q) = q {
-            let bin = (q & 3) as usize;
-            if q & 4 != 0 {
-                v = -v;
-            }
-            enc.int(m.get_phased(class, slot, prev, nbr[slot], bin), v);
-            m.observe_phased(class, slot, bin, v);
-        } else {
-            enc.int(m.get(class, slot, prev, nbr[slot]), v);
-            m.observe(class, slot, v);
+        if q.is_some_and(|q| q & 4 != 0) {
+            v = -v;
         }
+        let c = Ctx {
+            class,
+            slot,
+            prev,
+            nbr: nbr[slot],
+            bin: q.map(|q| (q & 3) as usize),
+            unbinned,
+        };
+        enc.int(m.model(c), v);
+        m.learn(c, v);
         prev = class_of(v);
         mags[slot] = prev as u8;
     }
@@ -1122,6 +1209,7 @@ fn get(
     nbr: [usize; 3],
     fr: Option<(usize, [i64; 3])>,
     ph: Phased,
+    unbinned: bool,
 ) -> Result<([i64; 3], [u8; 3])> {
     let (order, n) = plan(fr);
     let mut d = [0i64; 3];
@@ -1141,22 +1229,24 @@ fn get(
             ),
             _ => None,
         };
+        let c = Ctx {
+            class,
+            slot,
+            prev,
+            nbr: nbr[slot],
+            bin: q.map(|(_, q)| (q & 3) as usize),
+            unbinned,
+        };
+        let v = dec.int(m.model(c))?;
+        m.learn(c, v);
+        prev = class_of(v);
         let v = match q {
             Some((s, q)) => {
-                let bin = (q & 3) as usize;
-                let v = dec.int(m.get_phased(class, slot, prev, nbr[slot], bin))?;
-                m.observe_phased(class, slot, bin, v);
-                prev = class_of(v);
                 // (|v| < 2^62: the negation cannot overflow.)
                 let v = if q & 4 != 0 { -v } else { v };
                 v.checked_add(s).ok_or_else(bad)?
             }
-            None => {
-                let v = dec.int(m.get(class, slot, prev, nbr[slot]))?;
-                m.observe(class, slot, v);
-                prev = class_of(v);
-                v
-            }
+            None => v,
         };
         mags[slot] = prev as u8;
         let x = v.checked_add(pred).filter(|x| x.abs() <= MAX_LIFTED);
@@ -1198,6 +1288,7 @@ pub fn encode(
             act,
             &mut mags,
             Mode::Plain,
+            false,
             &mut m,
             usize::MAX,
         )
@@ -1211,6 +1302,11 @@ pub fn encode(
     // transform with them free to use them, and the other way round. (Modes 2 and 7 are
     // open to the same levels: a plan names the one to use.)
     let only = models.only.as_mut().and_then(Iterator::next);
+    // Format 22: a plan's unbinned flag is followed; without a plan the level's best
+    // mode is tried unbinned as well.
+    let unbin_open = version >= UNBINNED_VERSION;
+    let plan_unbinned = only.map(|o| unbin_open && o & UNBINNED != 0);
+    let only = only.map(|o| if unbin_open { o & !UNBINNED } else { o });
     let plain = |m: u8| matches!(m, 0 | 6);
     let open = |m: u8| only.is_none_or(|o| o == m || (plain(o) && plain(m)));
     let mut modes = vec![Mode::Plain, Mode::Framed];
@@ -1267,20 +1363,41 @@ pub fn encode(
         order.insert(0, i);
     }
     let mut best: Option<(usize, Tried)> = None;
-    for i in order {
+    let mut trials: Vec<(usize, bool)> = order
+        .into_iter()
+        .map(|i| (i, plan_unbinned.unwrap_or(false)))
+        .collect();
+    // Last, without a plan, the best mode unbinned (kept only if strictly smaller).
+    let mut unbinned_best = unbin_open && plan_unbinned.is_none();
+    let mut t = 0;
+    loop {
+        let Some(&(i, unbinned)) = trials.get(t) else {
+            match &best {
+                Some((j, _)) if unbinned_best => {
+                    trials.push((*j, true));
+                    unbinned_best = false;
+                    continue;
+                }
+                _ => break,
+            }
+        };
+        t += 1;
         let mode = modes[i];
         let head = mode.bytes().len();
         // A stream longer than this is over the limit or loses to the best so far (or
-        // ties with a mode tried before it).
+        // ties with a mode tried before it). While the unbinned trial is to come, the
+        // binned ones are not cut at the limit: their best is the mode tried unbinned,
+        // which may fit where they do not.
+        let cap = if unbinned_best { usize::MAX } else { limit };
         let room = best
             .as_ref()
-            .map_or(limit, |(_, b)| (b.body.len() + b.mode.len()).min(limit))
+            .map_or(cap, |(_, b)| (b.body.len() + b.mode.len()).min(cap))
             .saturating_sub(head);
         let mut a = act.clone();
         let mut mg = models.mags.clone();
-        let mut m = start.clone();
+        let mut m = models.ready(start.clone(), mode);
         let Some(body) = encode_mode(
-            level, sqrt2, x, coarse, &prep, phases, &mut a, &mut mg, mode, &mut m, room,
+            level, sqrt2, x, coarse, &prep, phases, &mut a, &mut mg, mode, unbinned, &mut m, room,
         ) else {
             continue;
         };
@@ -1289,10 +1406,14 @@ pub fn encode(
             let bs = b.body.len() + b.mode.len();
             size < bs || (size == bs && i < *j)
         }) {
+            let mut bytes = mode.bytes();
+            if unbinned {
+                bytes[0] |= UNBINNED;
+            }
             best = Some((
                 i,
                 Tried {
-                    mode: mode.bytes(),
+                    mode: bytes,
                     body,
                     act: a,
                     mags: mg,
@@ -1303,6 +1424,7 @@ pub fn encode(
     }
     let best = best.map(|(i, t)| {
         models.prev_mode = Some(modes[i].byte());
+        models.last_phased = modes[i].phased();
         t
     });
     let Tried {
@@ -1312,6 +1434,9 @@ pub fn encode(
         mags,
         models: m,
     } = best?;
+    if mode.len() + body.len() > limit {
+        return None;
+    }
     *act = a;
     models.mags = mags;
     models.last = Some(m);
@@ -1407,6 +1532,14 @@ impl Mode<'_> {
         }
     }
 
+    /// Modes 6, 7 and 9, whose values are modelled by their phases.
+    fn phased(self) -> bool {
+        matches!(
+            self,
+            Mode::Phased | Mode::TangentPhased(_) | Mode::CorrectedPhased(_)
+        )
+    }
+
     fn framed(self) -> bool {
         !matches!(
             self,
@@ -1434,6 +1567,7 @@ fn encode_mode(
     act: &mut Vec<u8>,
     mags: &mut Vec<[u8; 3]>,
     mode: Mode<'_>,
+    unbinned: bool,
     m: &mut Models,
     limit: usize,
 ) -> Option<Vec<u8>> {
@@ -1501,7 +1635,7 @@ fn encode_mode(
             }
             _ => Phased::No,
         };
-        mags[nv + i] = put(&mut enc, m, class, bins, d, fr, ph)?;
+        mags[nv + i] = put(&mut enc, m, class, bins, d, fr, ph, unbinned)?;
         act[nv + i] = activity(d);
         if i % 64 == 63 && enc.written() > limit {
             return None;
@@ -1551,8 +1685,11 @@ pub fn decode(
     }
     let no_targets = || Error::corrupt("LEVL", "tangent mode on a level without tangent targets");
     let no_phases = || Error::corrupt("LEVL", "phase mode on a level without prediction phases");
+    // Format 22: the mode byte's top bit makes the level unbinned.
+    let unbinned = unbinned(version, payload);
+    let first = mode_of(version, payload);
     let (mode, payload) = if version >= 3 {
-        match payload.split_first() {
+        match first.zip(payload.get(1..)) {
             Some((0, rest)) => (Mode::Plain, rest),
             Some((1, rest)) => (Mode::Framed, rest),
             Some((2, rest)) if version >= 7 => match targets {
@@ -1594,7 +1731,8 @@ pub fn decode(
     };
     let framed = mode.framed();
     let mut dec = Decoder::new(payload, "LEVL")?;
-    let mut m = models.start();
+    let mut m = models.ready(models.start(), mode);
+    models.last_phased = mode.phased();
     act.resize(nv + nd, 0);
     let mags = &mut models.mags;
     mags.resize(nv, [UNKNOWN; 3]);
@@ -1699,6 +1837,7 @@ pub fn decode(
             bins,
             fr.filter(|_| rotation.is_none()),
             ph,
+            unbinned,
         )?;
         mags[nv + i] = mg;
         let mut d = r;
@@ -2073,6 +2212,7 @@ mod tests {
             &mut act,
             &mut mags,
             mode,
+            false,
             &mut m,
             usize::MAX,
         )
@@ -2229,6 +2369,7 @@ mod tests {
             &mut act,
             &mut mags,
             mode,
+            false,
             &mut m,
             usize::MAX,
         )
@@ -2415,8 +2556,8 @@ mod tests {
                     let mut m = Models::new(ROTATED_VERSION);
                     let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
                     encode_mode(
-                        &level, false, &x, &coarse, &prep, None, &mut act, &mut mags, mode, &mut m,
-                        limit,
+                        &level, false, &x, &coarse, &prep, None, &mut act, &mut mags, mode, false,
+                        &mut m, limit,
                     )
                 };
                 assert_eq!(run(full.len()).as_ref(), Some(&full));
@@ -2670,6 +2811,94 @@ mod tests {
             assert_ne!(plain[1..], bytes[1..]);
             let y = decode_fresh(&plain, &level, false, &coarse, v, None, None);
             assert_eq!(y.unwrap(), x, "{w:?}");
+        }
+    }
+
+    /// Details of one size everywhere (noise of 5 bits): an unbinned level (format 22)
+    /// codes them smaller than the neighbour bins do, and the encoder chooses it; a level
+    /// with large details in one corner and zeros elsewhere stays binned. Each payload
+    /// decodes exactly, and not with its flag flipped or before format 22.
+    #[test]
+    fn unbinned_levels_pay_where_neighbours_tell_nothing() {
+        let (level, _) = grid_level(33);
+        let (nv, nd) = (level.nv, level.ne() + level.nf());
+        let coarse: [Vec<i64>; 3] = std::array::from_fn(|_| vec![0; nv]);
+        let noise = |seed: u64| -> [Vec<i64>; 3] {
+            std::array::from_fn(|k| {
+                let mut v = vec![0; nv];
+                v.extend(pseudo(seed + k as u64, nd, 5));
+                v
+            })
+        };
+        let even = noise(300);
+        // Large details on the first tenth of the details (a corner of edge points),
+        // zeros elsewhere: their neighbours' sizes tell them apart.
+        let mut corner = noise(310);
+        for xk in corner.iter_mut() {
+            for (i, v) in xk[nv..].iter_mut().enumerate() {
+                *v = if i < nd / 10 { *v * 64 } else { 0 };
+            }
+        }
+        let v = UNBINNED_VERSION;
+        for (x, want) in [(&even, true), (&corner, false)] {
+            let mut act = vec![UNKNOWN; nv];
+            let mut models = LevelModels::new(v);
+            let bytes = encode_fresh(&level, x, &coarse, &mut act, &mut models);
+            assert_eq!(unbinned(v, &bytes), want, "mode byte {:#x}", bytes[0]);
+            let y = decode_fresh(&bytes, &level, false, &coarse, v, None, None);
+            assert_eq!(&y.unwrap(), x);
+            // The other choice, as a plan: larger, and exact too.
+            let mut act = vec![UNKNOWN; nv];
+            let mut models = LevelModels::new(v);
+            models.only = Some(vec![bytes[0] ^ UNBINNED].into_iter());
+            let other = encode_fresh(&level, x, &coarse, &mut act, &mut models);
+            assert_eq!(other[0], bytes[0] ^ UNBINNED);
+            assert!(other.len() > bytes.len(), "{} {}", other.len(), bytes.len());
+            let y = decode_fresh(&other, &level, false, &coarse, v, None, None);
+            assert_eq!(&y.unwrap(), x);
+            // Read with the flag flipped: an error or other details.
+            let mut flipped = bytes.clone();
+            flipped[0] ^= UNBINNED;
+            let y = decode_fresh(&flipped, &level, false, &coarse, v, None, None);
+            assert!(y.map_or(true, |y| &y != x));
+        }
+        // Before format 22 the flag is an unknown mode; format 21 never sets it.
+        let mut act = vec![UNKNOWN; nv];
+        let mut models = LevelModels::new(v);
+        let bytes = encode_fresh(&level, &even, &coarse, &mut act, &mut models);
+        assert_eq!(mode_of(v, &bytes), Some(bytes[0] & 0x7f));
+        assert_eq!(mode_of(v - 1, &bytes), Some(bytes[0]));
+        let err = decode_fresh(&bytes, &level, false, &coarse, v - 1, None, None).unwrap_err();
+        assert!(err.to_string().contains("unknown level mode"), "{err}");
+        let mut act = vec![UNKNOWN; nv];
+        let mut models = LevelModels::new(v - 1);
+        let old = encode_fresh(&level, &even, &coarse, &mut act, &mut models);
+        assert!(!unbinned(v, &old) && old[0] & UNBINNED == 0);
+    }
+
+    /// Format 22 hands phased models on only from one phased level to the next (SPEC.md
+    /// 10.6): after a level in another mode, a phased level starts without them.
+    #[test]
+    fn phased_models_are_handed_on_between_phased_levels_only() {
+        let with_phased = |version: u16, last_phased: bool| {
+            let mut models = LevelModels::new(version);
+            let mut m = Models::new(version);
+            m.get_phased(0, 2, 0, 1, 0).observe(3);
+            models.last = Some(m);
+            models.last_phased = last_phased;
+            models
+        };
+        let plain = Mode::Plain;
+        for (version, last_phased, mode, kept) in [
+            (UNBINNED_VERSION, false, Mode::Phased, false),
+            (UNBINNED_VERSION, true, Mode::Phased, true),
+            (UNBINNED_VERSION, false, plain, true),
+            (UNBINNED_VERSION - 1, false, Mode::Phased, true),
+        ] {
+            let models = with_phased(version, last_phased);
+            let m = models.ready(models.start(), mode);
+            assert_eq!(!m.ph.is_empty(), kept, "{version} {last_phased}");
+            assert_eq!(!m.ph_parents.is_empty(), kept, "{version} {last_phased}");
         }
     }
 }

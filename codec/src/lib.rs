@@ -88,9 +88,12 @@ pub struct SectionInfo {
     pub kind: String,
     /// Bytes it occupies, overhead included.
     pub bytes: usize,
-    /// A level section's coding mode (SPEC.md 10.1: 0 plain, 1 normal frame, 2 tangent),
-    /// for containers of version 3 on; `None` for other sections.
+    /// A level section's coding mode (SPEC.md 10.1, 10.2: 0 plain, 1 normal frame, 2
+    /// tangent, ..., 9 phased corrected; without format 22's unbinned flag), for
+    /// containers of version 3 on; `None` for other sections.
     pub mode: Option<u8>,
+    /// Whether a level section is unbinned (SPEC.md 10.1, format 22 on).
+    pub unbinned: bool,
 }
 
 /// The result of [`encode`].
@@ -127,10 +130,13 @@ impl Payloads {
         self.coded() + self.order.as_ref().map_or(0, Vec::len)
     }
 
-    /// Each LEVL payload's mode byte (SPEC.md 10.1).
+    /// Each LEVL payload's mode byte, format 22's unbinned flag included (SPEC.md 10.1):
+    /// the plan of a coding in the same modes.
     fn modes(&self) -> Vec<u8> {
-        let mode = |l: &Vec<u8>| level_mode(SectionKind::LEVEL, FORMAT_VERSION, l);
-        self.levels.iter().filter_map(mode).collect()
+        self.levels
+            .iter()
+            .filter_map(|l| l.first().copied())
+            .collect()
     }
 }
 
@@ -666,6 +672,7 @@ fn encode_with(
             bytes: payload.len()
                 + subwave_container::section_overhead(FORMAT_VERSION, payload.len()),
             mode: level_mode(kind, FORMAT_VERSION, payload),
+            unbinned: kind == SectionKind::LEVEL && levels::unbinned(FORMAT_VERSION, payload),
         });
         Ok(())
     };
@@ -685,6 +692,7 @@ fn encode_with(
         kind: SectionKind::END.to_string(),
         bytes: subwave_container::section_overhead(FORMAT_VERSION, 0),
         mode: None,
+        unbinned: false,
     });
     Ok(Encoded {
         bytes,
@@ -750,8 +758,8 @@ fn expect_kind(c: &Container<'_>, i: usize, kind: SectionKind, what: &str) -> Re
 
 /// The mode byte of a level section (SPEC.md 10.1), version 3 on.
 fn level_mode(kind: SectionKind, version: u16, payload: &[u8]) -> Option<u8> {
-    (kind == SectionKind::LEVEL && version >= 3)
-        .then(|| payload.first().copied())
+    (kind == SectionKind::LEVEL)
+        .then(|| levels::mode_of(version, payload))
         .flatten()
 }
 
@@ -769,6 +777,7 @@ pub fn inspect(bytes: &[u8], limits: &Limits) -> Result<Info> {
                 kind: s.kind.to_string(),
                 bytes: s.total_len(),
                 mode: level_mode(s.kind, c.version, s.payload),
+                unbinned: s.kind == SectionKind::LEVEL && levels::unbinned(c.version, s.payload),
             })
             .collect(),
         bytes: bytes.len(),
@@ -996,8 +1005,9 @@ fn synthesise_levels(
         // (Made before the details are decoded: while the coarse values alone are in
         // memory, which is smaller than making them after.)
         // Modes 6 and 9 read the predictions' phases (SPEC.md 10.6, 10.9).
-        let phased = (c.version >= levels::PHASE_VERSION && payload.first() == Some(&6))
-            || (c.version >= levels::CORRECTED_PHASED_VERSION && payload.first() == Some(&9));
+        let mode = levels::mode_of(c.version, payload);
+        let phased = (c.version >= levels::PHASE_VERSION && mode == Some(6))
+            || (c.version >= levels::CORRECTED_PHASED_VERSION && mode == Some(9));
         let (predictions, phases) = match lazy {
             true => {
                 let (p, ph) = sqrt2::predictions_with(&level, &x, phased);
@@ -1007,8 +1017,8 @@ fn synthesise_levels(
         };
         let plan = (is_sqrt2 && w == Wavelet::Sqrt2Sym).then(|| sqrt2::Plan::new(&level, w));
         // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
-        let tangent = (c.version >= 7 && payload.first() == Some(&2))
-            || (c.version >= levels::PHASE_VERSION && payload.first() == Some(&7));
+        let tangent = (c.version >= 7 && mode == Some(2))
+            || (c.version >= levels::PHASE_VERSION && mode == Some(7));
         let targets = (is_sqrt2 && tangent).then(|| match &predictions {
             Some(pr) => sqrt2::tangent_targets_from(&level, &x, pr),
             None => sqrt2::tangent_targets_from(&level, &x, &sqrt2::predictions(&level, &x)),
@@ -1239,7 +1249,7 @@ mod tests {
                         .unwrap();
                 let n = whole.coded();
                 let fit = code_hierarchy(&canon, &pos, w, d, &header, true, modes.clone(), n)
-                    .expect("fits its own size");
+                    .unwrap_or_else(|| panic!("fits its own size {w:?} {:?} {n}", modes));
                 assert_eq!((fit.base, fit.levels), (whole.base, whole.levels), "{w:?}");
                 assert!(
                     code_hierarchy(&canon, &pos, w, d, &header, true, modes, n - 1).is_none(),
