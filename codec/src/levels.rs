@@ -225,7 +225,8 @@ fn read_weights(rest: &[u8]) -> Result<(Weights, &[u8])> {
         if mask >> j & 1 == 1 {
             let (c, r) = rest.split_first_chunk::<NFEAT>().ok_or_else(bad)?;
             *p = c.map(|v| v as i8);
-            if p.iter().any(|v| v.abs() > CORR_MAX) {
+            // (unsigned_abs: -128's abs overflows an i8.)
+            if p.iter().any(|v| v.unsigned_abs() > CORR_MAX as u8) {
                 return Err(bad());
             }
             rest = r;
@@ -2743,6 +2744,8 @@ mod tests {
             (20, &[8, 0b1000100, 246, 5, 64, 192][..]),
             (20, &[8, 0b1100, 246, 5, 65, 192]),
             (20, &[8, 0b1100, 246, 5, 64, 191]),
+            (20, &[8, 0b1100, 246, 5, 64, 128]),
+            (20, &[8, 0b1100, 128, 5, 64, 192]),
         ] {
             let err = run(version, head).unwrap_err().to_string();
             assert!(err.contains("LEVL"), "{version} {head:?}: {err}");
