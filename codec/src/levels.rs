@@ -86,8 +86,9 @@ pub const CORRECTED_VERSION: u16 = 20;
 pub const CORRECTED_PHASED_VERSION: u16 = 21;
 
 /// From format 22 a level's mode byte may have its top bit set: the level is *unbinned*,
-/// every value coded with the neighbourhood bin of a detail without neighbours (SPEC.md
-/// 10.1), for levels whose details hardly depend on their neighbours' sizes.
+/// every value coded with the shared model of its class and slot (or phase bin) rather
+/// than a model of its neighbour bin (SPEC.md 10.1), for levels whose details hardly
+/// depend on their neighbours' sizes.
 pub const UNBINNED_VERSION: u16 = 22;
 /// The mode byte's unbinned flag (format 22 on).
 const UNBINNED: u8 = 0x80;
