@@ -92,9 +92,6 @@ pub const CORRECTED_PHASED_VERSION: u16 = 21;
 pub const UNBINNED_VERSION: u16 = 22;
 /// The mode byte's unbinned flag (format 22 on).
 const UNBINNED: u8 = 0x80;
-/// The neighbour bin of an unbinned level's values: they are coded with the shared
-/// model of their class and slot (and phase bin) itself.
-const SHARED_BIN: usize = usize::MAX;
 
 /// A LEVL payload's mode (SPEC.md 10.1): its first byte, without format 22's unbinned
 /// flag; `None` for an empty payload or before format 3.
@@ -416,19 +413,22 @@ impl Models {
         nbr: usize,
         bin: usize,
     ) -> &mut IntModel {
+        let j = self.phased_shared(class, slot, bin);
+        let i = self.context(class, slot, prev, nbr) * PHASE_BINS + bin;
+        let shared = &self.ph_parents[j];
+        self.ph[i].get_or_insert_with(|| seeded(shared))
+    }
+
+    /// The index in `ph_parents` of the phased shared model of `class`, `slot` and phase
+    /// bin `bin`; at the first phased value, the phased models are made (SPEC.md 10.6).
+    fn phased_shared(&mut self, class: usize, slot: usize, bin: usize) -> usize {
         if self.ph.is_empty() {
             self.ph = vec![None; self.m.len() * PHASE_BINS];
             self.ph_parents = (0..6 * PHASE_BINS)
                 .map(|j| seeded(&self.parents[j / PHASE_BINS]))
                 .collect();
         }
-        let j = (class * 3 + slot) * PHASE_BINS + bin;
-        if nbr == SHARED_BIN {
-            return &mut self.ph_parents[j];
-        }
-        let i = self.context(class, slot, prev, nbr) * PHASE_BINS + bin;
-        let shared = &self.ph_parents[j];
-        self.ph[i].get_or_insert_with(|| seeded(shared))
+        (class * 3 + slot) * PHASE_BINS + bin
     }
 
     /// Format 18: the shared model of `class`, `slot` and phase bin `bin` learns `v`.
@@ -449,9 +449,6 @@ impl Models {
     }
 
     fn get(&mut self, class: usize, axis: usize, prev: usize, nbr: usize) -> &mut IntModel {
-        if nbr == SHARED_BIN {
-            return &mut self.parents[class * 3 + axis];
-        }
         let i = self.context(class, axis, prev, nbr);
         if !self.used[i] {
             self.used[i] = true;
@@ -463,10 +460,14 @@ impl Models {
     /// The model a value in context `c` is coded with (SPEC.md 10.1, 10.6): its context
     /// model, or in an unbinned level its shared model.
     fn model(&mut self, c: Ctx) -> &mut IntModel {
-        let nbr = if c.unbinned { SHARED_BIN } else { c.nbr };
-        match c.bin {
-            Some(b) => self.get_phased(c.class, c.slot, c.prev, nbr, b),
-            None => self.get(c.class, c.slot, c.prev, nbr),
+        match (c.unbinned, c.bin) {
+            (true, Some(b)) => {
+                let j = self.phased_shared(c.class, c.slot, b);
+                &mut self.ph_parents[j]
+            }
+            (true, None) => &mut self.parents[c.class * 3 + c.slot],
+            (false, Some(b)) => self.get_phased(c.class, c.slot, c.prev, c.nbr, b),
+            (false, None) => self.get(c.class, c.slot, c.prev, c.nbr),
         }
     }
 
@@ -1364,33 +1365,16 @@ pub fn encode(
         order.remove(i);
         order.insert(0, i);
     }
-    let mut best: Option<(usize, Tried)> = None;
-    let mut trials: Vec<(usize, bool)> = order
-        .into_iter()
-        .map(|i| (i, plan_unbinned.unwrap_or(false)))
-        .collect();
-    // Last, without a plan, the best mode unbinned (kept only if strictly smaller).
-    let mut unbinned_best = unbin_open && plan_unbinned.is_none();
-    let mut t = 0;
-    loop {
-        let Some(&(i, unbinned)) = trials.get(t) else {
-            match &best {
-                Some((j, _)) if unbinned_best => {
-                    trials.push((*j, true));
-                    unbinned_best = false;
-                    continue;
-                }
-                _ => break,
-            }
-        };
-        t += 1;
+    // Codes the level in mode `i` (unbinned or not) and keeps it in `best` if smaller.
+    // A stream longer than `cap` or than the best so far is abandoned; ties go to the
+    // first mode in `modes`' order whatever the order of trying.
+    let attempt = |best: &mut Option<(usize, Tried)>, i: usize, unbinned: bool, cap: usize| {
         let mode = modes[i];
-        let head = mode.bytes().len();
-        // A stream longer than this is over the limit or loses to the best so far (or
-        // ties with a mode tried before it). While the unbinned trial is to come, the
-        // binned ones are not cut at the limit: their best is the mode tried unbinned,
-        // which may fit where they do not.
-        let cap = if unbinned_best { usize::MAX } else { limit };
+        let mut bytes = mode.bytes();
+        if unbinned {
+            bytes[0] |= UNBINNED;
+        }
+        let head = bytes.len();
         let room = best
             .as_ref()
             .map_or(cap, |(_, b)| (b.body.len() + b.mode.len()).min(cap))
@@ -1401,18 +1385,14 @@ pub fn encode(
         let Some(body) = encode_mode(
             level, sqrt2, x, coarse, &prep, phases, &mut a, &mut mg, mode, unbinned, &mut m, room,
         ) else {
-            continue;
+            return;
         };
         let size = body.len() + head;
         if best.as_ref().is_none_or(|(j, b)| {
             let bs = b.body.len() + b.mode.len();
             size < bs || (size == bs && i < *j)
         }) {
-            let mut bytes = mode.bytes();
-            if unbinned {
-                bytes[0] |= UNBINNED;
-            }
-            best = Some((
+            *best = Some((
                 i,
                 Tried {
                     mode: bytes,
@@ -1423,6 +1403,18 @@ pub fn encode(
                 },
             ));
         }
+    };
+    // Without a plan, the open modes binned, then the best of them unbinned (kept only
+    // if strictly smaller). While that trial is to come, the binned ones are not cut at
+    // the limit: their best is the mode tried unbinned, which may fit where they do not.
+    let unbinned_trial = unbin_open && plan_unbinned.is_none();
+    let cap = if unbinned_trial { usize::MAX } else { limit };
+    let mut best: Option<(usize, Tried)> = None;
+    for i in order {
+        attempt(&mut best, i, plan_unbinned.unwrap_or(false), cap);
+    }
+    if let Some(j) = best.as_ref().map(|(j, _)| *j).filter(|_| unbinned_trial) {
+        attempt(&mut best, j, true, limit);
     }
     let best = best.map(|(i, t)| {
         models.prev_mode = Some(modes[i].byte());
