@@ -667,13 +667,9 @@ fn encode_with(
             )));
         }
         w.section(kind, payload);
-        sections.push(SectionInfo {
-            kind: kind.to_string(),
-            bytes: payload.len()
-                + subwave_container::section_overhead(FORMAT_VERSION, payload.len()),
-            mode: level_mode(kind, FORMAT_VERSION, payload),
-            unbinned: kind == SectionKind::LEVEL && levels::unbinned(FORMAT_VERSION, payload),
-        });
+        let bytes =
+            payload.len() + subwave_container::section_overhead(FORMAT_VERSION, payload.len());
+        sections.push(section_info(kind, bytes, FORMAT_VERSION, payload));
         Ok(())
     };
     put(&mut w, SectionKind::HEADER, &header.write())?;
@@ -688,12 +684,8 @@ fn encode_with(
         put(&mut w, SectionKind::ORDER, o)?;
     }
     let bytes = w.finish();
-    sections.push(SectionInfo {
-        kind: SectionKind::END.to_string(),
-        bytes: subwave_container::section_overhead(FORMAT_VERSION, 0),
-        mode: None,
-        unbinned: false,
-    });
+    let end = subwave_container::section_overhead(FORMAT_VERSION, 0);
+    sections.push(section_info(SectionKind::END, end, FORMAT_VERSION, &[]));
     Ok(Encoded {
         bytes,
         order,
@@ -756,11 +748,16 @@ fn expect_kind(c: &Container<'_>, i: usize, kind: SectionKind, what: &str) -> Re
     }
 }
 
-/// The mode byte of a level section (SPEC.md 10.1), version 3 on.
-fn level_mode(kind: SectionKind, version: u16, payload: &[u8]) -> Option<u8> {
-    (kind == SectionKind::LEVEL)
-        .then(|| levels::mode_of(version, payload))
-        .flatten()
+/// A section's entry in the section table: a level section's mode (version 3 on) and
+/// unbinned flag (version 22 on) read from its payload (SPEC.md 10.1).
+fn section_info(kind: SectionKind, bytes: usize, version: u16, payload: &[u8]) -> SectionInfo {
+    let level = kind == SectionKind::LEVEL;
+    SectionInfo {
+        kind: kind.to_string(),
+        bytes,
+        mode: level.then(|| levels::mode_of(version, payload)).flatten(),
+        unbinned: level && levels::unbinned(version, payload),
+    }
 }
 
 /// Reads the header and section table (SPEC.md 2, 5), checking every checksum.
@@ -773,12 +770,7 @@ pub fn inspect(bytes: &[u8], limits: &Limits) -> Result<Info> {
         sections: c
             .sections
             .iter()
-            .map(|s| SectionInfo {
-                kind: s.kind.to_string(),
-                bytes: s.total_len(),
-                mode: level_mode(s.kind, c.version, s.payload),
-                unbinned: s.kind == SectionKind::LEVEL && levels::unbinned(c.version, s.payload),
-            })
+            .map(|s| section_info(s.kind, s.total_len(), c.version, s.payload))
             .collect(),
         bytes: bytes.len(),
     })
