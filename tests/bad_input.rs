@@ -340,7 +340,8 @@ fn every_truncation_of_a_hierarchy_is_rejected_or_a_correct_coarser_level() {
 /// checksum valid.
 fn with_level(bytes: &[u8], level: usize, edit: impl FnOnce(&mut Vec<u8>)) -> Vec<u8> {
     let c = subwave_container::Container::parse(bytes, &Limits::default()).unwrap();
-    let mut w = ContainerWriter::new();
+    // Under the container's own version: its streams are read by that version's rules.
+    let mut w = ContainerWriter::for_version(c.version);
     let mut edit = Some(edit);
     let mut n = 0;
     for s in &c.sections {

@@ -109,6 +109,7 @@ fn frozen_containers_still_decode() {
             "subdivided_open_cc3.lazy.q12.v22.swv",
             "subdivided_open_cc3.obj",
         ),
+        ("terrain_grid33.q16.v23.swv", "terrain_grid33.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

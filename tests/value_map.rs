@@ -232,6 +232,42 @@ fn hostile_value_maps_are_refused() {
 }
 
 #[test]
+fn every_flipped_bit_or_cut_of_a_lattice_map_is_an_error_or_a_valid_mesh() {
+    // At 16 bits a terrain's whole-metre heights lie on a lattice, coded as one (format
+    // 23, SPEC.md 3.1; its rows and columns, 17 each, code smaller as gaps): the VMAP
+    // payload flipped bit by bit and cut byte by byte, checksums valid.
+    let m = terrain(4, 16);
+    let enc = encode(&m, Some(true), true);
+    let d = subwave::decode_slice(&enc.bytes).unwrap();
+    assert_eq!(d.mesh.positions, m.mesh.positions);
+    let c = Container::parse(&enc.bytes, &Limits::default()).unwrap();
+    let map = c
+        .sections
+        .iter()
+        .find(|s| s.kind == SectionKind::VALUE_MAP)
+        .unwrap()
+        .payload
+        .to_vec();
+    let mut changed = 0;
+    let mut check = |payload: &[u8]| {
+        if let Ok(d) = subwave::decode_slice(&with_vmap(&enc, payload)) {
+            d.mesh.validate().unwrap();
+            changed += (d.mesh.positions != m.mesh.positions) as usize;
+        }
+    };
+    for bit in 0..map.len() * 8 {
+        let mut p = map.clone();
+        p[bit / 8] ^= 1 << (bit % 8);
+        check(&p);
+    }
+    for len in 0..map.len() {
+        check(&map[..len]);
+    }
+    // Some of the edits decode to other meshes: the map is read, not skipped.
+    assert!(changed > 0);
+}
+
+#[test]
 fn corpus_grids_are_mapped_and_decode_exactly() {
     let Some(dir) = common::shared_corpus() else {
         eprintln!("../shared/corpus not found: skipped");

@@ -346,7 +346,7 @@ pub fn encode_residuals(
         }
     }
     let mut out = vec![RESIDUAL_MODE];
-    out.extend(enc.finish());
+    out.extend(enc.finish_for(version));
     out
 }
 
@@ -381,7 +381,7 @@ pub fn decode_residuals(
         }
         None => return Err(Error::corrupt("LEVL", "empty residual section")),
     };
-    let mut dec = Decoder::new(payload, "LEVL")?;
+    let mut dec = Decoder::new(payload, "LEVL", version)?;
     let mut models: Vec<IntModel> = (0..3 * BUCKETS)
         .map(|_| IntModel::for_version(version))
         .collect();

@@ -367,7 +367,7 @@ pub fn encode(mesh: &Mesh, version: u16) -> Vec<u8> {
         }
     }
     encode_positions(&mut e, mesh, version);
-    e.finish()
+    e.finish_for(version)
 }
 
 fn encode_positions(e: &mut Encoder, mesh: &Mesh, version: u16) {
@@ -414,7 +414,7 @@ pub fn decode(
             ),
         ));
     }
-    let mut d = Decoder::new(payload, SECTION)?;
+    let mut d = Decoder::new(payload, SECTION, version)?;
     let mut mesh = decode_faces(&mut d, vertices, faces, corners, version)?;
     mesh.positions = decode_positions(&mut d, &mesh, vertices as usize, max_abs, version)?;
     Ok(mesh)

@@ -1294,6 +1294,7 @@ pub fn encode(
             false,
             &mut m,
             usize::MAX,
+            version,
         )
         .expect("plain details are in range");
         models.mags = mags;
@@ -1384,6 +1385,7 @@ pub fn encode(
         let mut m = models.ready(start.clone(), mode);
         let Some(body) = encode_mode(
             level, sqrt2, x, coarse, &prep, phases, &mut a, &mut mg, mode, unbinned, &mut m, room,
+            version,
         ) else {
             return;
         };
@@ -1564,6 +1566,7 @@ fn encode_mode(
     unbinned: bool,
     m: &mut Models,
     limit: usize,
+    version: u16,
 ) -> Option<Vec<u8>> {
     let mut enc = Encoder::new();
     let (nv, nd) = (level.nv, details(level, sqrt2));
@@ -1635,7 +1638,7 @@ fn encode_mode(
             return None;
         }
     }
-    let body = enc.finish();
+    let body = enc.finish_for(version);
     (body.len() <= limit).then_some(body)
 }
 
@@ -1724,7 +1727,7 @@ pub fn decode(
         (Mode::Plain, payload)
     };
     let framed = mode.framed();
-    let mut dec = Decoder::new(payload, "LEVL")?;
+    let mut dec = Decoder::new(payload, "LEVL", version)?;
     let mut m = models.ready(models.start(), mode);
     models.last_phased = mode.phased();
     act.resize(nv + nd, 0);
@@ -2209,6 +2212,7 @@ mod tests {
             false,
             &mut m,
             usize::MAX,
+            ROTATED_VERSION,
         )
     }
 
@@ -2366,6 +2370,7 @@ mod tests {
             false,
             &mut m,
             usize::MAX,
+            PHASE_VERSION,
         )
         .unwrap();
         let mut out = mode.bytes();
@@ -2550,8 +2555,19 @@ mod tests {
                     let mut m = Models::new(ROTATED_VERSION);
                     let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
                     encode_mode(
-                        &level, false, &x, &coarse, &prep, None, &mut act, &mut mags, mode, false,
-                        &mut m, limit,
+                        &level,
+                        false,
+                        &x,
+                        &coarse,
+                        &prep,
+                        None,
+                        &mut act,
+                        &mut mags,
+                        mode,
+                        false,
+                        &mut m,
+                        limit,
+                        ROTATED_VERSION,
                     )
                 };
                 assert_eq!(run(full.len()).as_ref(), Some(&full));

@@ -140,12 +140,12 @@ pub fn encode(o: &InputOrder, version: u16) -> Vec<u8> {
     for &r in &o.rotations {
         e.int(&mut m, r as i64);
     }
-    e.finish()
+    e.finish_for(version)
 }
 
 /// Decodes a format-2 ORDR section; `degrees[c]` is canonical face c's degree.
 pub fn decode(payload: &[u8], nv: usize, degrees: &[u32], version: u16) -> Result<InputOrder> {
-    let mut d = Decoder::new(payload, SECTION)?;
+    let mut d = Decoder::new(payload, SECTION, version)?;
     let vertices = get_perm(&mut d, nv, version)?;
     let faces = get_perm(&mut d, degrees.len(), version)?;
     let mut m = IntModel::for_version(version);
@@ -166,7 +166,7 @@ pub fn decode(payload: &[u8], nv: usize, degrees: &[u32], version: u16) -> Resul
 
 /// Decodes a format-1 ORDR section: the vertex permutation alone.
 pub fn decode_v1(payload: &[u8], nv: usize) -> Result<Vec<u32>> {
-    let mut d = Decoder::new(payload, SECTION)?;
+    let mut d = Decoder::new(payload, SECTION, 1)?;
     get_perm(&mut d, nv, 1)
 }
 

@@ -36,6 +36,102 @@ fn distinct(positions: &[[i64; 3]], k: usize) -> Vec<i64> {
     v
 }
 
+/// First format whose axes may be coded on a lattice: values rounded from equal steps
+/// between the first and last, plus residuals (SPEC.md 3.1).
+pub const LATTICE_VERSION: u16 = 23;
+
+/// `round(k span / steps)`, halves up: lattice point k's offset from the first value.
+fn lattice_offset(k: i128, span: i128, steps: i128) -> i128 {
+    (2 * k * span + steps).div_euclid(2 * steps)
+}
+
+/// The lattice points of the sorted distinct values `v` on a lattice of `steps` steps
+/// from `v[0]` to the last value: each value's nearest point, kept increasing, the last
+/// value on the last point; `None` when they do not fit.
+fn lattice_points(v: &[i64], steps: i64) -> Option<Vec<i64>> {
+    let n = v.len() - 1;
+    let span = (v[n] - v[0]) as i128;
+    if n == 0 || (steps as usize) < n || steps as i128 > span {
+        return None;
+    }
+    let mut k = Vec::with_capacity(v.len());
+    k.push(0i64);
+    for (i, &x) in v.iter().enumerate().skip(1).take(n - 1) {
+        let nearest = ((2 * (x - v[0]) as i128 * steps as i128 + span) / (2 * span)) as i64;
+        // Leave room for the values still to come.
+        let hi = steps - (n - i) as i64;
+        k.push(nearest.max(k[i - 1] + 1).min(hi));
+    }
+    k.push(steps);
+    k.windows(2).all(|w| w[0] < w[1]).then_some(k)
+}
+
+/// Codes one axis's sorted distinct values `v` (SPEC.md 3.1): its count less one, its
+/// first value, then (format 23 on) a flag and either the gaps' changes or, given the
+/// values' points `lattice` ([`lattice_points`]), the lattice's steps' excess over the
+/// count, the span's excess over the steps, then per value its skipped lattice points
+/// (when there are any) and its residual.
+fn put_axis(e: &mut Encoder, v: &[i64], lattice: Option<&[i64]>) {
+    let (mut count, mut first, mut extra, mut spread, mut skips, mut gaps) = (
+        IntModel::new(),
+        IntModel::new(),
+        IntModel::new(),
+        IntModel::new(),
+        IntModel::new(),
+        IntModel::new(),
+    );
+    let n = v.len() - 1;
+    e.int(&mut count, n as i64);
+    e.int(&mut first, v[0]);
+    if n > 0 {
+        e.uniform(lattice.is_some() as u64, 2);
+    }
+    if let Some(k) = lattice {
+        let (steps, span) = (k[n], v[n] - v[0]);
+        e.int(&mut extra, steps - n as i64);
+        e.int(&mut spread, span - steps);
+        for i in 1..n {
+            if steps > n as i64 {
+                e.int(&mut skips, k[i] - k[i - 1] - 1);
+            }
+            let p = v[0] as i128 + lattice_offset(k[i] as i128, span as i128, steps as i128);
+            e.int(&mut gaps, (v[i] as i128 - p) as i64);
+        }
+        return;
+    }
+    let mut prev_gap = 0;
+    for w in v.windows(2) {
+        let gap = w[1] - w[0] - 1;
+        e.int(&mut gaps, gap - prev_gap);
+        prev_gap = gap;
+    }
+}
+
+/// Lattices worth trying for the sorted distinct values `v`: one step per value, and
+/// steps near the span over the mean of the gaps of at most 1.5 times the least (the
+/// gaps of one step, on a lattice with points left out).
+fn lattice_candidates(v: &[i64]) -> Vec<i64> {
+    let n = v.len() as i64 - 1;
+    if n < 1 {
+        return Vec::new();
+    }
+    let least = v.windows(2).map(|w| w[1] - w[0]).min().unwrap_or(1);
+    let (sum, count) = v
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|&g| 2 * g as i128 <= 3 * least as i128)
+        .fold((0i128, 0i128), |(s, c), g| (s + g as i128, c + 1));
+    let span = (v[n as usize] - v[0]) as i128;
+    let guess = ((2 * span * count + sum) / (2 * sum)) as i64;
+    let mut c: Vec<i64> = [n, guess - 1, guess, guess + 1]
+        .into_iter()
+        .filter(|&s| s >= n && s as i128 <= span && s <= 64 * (n + 1))
+        .collect();
+    c.sort_unstable();
+    c.dedup();
+    c
+}
+
 impl ValueMap {
     /// The map `auto` tries: every axis whose distinct values are sparse in their span
     /// and lie apart, as on a lattice ([`SPARSE`], [`LATTICE`]); `None` when no axis is.
@@ -101,16 +197,23 @@ impl ValueMap {
             .sum::<u64>();
         e.uniform(mask, 8);
         for v in self.axes.iter().flatten() {
-            let (mut count, mut first, mut gaps) =
-                (IntModel::new(), IntModel::new(), IntModel::new());
-            e.int(&mut count, v.len() as i64 - 1);
-            e.int(&mut first, v[0]);
-            let mut prev_gap = 0;
-            for w in v.windows(2) {
-                let gap = w[1] - w[0] - 1;
-                e.int(&mut gaps, gap - prev_gap);
-                prev_gap = gap;
+            // Each axis in the smallest of its codings (the gaps on ties).
+            let size = |lattice: Option<&[i64]>| {
+                let mut t = Encoder::new();
+                put_axis(&mut t, v, lattice);
+                t.finish().len()
+            };
+            let mut best = (size(None), None);
+            for k in lattice_candidates(v)
+                .into_iter()
+                .filter_map(|s| lattice_points(v, s))
+            {
+                let z = size(Some(&k));
+                if z < best.0 {
+                    best = (z, Some(k));
+                }
             }
+            put_axis(&mut e, v, best.1.as_deref());
         }
         e.finish()
     }
@@ -119,7 +222,7 @@ impl ValueMap {
     /// allocating) more values than the mesh has or than the payload can hold
     /// (SPEC.md 2.6).
     pub fn decode(payload: &[u8], vertices: u64, version: u16) -> Result<ValueMap> {
-        let mut d = Decoder::new(payload, SECTION)?;
+        let mut d = Decoder::new(payload, SECTION, version)?;
         let mask = d.uniform(8)?;
         if mask == 0 {
             return Err(Error::corrupt(SECTION, "a value map of no axis"));
@@ -130,11 +233,8 @@ impl ValueMap {
             if mask & (1 << k) == 0 {
                 continue;
             }
-            let (mut count, mut first, mut gaps) = (
-                IntModel::for_version(version),
-                IntModel::for_version(version),
-                IntModel::for_version(version),
-            );
+            let [mut count, mut first, mut extra, mut spread, mut skips, mut gaps] =
+                std::array::from_fn(|_| IntModel::for_version(version));
             let n = d.int(&mut count)?;
             if n < 0 || n as u64 >= vertices || n as u64 > 2048 * room {
                 return Err(Error::corrupt(
@@ -143,21 +243,54 @@ impl ValueMap {
                 ));
             }
             let mut v = Vec::with_capacity(n as usize + 1);
-            let mut x = d.int(&mut first)? as i128;
-            let mut gap: i128 = 0;
-            for i in 0..=n {
-                if i > 0 {
-                    gap += d.int(&mut gaps)? as i128;
-                    if gap < 0 {
-                        return Err(Error::corrupt(SECTION, "values out of order"));
+            let first = d.int(&mut first)? as i128;
+            let lattice = version >= LATTICE_VERSION && n > 0 && d.uniform(2)? == 1;
+            if lattice {
+                // Lattice point k_i, then the value rounded from it plus a residual.
+                let steps = n as i128 + d.int(&mut extra)? as i128;
+                let span = steps + d.int(&mut spread)? as i128;
+                if steps < n as i128 || span < steps || first + span > MAX_COORD as i128 {
+                    return Err(Error::corrupt(SECTION, "a lattice out of order or range"));
+                }
+                v.push(first);
+                let mut k: i128 = 0;
+                for _ in 1..n {
+                    k += 1;
+                    if steps > n as i128 {
+                        let skip = d.int(&mut skips)?;
+                        if skip < 0 {
+                            return Err(Error::corrupt(SECTION, "lattice points out of order"));
+                        }
+                        k += skip as i128;
                     }
-                    x += gap + 1;
+                    if k >= steps {
+                        return Err(Error::corrupt(SECTION, "a lattice point past the last"));
+                    }
+                    let x = first + lattice_offset(k, span, steps) + d.int(&mut gaps)? as i128;
+                    v.push(x);
                 }
-                if x.abs() > MAX_COORD as i128 {
-                    return Err(Error::corrupt(SECTION, "a value out of range"));
+                v.push(first + span);
+                if v.windows(2).any(|w| w[0] >= w[1]) {
+                    return Err(Error::corrupt(SECTION, "values out of order"));
                 }
-                v.push(x as i64);
+            } else {
+                let mut x = first;
+                let mut gap: i128 = 0;
+                for i in 0..=n {
+                    if i > 0 {
+                        gap += d.int(&mut gaps)? as i128;
+                        if gap < 0 {
+                            return Err(Error::corrupt(SECTION, "values out of order"));
+                        }
+                        x += gap + 1;
+                    }
+                    v.push(x);
+                }
             }
+            if v.iter().any(|x| x.abs() > MAX_COORD as i128) {
+                return Err(Error::corrupt(SECTION, "a value out of range"));
+            }
+            let v: Vec<i64> = v.into_iter().map(|x| x as i64).collect();
             *axis = Some(v);
         }
         Ok(ValueMap { axes })
@@ -215,6 +348,102 @@ mod tests {
         assert_eq!(m.axes[2], None);
     }
 
+    /// The payload of a map of axis x alone, `v`, coded as gaps or on `lattice`.
+    fn one_axis(v: &[i64], lattice: Option<&[i64]>) -> Vec<u8> {
+        let mut e = Encoder::new();
+        e.uniform(1, 8);
+        put_axis(&mut e, v, lattice);
+        e.finish()
+    }
+
+    #[test]
+    fn lattice_axes_cost_less_and_come_back_exactly() {
+        // A grid's columns on Draco's grid: 65 values, 3311 apart in all (steps of 51
+        // and 52), one off the lattice by 1.
+        let mut cols: Vec<i64> = (0..65).map(|i| (2 * i * 3311 + 64) / 128 - 7).collect();
+        cols[30] += 1;
+        // Heights in whole metres at 16 bits: 191.6 apart, a few metres missing.
+        let heights: Vec<i64> = (0..343)
+            .filter(|h| ![17, 18, 90, 200, 341].contains(h))
+            .map(|h| 40 + (2 * h * 65_535 + 342) / 684)
+            .collect();
+        // The payload of x coded as `lattice` (or gaps), then y and z, one value each.
+        let expected = |v: &[i64], lattice: Option<&[i64]>| {
+            let mut e = Encoder::new();
+            e.uniform(7, 8);
+            put_axis(&mut e, v, lattice);
+            for _ in 0..2 {
+                put_axis(&mut e, &[0], None);
+            }
+            e.finish()
+        };
+        for (v, steps) in [(&cols, 64), (&heights, 342)] {
+            let n = v.len();
+            let pos: Vec<[i64; 3]> = (0..n).map(|i| [v[i], 0, 0]).collect();
+            let m = ValueMap::every_axis(&pos).unwrap();
+            let bytes = m.encode();
+            assert_eq!(
+                ValueMap::decode(&bytes, n as u64, FORMAT_VERSION).unwrap(),
+                m
+            );
+            // The lattice of one step per value, or per metre, is found and chosen, and
+            // costs at most half as much as the gaps.
+            let k = lattice_points(v, steps).unwrap();
+            assert_eq!(bytes, expected(v, Some(&k)));
+            let (lattice, gaps) = (one_axis(v, Some(&k)).len(), one_axis(v, None).len());
+            assert!(2 * lattice <= gaps, "{lattice} {gaps}");
+        }
+        // Scattered values stay coded as gaps.
+        let scattered: Vec<i64> = (0..100i64).map(|i| i * i + 3 * i).collect();
+        let pos: Vec<[i64; 3]> = scattered.iter().map(|&x| [x, 0, 0]).collect();
+        let m = ValueMap::every_axis(&pos).unwrap();
+        assert_eq!(m.encode(), expected(&scattered, None));
+    }
+
+    #[test]
+    fn hostile_lattices_are_refused() {
+        // count n = 3, first 10, lattice flag, then (extra, spread) and per value
+        // (skip if extra > 0, residual), as `put_axis` writes them.
+        let payload = |extra: i64, spread: i64, rest: &[i64]| {
+            let mut e = Encoder::new();
+            e.uniform(1, 8);
+            let [mut c, mut f, mut x, mut s, mut k, mut g] =
+                std::array::from_fn(|_| IntModel::new());
+            e.int(&mut c, 3);
+            e.int(&mut f, 10);
+            e.uniform(1, 2);
+            e.int(&mut x, extra);
+            e.int(&mut s, spread);
+            for (i, &r) in rest.iter().enumerate() {
+                if extra > 0 && i % 2 == 0 {
+                    e.int(&mut k, r);
+                } else {
+                    e.int(&mut g, r);
+                }
+            }
+            e.finish()
+        };
+        let ok = |bytes: Vec<u8>| ValueMap::decode(&bytes, 10, FORMAT_VERSION);
+        // Steps 3, span 30: values 10, 20, 30, 40; and with a residual.
+        let v = |m: ValueMap| m.axes[0].clone().unwrap();
+        assert_eq!(v(ok(payload(0, 27, &[0, 0])).unwrap()), [10, 20, 30, 40]);
+        assert_eq!(v(ok(payload(0, 27, &[-3, 4])).unwrap()), [10, 17, 34, 40]);
+        // Steps 5 (two skipped), span 50: points 0, 2, 3, 5.
+        assert_eq!(
+            v(ok(payload(2, 45, &[1, 0, 0, 0])).unwrap()),
+            [10, 30, 40, 60]
+        );
+        // Fewer steps than values; span below the steps; past the coordinate range.
+        assert!(ok(payload(-1, 27, &[0, 0])).is_err());
+        assert!(ok(payload(0, -1, &[0, 0])).is_err());
+        assert!(ok(payload(0, MAX_COORD - 12, &[0, 0])).is_err());
+        // A negative skip; a point past the last; values out of order.
+        assert!(ok(payload(2, 45, &[-1, 0, 0, 0])).is_err());
+        assert!(ok(payload(2, 45, &[1, 0, 2, 0])).is_err());
+        assert!(ok(payload(0, 27, &[10, 0])).is_err());
+        assert!(ok(payload(0, 27, &[0, 10])).is_err());
+    }
+
     #[test]
     fn dense_axes_are_no_candidate() {
         let pos: Vec<[i64; 3]> = (0..100).map(|i| [i, i / 2, 99 - i]).collect();
@@ -243,6 +472,7 @@ mod tests {
             let (mut c, mut f, mut g) = (IntModel::new(), IntModel::new(), IntModel::new());
             e.int(&mut c, 1);
             e.int(&mut f, v[0]);
+            e.uniform(0, 2);
             e.int(&mut g, v[1] - v[0] - 1);
             assert!(
                 ValueMap::decode(&e.finish(), 10, FORMAT_VERSION).is_err(),
