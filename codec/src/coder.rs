@@ -504,21 +504,24 @@ impl Encoder {
             // Nothing coded: an empty stream.
             return out;
         }
-        if situation != EncoderSituation::Normal {
-            // Words held back for a carry (rare): constriction's seal settles them.
-            let enc = DefaultRangeEncoder::from_raw_parts(Vec::new(), state, situation);
-            let tail = enc.into_compressed().unwrap_or_default();
-            out.extend(tail.iter().flat_map(|w| w.to_be_bytes()));
-            return out;
-        }
-        // In the normal situation lower + range <= 2^64 - 1, and range >= 2^32, so
-        // t = 32 always fits.
-        for t in [64u32, 56, 48, 40, 32] {
-            let point = lower.div_ceil(1 << t) << t;
-            if point < lower + range && point < 1 << 64 {
-                let bytes = (64 - t) as usize / 8;
-                out.extend_from_slice(&(point as u64).to_be_bytes()[..bytes]);
-                break;
+        // In the normal situation lower + range <= 2^64 - 1 and range >= 2^32, so t = 32
+        // always fits.
+        let tail = (situation == EncoderSituation::Normal)
+            .then(|| {
+                [64u32, 56, 48, 40, 32].into_iter().find_map(|t| {
+                    let point = lower.div_ceil(1 << t) << t;
+                    (point < lower + range && point < 1 << 64)
+                        .then(|| (point as u64).to_be_bytes()[..(64 - t) as usize / 8].to_vec())
+                })
+            })
+            .flatten();
+        match tail {
+            Some(t) => out.extend(t),
+            None => {
+                // Words held back for a carry (rare): constriction's seal settles them.
+                let enc = DefaultRangeEncoder::from_raw_parts(Vec::new(), state, situation);
+                let words = enc.into_compressed().unwrap_or_default();
+                out.extend(words.iter().flat_map(|w| w.to_be_bytes()));
             }
         }
         out
