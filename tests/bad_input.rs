@@ -451,7 +451,8 @@ fn corrected_phased_levels_round_trip() {
 #[test]
 fn every_bit_flip_inside_a_phased_level_is_an_error_or_a_valid_mesh() {
     // The frozen containers with a level in mode 6 (Catmull-Clark, interp4), mode 7
-    // (sqrt(2)), mode 8 (its weights included), mode 9, and mode 9 unbinned (format 22):
+    // (sqrt(2)), mode 8 (its weights included), mode 9, mode 9 unbinned (format 22) and
+    // mode 6 unbinned on interp6 (format 24):
     // every bit of those levels' payloads flipped, checksums made valid, so the phases,
     // shifts, corrections and their bounds meet hostile values.
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/golden/");
@@ -462,6 +463,7 @@ fn every_bit_flip_inside_a_phased_level_is_an_error_or_a_valid_mesh() {
         ("terrain_grid33.interp4.v20.swv", 8),
         ("terrain_grid33.lazy.q16.v21.swv", 9),
         ("subdivided_open_cc3.lazy.q12.v22.swv", 0x89),
+        ("subdivided_open_cc3.interp6.q12.v24.swv", 0x86),
     ] {
         let b = std::fs::read(format!("{dir}{file}")).unwrap();
         let payloads = level_payloads(&b);

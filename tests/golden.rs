@@ -110,6 +110,10 @@ fn frozen_containers_still_decode() {
             "subdivided_open_cc3.obj",
         ),
         ("terrain_grid33.q16.v23.swv", "terrain_grid33.obj"),
+        (
+            "subdivided_open_cc3.interp6.q12.v24.swv",
+            "subdivided_open_cc3.obj",
+        ),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);
@@ -131,8 +135,8 @@ fn frozen_containers_still_decode() {
             // A ".flat." container is coded without levels (the flat path), a ".disc."
             // one with the lazy polar wavelet in its discs (radial first), a ".lifted."
             // one with the lifted polar wavelet (circular first), a ".vmap." one with
-            // every axis's value map, an ".interp4." one with the interp4 transform, a
-            // ".lazy." one with the lazy transform.
+            // every axis's value map, an ".interp4." (".interp6.") one with the interp4
+            // (interp6) transform, a ".lazy." one with the lazy transform.
             let enc = subwave::encode_to_vec(
                 &m.mesh,
                 &m.quantization,
@@ -150,6 +154,8 @@ fn frozen_containers_still_decode() {
                     value_map: swv.contains(".vmap.").then_some(true),
                     transform: if swv.contains(".interp4.") {
                         subwave::TransformChoice::Fixed(subwave::Wavelet::Interp4)
+                    } else if swv.contains(".interp6.") {
+                        subwave::TransformChoice::Fixed(subwave::Wavelet::Interp6)
                     } else if swv.contains(".lazy.") {
                         subwave::TransformChoice::Fixed(subwave::Wavelet::Lazy)
                     } else {

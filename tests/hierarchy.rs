@@ -277,6 +277,53 @@ fn interp4_codes_smooth_open_grids_smaller_than_lazy_and_is_new_in_version_13() 
     }
 }
 
+#[test]
+fn interp6_codes_smooth_open_grids_smaller_than_interp4_and_is_new_in_version_24() {
+    // A smooth open surface (a quintic height field over a grid refined 4 times): the
+    // 6-point rule's details are zero wherever its stencil is complete, so interp6 codes
+    // it smaller than interp4, and both decode exactly.
+    let mut p = subwave_corpus::open_grid(4, 4).refined(4);
+    for v in &mut p.positions {
+        let (x, y) = (v[0] * 3.7, v[1] * 4.1);
+        v[2] = x.powi(5) - 2.0 * x * x * y.powi(3) + 0.5 * y.powi(4) - x;
+    }
+    let mesh = common::to_mesh(&p, 1e4);
+    let q = Quantization::Decimal { decimals: 4 };
+    let code = |w: Wavelet| {
+        let opts = EncodeOptions {
+            transform: TransformChoice::Fixed(w),
+            ..Default::default()
+        };
+        let enc = subwave::encode_to_vec(&mesh, &q, &opts).unwrap();
+        let dec = subwave::decode_slice(&enc.bytes).unwrap();
+        assert_eq!(
+            common::fingerprint(&dec.mesh),
+            common::fingerprint(&mesh),
+            "{}",
+            w.name()
+        );
+        enc
+    };
+    let (interp4, interp6) = (code(Wavelet::Interp4), code(Wavelet::Interp6));
+    assert!(interp6.header.levels >= 4);
+    assert!(
+        interp6.bytes.len() < interp4.bytes.len(),
+        "interp6 {} B, interp4 {} B",
+        interp6.bytes.len(),
+        interp4.bytes.len()
+    );
+    // Transform 11 did not exist before version 24.
+    let head = interp6.header.write();
+    let limits = subwave::Limits::default();
+    assert!(subwave::Header::read(&head, 0, &limits, 24).is_ok());
+    match subwave::Header::read(&head, 0, &limits, 23) {
+        Err(subwave::Error::Unsupported(what)) => {
+            assert!(what.contains("transform code 11"), "{what}")
+        }
+        other => panic!("expected unsupported, got {other:?}"),
+    }
+}
+
 fn random_hierarchy(seed: u64, base: usize, levels: u32, bits: u32) -> Mesh {
     let mut rng = Rng::new(seed);
     let b = match base {

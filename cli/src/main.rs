@@ -94,9 +94,9 @@ struct Coding {
     #[arg(long, value_name = "Q", value_parser = clap::value_parser!(u8).range(1..=30))]
     bits: Option<u8>,
     /// Wavelet for subdivision levels: auto (smallest file); Catmull-Clark: lazy,
-    /// bilinear, bicubic, biquintic, dyadic-sym, interp4 (4-point interpolating), or
-    /// fit (the subdivision fit, for subdivided models); sqrt(2): sqrt2-lazy, ir2w,
-    /// sqrt2-sym.
+    /// bilinear, bicubic, biquintic, dyadic-sym, interp4 (4-point interpolating), interp6
+    /// (6-point interpolating), or fit (the subdivision fit, for subdivided models);
+    /// sqrt(2): sqrt2-lazy, ir2w, sqrt2-sym.
     #[arg(long, default_value = "auto", value_parser = parse_transform)]
     transform: TransformChoice,
     /// Look for at most N refinement levels (0: code the mesh flat).

@@ -2462,7 +2462,7 @@ mod tests {
         use crate::transform::{Phaser, Stencils, Wavelet};
         let level = refined(2);
         let nd = level.ne() + level.nf();
-        for w in [Wavelet::Lazy, Wavelet::Interp4] {
+        for w in [Wavelet::Lazy, Wavelet::Interp4, Wavelet::Interp6] {
             let [fine, x, coarse] = synthesised(&level, w, 40, 2);
             let st = Stencils::new(&level, w);
             let p = Phaser::new(&level, w, &st).unwrap();
@@ -2791,7 +2791,7 @@ mod tests {
         use crate::transform::{Phaser, Stencils, Wavelet};
         let (level, _) = grid_level(9);
         let nd = level.ne() + level.nf();
-        for w in [Wavelet::Lazy, Wavelet::Interp4] {
+        for w in [Wavelet::Lazy, Wavelet::Interp4, Wavelet::Interp6] {
             let [fine, x, coarse] = synthesised(&level, w, 60, 3);
             let st = Stencils::new(&level, w);
             let p = Phaser::new(&level, w, &st).unwrap();

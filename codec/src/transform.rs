@@ -28,6 +28,10 @@ pub enum Wavelet {
     /// where the quads around are regular (Kobbelt's interpolatory quad scheme), the
     /// lazy rules elsewhere; no update (SPEC.md 9.11).
     Interp4,
+    /// Prediction only, by the 6-point rule (3, -25, 150, 150, -25, 3) / 256 along the
+    /// mesh's lines where they run straight on for three coarse vertices each way
+    /// (Deslauriers-Dubuc), interp4's rules elsewhere; no update (SPEC.md 9.12, format 24).
+    Interp6,
     /// sqrt(2) levels: the interpolatory prediction of Wang & Ma 2009 (eq. 1) alone
     /// (SPEC.md 9.7).
     Sqrt2Lazy,
@@ -41,13 +45,14 @@ pub enum Wavelet {
 
 impl Wavelet {
     /// The Catmull-Clark transforms, in header-code order.
-    pub const ALL: [Wavelet; 6] = [
+    pub const ALL: [Wavelet; 7] = [
         Wavelet::Lazy,
         Wavelet::Bilinear,
         Wavelet::Bicubic,
         Wavelet::Biquintic,
         Wavelet::DyadicSym,
         Wavelet::Interp4,
+        Wavelet::Interp6,
     ];
 
     /// The sqrt(2) transforms, in header-code order.
@@ -67,6 +72,7 @@ impl Wavelet {
             Wavelet::Biquintic => "biquintic",
             Wavelet::DyadicSym => "dyadic-sym",
             Wavelet::Interp4 => "interp4",
+            Wavelet::Interp6 => "interp6",
             Wavelet::Sqrt2Lazy => "sqrt2-lazy",
             Wavelet::Ir2w => "ir2w",
             Wavelet::Sqrt2Sym => "sqrt2-sym",
@@ -85,6 +91,7 @@ impl Wavelet {
             Wavelet::Ir2w => 7,
             Wavelet::Sqrt2Sym => 8,
             Wavelet::Interp4 => 10,
+            Wavelet::Interp6 => 11,
         }
     }
 
@@ -93,6 +100,7 @@ impl Wavelet {
         match self {
             Wavelet::Sqrt2Lazy | Wavelet::Ir2w | Wavelet::Sqrt2Sym => 6,
             Wavelet::Interp4 => 13,
+            Wavelet::Interp6 => 24,
             _ => 2,
         }
     }
@@ -121,6 +129,7 @@ impl Wavelet {
         match self {
             Wavelet::DyadicSym
             | Wavelet::Interp4
+            | Wavelet::Interp6
             | Wavelet::Sqrt2Lazy
             | Wavelet::Ir2w
             | Wavelet::Sqrt2Sym => &[],
@@ -505,21 +514,26 @@ pub fn analyse_except<T: Sample>(level: &Level, w: Wavelet, x: &mut [T], skip: &
 }
 
 /// A level's neighbourhoods that a transform would otherwise look up for every value:
-/// interp4's beyond vertices and beyond edges (SPEC.md 9.11). Made once per level, they
-/// serve all three axes.
+/// interp4's beyond vertices and beyond edges (SPEC.md 9.11), and interp6's further
+/// ones (9.12). Made once per level, they serve all three axes.
 pub struct Stencils(Option<Interp4>);
 
 impl Stencils {
     /// The stencils of wavelet `w` on `level` (none for the transforms without any).
     pub fn new(level: &Level, w: Wavelet) -> Stencils {
-        Stencils((w == Wavelet::Interp4).then(|| Interp4::new(level)))
+        Stencils(match w {
+            Wavelet::Interp4 => Some(Interp4::new(level, false)),
+            Wavelet::Interp6 => Some(Interp4::new(level, true)),
+            _ => None,
+        })
     }
 
-    /// interp4's stencils: these, or made now if they were made for another wavelet.
-    fn interp4(&self, level: &Level) -> std::borrow::Cow<'_, Interp4> {
+    /// interp4's stencils (`six`: interp6's): these, or made now if they were made for
+    /// another wavelet.
+    fn interp4(&self, level: &Level, six: bool) -> std::borrow::Cow<'_, Interp4> {
         match &self.0 {
-            Some(st) => std::borrow::Cow::Borrowed(st),
-            None => std::borrow::Cow::Owned(Interp4::new(level)),
+            Some(st) if st.six == six => std::borrow::Cow::Borrowed(st),
+            _ => std::borrow::Cow::Owned(Interp4::new(level, six)),
         }
     }
 }
@@ -568,7 +582,8 @@ fn lift<T: Sample>(
 ) {
     match w {
         Wavelet::DyadicSym => dyadic_sym(level, x, forward, skip),
-        Wavelet::Interp4 => interp4(level, &st.interp4(level), x, forward, skip),
+        Wavelet::Interp4 => interp4(level, &st.interp4(level, false), x, forward, skip),
+        Wavelet::Interp6 => interp4(level, &st.interp4(level, true), x, forward, skip),
         _ if forward => {
             for &s in w.steps() {
                 step(level, x, s, true, skip);
@@ -663,14 +678,15 @@ fn ds_step3<T: Sample>(level: &Level, x: &[T], v: usize) -> T {
 /// two on the boundary (a regular boundary vertex; a corner turns);
 /// on an interior edge with two quads beside it, when `a` is interior with four edges,
 /// the other end of the one edge of `a` that is neither `e` nor beside `e` in those quads.
-fn beyond_vertex(level: &Level, e: usize, a: usize) -> Option<usize> {
+/// Returns the vertex and the edge that leads to it from `a`.
+fn beyond_vertex(level: &Level, e: usize, a: usize) -> Option<(usize, usize)> {
     let (nb, be) = level.boundary_edges(a);
     if level.is_boundary(e) {
         if nb != 2 || level.v_edges(a).len() != 3 {
             return None;
         }
         let other = if be[0] as usize == e { be[1] } else { be[0] };
-        return Some(level.other_end(other, a) as usize);
+        return Some((level.other_end(other, a) as usize, other as usize));
     }
     let edges = level.v_edges(a);
     if nb != 0 || edges.len() != 4 {
@@ -692,12 +708,13 @@ fn beyond_vertex(level: &Level, e: usize, a: usize) -> Option<usize> {
         .iter()
         .copied()
         .find(|&x| x as usize != e && !side.contains(&x))?;
-    Some(level.other_end(opp, a) as usize)
+    Some((level.other_end(opp, a) as usize, opp as usize))
 }
 
 /// The edge point beyond face `f`'s edge `e` (SPEC.md 9.11): the edge opposite `e` in the
 /// quad on `e`'s other side.
-fn beyond_edge(level: &Level, f: usize, e: u32) -> Option<usize> {
+/// Returns the edge and the quad it lies in.
+fn beyond_edge(level: &Level, f: usize, e: u32) -> Option<(usize, usize)> {
     let [f1, f2] = level.edge_faces[e as usize];
     if f2 == NONE {
         return None;
@@ -708,40 +725,68 @@ fn beyond_edge(level: &Level, f: usize, e: u32) -> Option<usize> {
         return None;
     }
     let i = fe.iter().position(|&x| x == e)?;
-    Some(fe[(i + 2) % 4] as usize)
+    Some((fe[(i + 2) % 4] as usize, g))
 }
 
 /// interp4's stencils (SPEC.md 9.11): per edge its two ends' beyond vertices, per quad
 /// face the beyond edge of each of its edges ([`NONE`] where there is none; non-quads
-/// take the lazy rule and no stencil).
+/// take the lazy rule and no stencil). With `six` (interp6, 9.12) also the vertices and
+/// edges beyond those.
 #[derive(Clone)]
 struct Interp4 {
+    six: bool,
     edge: Vec<[u32; 2]>,
     face: Vec<[u32; 4]>,
+    /// interp6: per edge the vertices beyond its ends' beyond vertices.
+    edge2: Vec<[u32; 2]>,
+    /// interp6: per quad face, per edge the edge beyond its beyond edge.
+    face2: Vec<[u32; 4]>,
 }
 
 impl Interp4 {
-    fn new(level: &Level) -> Interp4 {
+    fn new(level: &Level, six: bool) -> Interp4 {
         let some = |v: Option<usize>| v.map_or(NONE, |v| v as u32);
-        let edge = (0..level.ne())
-            .map(|e| {
-                let [a, b] = level.edges[e];
-                [
-                    some(beyond_vertex(level, e, a as usize)),
-                    some(beyond_vertex(level, e, b as usize)),
-                ]
-            })
+        // Per edge end, the beyond vertex and the edge that leads to it; per quad edge,
+        // the beyond edge and the quad it lies in. interp6's far vertex (edge) is the
+        // beyond vertex (edge) of those, already in the tables: no second search.
+        let ends: Vec<[Option<(usize, usize)>; 2]> = (0..level.ne())
+            .map(|e| level.edges[e].map(|a| beyond_vertex(level, e, a as usize)))
             .collect();
-        let face = (0..level.nf())
+        let sides: Vec<[Option<(usize, usize)>; 4]> = (0..level.nf())
             .map(|f| {
                 let fe = level.f_edges(f);
                 if fe.len() != 4 {
-                    return [NONE; 4];
+                    return [None; 4];
                 }
-                std::array::from_fn(|i| some(beyond_edge(level, f, fe[i])))
+                std::array::from_fn(|i| beyond_edge(level, f, fe[i]))
             })
             .collect();
-        Interp4 { edge, face }
+        let edge = ends.iter().map(|s| s.map(|b| some(b.map(|b| b.0)))).collect();
+        let face = sides.iter().map(|s| s.map(|b| some(b.map(|b| b.0)))).collect();
+        let (mut edge2, mut face2) = (Vec::new(), Vec::new());
+        if six {
+            // The beyond vertex b of a on edge e, reached by edge g: b's beyond vertex on g.
+            let far = |b: Option<(usize, usize)>| {
+                let (b, g) = b?;
+                let end = level.edges[g].iter().position(|&v| v as usize == b)?;
+                ends[g][end].map(|x| x.0)
+            };
+            edge2 = ends.iter().map(|s| s.map(|b| some(far(b)))).collect();
+            // The beyond edge y of f's edge, in quad h: the beyond edge of h's edge y.
+            let far = |y: Option<(usize, usize)>| {
+                let (y, h) = y?;
+                let i = level.f_edges(h).iter().position(|&x| x as usize == y)?;
+                sides[h][i].map(|x| x.0)
+            };
+            face2 = sides.iter().map(|s| s.map(|y| some(far(y)))).collect();
+        }
+        Interp4 {
+            six,
+            edge,
+            face,
+            edge2,
+            face2,
+        }
     }
 }
 
@@ -758,6 +803,19 @@ fn interp4_edge<T: Sample>(level: &Level, st: &Interp4, x: &[T], e: usize) -> T 
 fn interp4_edge_sum<T: Sample>(level: &Level, st: &Interp4, x: &[T], e: usize) -> (T::Acc, i128) {
     let [a, b] = level.edges[e];
     let (a, b) = (a as usize, b as usize);
+    if st.six {
+        let ([a2, b2], [a3, b3]) = (st.edge[e], st.edge2[e]);
+        if a3 != NONE && b3 != NONE {
+            // Both far vertices imply both beyond vertices.
+            let mut s = x[a].weighted(150);
+            s += x[b].weighted(150);
+            s += x[a2 as usize].weighted(-25);
+            s += x[b2 as usize].weighted(-25);
+            s += x[a3 as usize].weighted(3);
+            s += x[b3 as usize].weighted(3);
+            return (s, 256);
+        }
+    }
     match st.edge[e] {
         [a2, b2] if a2 != NONE && b2 != NONE => {
             let mut s = x[a].weighted(9);
@@ -789,6 +847,32 @@ fn interp4_face<T: Sample>(level: &Level, st: &Interp4, x: &[T], f: usize) -> T 
 fn interp4_face_sum<T: Sample>(level: &Level, st: &Interp4, x: &[T], f: usize) -> (T::Acc, i128) {
     let e0 = level.nv;
     let fe = level.f_edges(f);
+    if fe.len() == 4 && st.six {
+        // interp6: each pair of opposite edges by the widest rule it has, scaled to 256.
+        let (beyond, far) = (st.face[f], st.face2[f]);
+        let mut s = T::Acc::default();
+        for d in 0..2 {
+            let (m, m2) = (e0 + fe[d] as usize, e0 + fe[d + 2] as usize);
+            let (y, y2, z, z2) = (beyond[d], beyond[d + 2], far[d], far[d + 2]);
+            if z != NONE && z2 != NONE {
+                s += x[m].weighted(150);
+                s += x[m2].weighted(150);
+                s += x[e0 + y as usize].weighted(-25);
+                s += x[e0 + y2 as usize].weighted(-25);
+                s += x[e0 + z as usize].weighted(3);
+                s += x[e0 + z2 as usize].weighted(3);
+            } else if y != NONE && y2 != NONE {
+                s += x[m].weighted(144);
+                s += x[m2].weighted(144);
+                s += x[e0 + y as usize].weighted(-16);
+                s += x[e0 + y2 as usize].weighted(-16);
+            } else {
+                s += x[m].weighted(128);
+                s += x[m2].weighted(128);
+            }
+        }
+        return (s, 512);
+    }
     if fe.len() == 4 {
         let beyond = st.face[f];
         let mut s = T::Acc::default();
@@ -836,9 +920,9 @@ impl<'a> Phaser<'a> {
                 level,
                 interp4: None,
             }),
-            Wavelet::Interp4 => Some(Phaser {
+            Wavelet::Interp4 | Wavelet::Interp6 => Some(Phaser {
                 level,
-                interp4: Some(st.interp4(level)),
+                interp4: Some(st.interp4(level, w == Wavelet::Interp6)),
             }),
             _ => None,
         }
@@ -1018,7 +1102,7 @@ mod tests {
 
     #[test]
     fn phaser_gives_the_synthesis_and_the_rounding_offsets() {
-        // For lazy and interp4: a detail plus the phaser's correction is the fine value,
+        // For lazy, interp4 and interp6: a detail plus the phaser's correction is the fine value,
         // and the phase is where the unrounded prediction lies (the integer detail less
         // the same analysis on floating point values), on closed, open and mixed meshes.
         let mut seen = [0usize; 8];
@@ -1027,7 +1111,7 @@ mod tests {
             let t2 = level.fine();
             let level2 = Level::new(&t2).unwrap();
             for level in [&level, &level2] {
-                for w in [Wavelet::Lazy, Wavelet::Interp4] {
+                for w in [Wavelet::Lazy, Wavelet::Interp4, Wavelet::Interp6] {
                     let st = Stencils::new(level, w);
                     let p = Phaser::new(level, w, &st).unwrap();
                     let x = crate::hierarchy::fixtures::pseudo(n as u64 + 3, level.fine_nv(), 12);
@@ -1062,7 +1146,7 @@ mod tests {
             which in 0usize..3,
             seed in any::<u64>(),
             bits in 1u32..45,
-            w in 0usize..6,
+            w in 0usize..Wavelet::ALL.len(),
         ) {
             let coarse = match which { 0 => grid(3), 1 => mixed(), _ => open_mixed() };
             let level = Level::new(&coarse).unwrap();
@@ -1153,6 +1237,63 @@ mod tests {
         }
         synthesise(&level, Wavelet::Interp4, &mut y);
         assert_eq!(y, x);
+    }
+
+    #[test]
+    fn interp6_reproduces_quintics_along_the_mesh_lines() {
+        // An 8 x 8 grid refined once, data a quintic in u plus a quintic in v: where the
+        // 6-point rule applies (three coarse vertices on each side) its detail is 0 and
+        // interp4's is not; where only the 4-point rule fits, interp6 is interp4; faces
+        // whose both directions reach three edges out are exact; and it inverts.
+        let level = Level::new(&grid(8)).unwrap();
+        let (nv, ne) = (level.nv, level.ne());
+        let mut coords = vec![(0i64, 0i64); level.fine_nv()];
+        for (v, c) in coords.iter_mut().enumerate().take(nv) {
+            *c = (2 * (v as i64 % 9), 2 * (v as i64 / 9));
+        }
+        for (e, &[a, b]) in level.edges.iter().enumerate() {
+            let (pa, pb) = (coords[a as usize], coords[b as usize]);
+            coords[nv + e] = ((pa.0 + pb.0) / 2, (pa.1 + pb.1) / 2);
+        }
+        for f in 0..level.nf() {
+            let c = level.coarse.face(f);
+            let sx: i64 = c.iter().map(|&v| coords[v as usize].0).sum();
+            let sy: i64 = c.iter().map(|&v| coords[v as usize].1).sum();
+            coords[nv + ne + f] = (sx / 4, sy / 4);
+        }
+        let quintic = |t: i64| t.pow(5) - 30 * t.pow(4) + 7 * t * t * t - 40 * t * t + 3 * t + 11;
+        let x: Vec<i64> = coords
+            .iter()
+            .map(|&(u, v)| quintic(u) - 2 * quintic(v))
+            .collect();
+        let (mut six, mut four) = (x.clone(), x.clone());
+        analyse(&level, Wavelet::Interp6, &mut six);
+        analyse(&level, Wavelet::Interp4, &mut four);
+        let st = Interp4::new(&level, true);
+        let mut six_point = 0;
+        for e in 0..ne {
+            if st.edge2[e].iter().all(|&v| v != NONE) {
+                six_point += 1;
+                assert_eq!(six[nv + e], 0, "edge {e}");
+                assert_ne!(four[nv + e], 0, "edge {e}");
+            } else {
+                assert_eq!(six[nv + e], four[nv + e], "edge {e}");
+            }
+        }
+        // The middle 4 of the 8 edges of each of the 18 lines, boundary lines included.
+        assert_eq!(six_point, 18 * 4);
+        let mut exact = 0;
+        for f in 0..level.nf() {
+            let (u, v) = coords[nv + ne + f];
+            if (5..=11).contains(&u) && (5..=11).contains(&v) {
+                assert_eq!(six[nv + ne + f], 0, "face at {u},{v}");
+                assert_ne!(four[nv + ne + f], 0, "face at {u},{v}");
+                exact += 1;
+            }
+        }
+        assert_eq!(exact, 16);
+        synthesise(&level, Wavelet::Interp6, &mut six);
+        assert_eq!(six, x);
     }
 
     #[test]
