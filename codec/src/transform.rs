@@ -761,8 +761,14 @@ impl Interp4 {
                 std::array::from_fn(|i| beyond_edge(level, f, fe[i]))
             })
             .collect();
-        let edge = ends.iter().map(|s| s.map(|b| some(b.map(|b| b.0)))).collect();
-        let face = sides.iter().map(|s| s.map(|b| some(b.map(|b| b.0)))).collect();
+        let edge = ends
+            .iter()
+            .map(|s| s.map(|b| some(b.map(|b| b.0))))
+            .collect();
+        let face = sides
+            .iter()
+            .map(|s| s.map(|b| some(b.map(|b| b.0))))
+            .collect();
         let (mut edge2, mut face2) = (Vec::new(), Vec::new());
         if six {
             // The beyond vertex b of a on edge e, reached by edge g: b's beyond vertex on g.
