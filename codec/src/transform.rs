@@ -745,46 +745,55 @@ struct Interp4 {
 
 impl Interp4 {
     fn new(level: &Level, six: bool) -> Interp4 {
+        let (ne, nf) = (level.ne(), level.nf());
         let some = |v: Option<usize>| v.map_or(NONE, |v| v as u32);
-        // Per edge end, the beyond vertex and the edge that leads to it; per quad edge,
-        // the beyond edge and the quad it lies in. interp6's far vertex (edge) is the
-        // beyond vertex (edge) of those, already in the tables: no second search.
-        let ends: Vec<[Option<(usize, usize)>; 2]> = (0..level.ne())
-            .map(|e| level.edges[e].map(|a| beyond_vertex(level, e, a as usize)))
-            .collect();
-        let sides: Vec<[Option<(usize, usize)>; 4]> = (0..level.nf())
-            .map(|f| {
-                let fe = level.f_edges(f);
-                if fe.len() != 4 {
-                    return [None; 4];
-                }
-                std::array::from_fn(|i| beyond_edge(level, f, fe[i]))
-            })
-            .collect();
-        let edge = ends
-            .iter()
-            .map(|s| s.map(|b| some(b.map(|b| b.0))))
-            .collect();
-        let face = sides
-            .iter()
-            .map(|s| s.map(|b| some(b.map(|b| b.0))))
-            .collect();
+        // interp6 also keeps, per edge end, the edge that leads to its beyond vertex and,
+        // per quad edge, the quad its beyond edge lies in: the far vertex (edge) is the
+        // beyond vertex (edge) found there, already in the tables.
+        let mut edge = Vec::with_capacity(ne);
+        let mut via = Vec::with_capacity(if six { ne } else { 0 });
+        for e in 0..ne {
+            let found = level.edges[e].map(|a| beyond_vertex(level, e, a as usize));
+            edge.push(found.map(|b| some(b.map(|b| b.0))));
+            if six {
+                via.push(found.map(|b| some(b.map(|b| b.1))));
+            }
+        }
+        let mut face = Vec::with_capacity(nf);
+        let mut quad = Vec::with_capacity(if six { nf } else { 0 });
+        for f in 0..nf {
+            let fe = level.f_edges(f);
+            let found: [Option<(usize, usize)>; 4] = match fe.len() {
+                4 => std::array::from_fn(|i| beyond_edge(level, f, fe[i])),
+                _ => [None; 4],
+            };
+            face.push(found.map(|y| some(y.map(|y| y.0))));
+            if six {
+                quad.push(found.map(|y| some(y.map(|y| y.1))));
+            }
+        }
         let (mut edge2, mut face2) = (Vec::new(), Vec::new());
         if six {
-            // The beyond vertex b of a on edge e, reached by edge g: b's beyond vertex on g.
-            let far = |b: Option<(usize, usize)>| {
-                let (b, g) = b?;
-                let end = level.edges[g].iter().position(|&v| v as usize == b)?;
-                ends[g][end].map(|x| x.0)
-            };
-            edge2 = ends.iter().map(|s| s.map(|b| some(far(b)))).collect();
-            // The beyond edge y of f's edge, in quad h: the beyond edge of h's edge y.
-            let far = |y: Option<(usize, usize)>| {
-                let (y, h) = y?;
-                let i = level.f_edges(h).iter().position(|&x| x as usize == y)?;
-                sides[h][i].map(|x| x.0)
-            };
-            face2 = sides.iter().map(|s| s.map(|y| some(far(y)))).collect();
+            // Edge e's beyond vertex b at an end, reached by edge g: b's beyond vertex on g.
+            edge2 = (0..ne)
+                .map(|e| {
+                    std::array::from_fn(|end| {
+                        let (b, g) = (edge[e][end], via[e][end] as usize);
+                        let at = (b != NONE).then(|| level.edges[g].iter().position(|&v| v == b));
+                        at.flatten().map_or(NONE, |j| edge[g][j])
+                    })
+                })
+                .collect();
+            // Face f's beyond edge y of an edge, in quad h: the beyond edge of h's edge y.
+            face2 = (0..nf)
+                .map(|f| {
+                    std::array::from_fn(|i| {
+                        let (y, h) = (face[f][i], quad[f][i] as usize);
+                        let at = (y != NONE).then(|| level.f_edges(h).iter().position(|&x| x == y));
+                        at.flatten().map_or(NONE, |j| face[h][j])
+                    })
+                })
+                .collect();
         }
         Interp4 {
             six,
