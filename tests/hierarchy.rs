@@ -230,19 +230,22 @@ fn bicubic_coarse_levels_are_rescaled_to_the_geometry() {
     }
 }
 
-#[test]
-fn interp4_codes_smooth_open_grids_smaller_than_lazy_and_is_new_in_version_13() {
-    // A smooth open surface (a cubic height field over a grid refined 3 times): the
-    // 4-point rule's details are zero wherever its stencil is complete, so interp4 codes
-    // it smaller than the lazy transform, and both decode exactly.
-    let mut p = subwave_corpus::open_grid(4, 4).refined(3);
+/// A smooth height field `height(x, y)` over a 4 x 4 open grid refined `levels` times,
+/// coded with `better` and with `worse`: both decode exactly, `better` is smaller, and its
+/// transform code (`code`) is refused as unsupported before format `since`.
+fn codes_smaller_and_is_new_in(
+    levels: u32,
+    height: impl Fn(f64, f64) -> f64,
+    (better, worse): (Wavelet, Wavelet),
+    (code, since): (u8, u16),
+) {
+    let mut p = subwave_corpus::open_grid(4, 4).refined(levels);
     for v in &mut p.positions {
-        let (x, y) = (v[0] * 3.7, v[1] * 4.1);
-        v[2] = x * x * x - 2.0 * x * y * y + 0.5 * y;
+        v[2] = height(v[0] * 3.7, v[1] * 4.1);
     }
     let mesh = common::to_mesh(&p, 1e4);
     let q = Quantization::Decimal { decimals: 4 };
-    let code = |w| {
+    let coded = |w: Wavelet| {
         let opts = EncodeOptions {
             transform: TransformChoice::Fixed(w),
             ..Default::default()
@@ -257,71 +260,49 @@ fn interp4_codes_smooth_open_grids_smaller_than_lazy_and_is_new_in_version_13() 
         );
         enc
     };
-    let (lazy, interp4) = (code(Wavelet::Lazy), code(Wavelet::Interp4));
-    assert!(interp4.header.levels >= 3);
+    let (b, w) = (coded(better), coded(worse));
+    assert!(b.header.levels >= levels as u8);
     assert!(
-        interp4.bytes.len() < lazy.bytes.len(),
-        "interp4 {} B, lazy {} B",
-        interp4.bytes.len(),
-        lazy.bytes.len()
+        b.bytes.len() < w.bytes.len(),
+        "{} {} B, {} {} B",
+        better.name(),
+        b.bytes.len(),
+        worse.name(),
+        w.bytes.len()
     );
-    // Transform 10 did not exist before version 13.
-    let head = interp4.header.write();
+    let head = b.header.write();
     let limits = subwave::Limits::default();
-    assert!(subwave::Header::read(&head, 0, &limits, 13).is_ok());
-    match subwave::Header::read(&head, 0, &limits, 12) {
+    assert!(subwave::Header::read(&head, 0, &limits, since).is_ok());
+    match subwave::Header::read(&head, 0, &limits, since - 1) {
         Err(subwave::Error::Unsupported(what)) => {
-            assert!(what.contains("transform code 10"), "{what}")
+            assert!(what.contains(&format!("transform code {code}")), "{what}")
         }
         other => panic!("expected unsupported, got {other:?}"),
     }
 }
 
 #[test]
-fn interp6_codes_smooth_open_grids_smaller_than_interp4_and_is_new_in_version_24() {
-    // A smooth open surface (a quintic height field over a grid refined 4 times): the
-    // 6-point rule's details are zero wherever its stencil is complete, so interp6 codes
-    // it smaller than interp4, and both decode exactly.
-    let mut p = subwave_corpus::open_grid(4, 4).refined(4);
-    for v in &mut p.positions {
-        let (x, y) = (v[0] * 3.7, v[1] * 4.1);
-        v[2] = x.powi(5) - 2.0 * x * x * y.powi(3) + 0.5 * y.powi(4) - x;
-    }
-    let mesh = common::to_mesh(&p, 1e4);
-    let q = Quantization::Decimal { decimals: 4 };
-    let code = |w: Wavelet| {
-        let opts = EncodeOptions {
-            transform: TransformChoice::Fixed(w),
-            ..Default::default()
-        };
-        let enc = subwave::encode_to_vec(&mesh, &q, &opts).unwrap();
-        let dec = subwave::decode_slice(&enc.bytes).unwrap();
-        assert_eq!(
-            common::fingerprint(&dec.mesh),
-            common::fingerprint(&mesh),
-            "{}",
-            w.name()
-        );
-        enc
-    };
-    let (interp4, interp6) = (code(Wavelet::Interp4), code(Wavelet::Interp6));
-    assert!(interp6.header.levels >= 4);
-    assert!(
-        interp6.bytes.len() < interp4.bytes.len(),
-        "interp6 {} B, interp4 {} B",
-        interp6.bytes.len(),
-        interp4.bytes.len()
+fn interp4_codes_smooth_open_grids_smaller_than_lazy_and_is_new_in_version_13() {
+    // A cubic height field: the 4-point rule's details are zero wherever its stencil is
+    // complete, so interp4 codes it smaller than the lazy transform.
+    codes_smaller_and_is_new_in(
+        3,
+        |x, y| x * x * x - 2.0 * x * y * y + 0.5 * y,
+        (Wavelet::Interp4, Wavelet::Lazy),
+        (10, 13),
     );
-    // Transform 11 did not exist before version 24.
-    let head = interp6.header.write();
-    let limits = subwave::Limits::default();
-    assert!(subwave::Header::read(&head, 0, &limits, 24).is_ok());
-    match subwave::Header::read(&head, 0, &limits, 23) {
-        Err(subwave::Error::Unsupported(what)) => {
-            assert!(what.contains("transform code 11"), "{what}")
-        }
-        other => panic!("expected unsupported, got {other:?}"),
-    }
+}
+
+#[test]
+fn interp6_codes_smooth_open_grids_smaller_than_interp4_and_is_new_in_version_24() {
+    // A quintic height field: the 6-point rule's details are zero wherever its stencil
+    // is complete, so interp6 codes it smaller than interp4.
+    codes_smaller_and_is_new_in(
+        4,
+        |x, y| x.powi(5) - 2.0 * x * x * y.powi(3) + 0.5 * y.powi(4) - x,
+        (Wavelet::Interp6, Wavelet::Interp4),
+        (11, 24),
+    );
 }
 
 fn random_hierarchy(seed: u64, base: usize, levels: u32, bits: u32) -> Mesh {

@@ -2193,6 +2193,17 @@ mod tests {
         x: &[Vec<i64>; 3],
         mode: Mode<'_>,
     ) -> Option<Vec<u8>> {
+        body_within(level, coarse, x, mode, usize::MAX)
+    }
+
+    /// [`body_in_mode`], refused (`None`) past `limit` bytes.
+    fn body_within(
+        level: &Level,
+        coarse: &[Vec<i64>; 3],
+        x: &[Vec<i64>; 3],
+        mode: Mode<'_>,
+        limit: usize,
+    ) -> Option<Vec<u8>> {
         let prep = Prepared {
             frames: rot_frames(level, coarse, false),
             ..Default::default()
@@ -2211,7 +2222,7 @@ mod tests {
             mode,
             false,
             &mut m,
-            usize::MAX,
+            limit,
             ROTATED_VERSION,
         )
     }
@@ -2547,29 +2558,7 @@ mod tests {
             // Plain and framed coded in full, then each refused under its own size.
             for mode in [Mode::Plain, Mode::Framed] {
                 let full = body_in_mode(&level, &coarse, &x, mode).unwrap();
-                let prep = Prepared {
-                    frames: rot_frames(&level, &coarse, false),
-                    ..Default::default()
-                };
-                let run = |limit: usize| {
-                    let mut m = Models::new(ROTATED_VERSION);
-                    let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
-                    encode_mode(
-                        &level,
-                        false,
-                        &x,
-                        &coarse,
-                        &prep,
-                        None,
-                        &mut act,
-                        &mut mags,
-                        mode,
-                        false,
-                        &mut m,
-                        limit,
-                        ROTATED_VERSION,
-                    )
-                };
+                let run = |limit| body_within(&level, &coarse, &x, mode, limit);
                 assert_eq!(run(full.len()).as_ref(), Some(&full));
                 assert!(run(full.len() - 1).is_none());
             }

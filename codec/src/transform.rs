@@ -1197,16 +1197,15 @@ mod tests {
         assert_eq!(got, orig);
     }
 
-    #[test]
-    fn interp4_reproduces_cubics_along_the_mesh_lines() {
-        // A 6 x 6 grid refined once: fine coordinates (u, v) in 0..=12; data a cubic in u
-        // plus a cubic in v. Where the 4-point rule applies its detail is exactly 0
-        // (the lazy rule's is not), elsewhere it is the lazy rule's; and it inverts.
-        let level = Level::new(&grid(6)).unwrap();
-        let (nv, ne) = (level.nv, level.ne());
+    /// An `n` x `n` grid's level and the fine coordinates (u, v) of its fine values:
+    /// vertices at even u and v in 0..=2n, edge points at their midpoints, face points at
+    /// their centres.
+    fn refined_grid(n: u32) -> (Level, Vec<(i64, i64)>) {
+        let level = Level::new(&grid(n)).unwrap();
+        let (nv, ne, side) = (level.nv, level.ne(), n as i64 + 1);
         let mut coords = vec![(0i64, 0i64); level.fine_nv()];
         for (v, c) in coords.iter_mut().enumerate().take(nv) {
-            *c = (2 * (v as i64 % 7), 2 * (v as i64 / 7));
+            *c = (2 * (v as i64 % side), 2 * (v as i64 / side));
         }
         for (e, &[a, b]) in level.edges.iter().enumerate() {
             let (pa, pb) = (coords[a as usize], coords[b as usize]);
@@ -1218,6 +1217,16 @@ mod tests {
             let sy: i64 = c.iter().map(|&v| coords[v as usize].1).sum();
             coords[nv + ne + f] = (sx / 4, sy / 4);
         }
+        (level, coords)
+    }
+
+    #[test]
+    fn interp4_reproduces_cubics_along_the_mesh_lines() {
+        // A 6 x 6 grid refined once: fine coordinates (u, v) in 0..=12; data a cubic in u
+        // plus a cubic in v. Where the 4-point rule applies its detail is exactly 0
+        // (the lazy rule's is not), elsewhere it is the lazy rule's; and it inverts.
+        let (level, coords) = refined_grid(6);
+        let (nv, ne) = (level.nv, level.ne());
         let cubic = |t: i64| 7 * t * t * t - 40 * t * t + 3 * t + 11;
         let x: Vec<i64> = coords
             .iter()
@@ -1260,22 +1269,8 @@ mod tests {
         // 6-point rule applies (three coarse vertices on each side) its detail is 0 and
         // interp4's is not; where only the 4-point rule fits, interp6 is interp4; faces
         // whose both directions reach three edges out are exact; and it inverts.
-        let level = Level::new(&grid(8)).unwrap();
+        let (level, coords) = refined_grid(8);
         let (nv, ne) = (level.nv, level.ne());
-        let mut coords = vec![(0i64, 0i64); level.fine_nv()];
-        for (v, c) in coords.iter_mut().enumerate().take(nv) {
-            *c = (2 * (v as i64 % 9), 2 * (v as i64 / 9));
-        }
-        for (e, &[a, b]) in level.edges.iter().enumerate() {
-            let (pa, pb) = (coords[a as usize], coords[b as usize]);
-            coords[nv + e] = ((pa.0 + pb.0) / 2, (pa.1 + pb.1) / 2);
-        }
-        for f in 0..level.nf() {
-            let c = level.coarse.face(f);
-            let sx: i64 = c.iter().map(|&v| coords[v as usize].0).sum();
-            let sy: i64 = c.iter().map(|&v| coords[v as usize].1).sum();
-            coords[nv + ne + f] = (sx / 4, sy / 4);
-        }
         let quintic = |t: i64| t.pow(5) - 30 * t.pow(4) + 7 * t * t * t - 40 * t * t + 3 * t + 11;
         let x: Vec<i64> = coords
             .iter()
