@@ -862,51 +862,36 @@ fn interp4_face<T: Sample>(level: &Level, st: &Interp4, x: &[T], f: usize) -> T 
 fn interp4_face_sum<T: Sample>(level: &Level, st: &Interp4, x: &[T], f: usize) -> (T::Acc, i128) {
     let e0 = level.nv;
     let fe = level.f_edges(f);
-    if fe.len() == 4 && st.six {
-        // interp6: each pair of opposite edges by the widest rule it has, scaled to 256.
-        let (beyond, far) = (st.face[f], st.face2[f]);
+    if fe.len() == 4 {
+        // Each pair of opposite edges by the widest rule it has: interp6's 6-point rule
+        // over 256, else the 4-point rule over 16, else the mean; interp6 scales the
+        // narrower two to 256 (by `k` = 16) so both pairs share the divisor 512.
+        let beyond = st.face[f];
+        let (k, div) = if st.six { (16, 512) } else { (1, 32) };
         let mut s = T::Acc::default();
         for d in 0..2 {
             let (m, m2) = (e0 + fe[d] as usize, e0 + fe[d + 2] as usize);
-            let (y, y2, z, z2) = (beyond[d], beyond[d + 2], far[d], far[d + 2]);
-            if z != NONE && z2 != NONE {
+            let (y, y2) = (beyond[d], beyond[d + 2]);
+            let far = st.face2.get(f).map_or([NONE; 2], |z| [z[d], z[d + 2]]);
+            if far.iter().all(|&z| z != NONE) {
+                // A far edge implies its beyond edge.
                 s += x[m].weighted(150);
                 s += x[m2].weighted(150);
                 s += x[e0 + y as usize].weighted(-25);
                 s += x[e0 + y2 as usize].weighted(-25);
-                s += x[e0 + z as usize].weighted(3);
-                s += x[e0 + z2 as usize].weighted(3);
+                s += x[e0 + far[0] as usize].weighted(3);
+                s += x[e0 + far[1] as usize].weighted(3);
             } else if y != NONE && y2 != NONE {
-                s += x[m].weighted(144);
-                s += x[m2].weighted(144);
-                s += x[e0 + y as usize].weighted(-16);
-                s += x[e0 + y2 as usize].weighted(-16);
+                s += x[m].weighted(9 * k);
+                s += x[m2].weighted(9 * k);
+                s += x[e0 + y as usize].weighted(-k);
+                s += x[e0 + y2 as usize].weighted(-k);
             } else {
-                s += x[m].weighted(128);
-                s += x[m2].weighted(128);
+                s += x[m].weighted(8 * k);
+                s += x[m2].weighted(8 * k);
             }
         }
-        return (s, 512);
-    }
-    if fe.len() == 4 {
-        let beyond = st.face[f];
-        let mut s = T::Acc::default();
-        for d in 0..2 {
-            let (m, m2) = (fe[d], fe[d + 2]);
-            match (beyond[d], beyond[d + 2]) {
-                (y, y2) if y != NONE && y2 != NONE => {
-                    s += x[e0 + m as usize].weighted(9);
-                    s += x[e0 + m2 as usize].weighted(9);
-                    s += x[e0 + y as usize].weighted(-1);
-                    s += x[e0 + y2 as usize].weighted(-1);
-                }
-                _ => {
-                    s += x[e0 + m as usize].weighted(8);
-                    s += x[e0 + m2 as usize].weighted(8);
-                }
-            }
-        }
-        return (s, 32);
+        return (s, div);
     }
     let mut s = T::Acc::default();
     for &e in fe {

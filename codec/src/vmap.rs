@@ -242,7 +242,18 @@ impl ValueMap {
                     "more values than the mesh has vertices or the section can hold",
                 ));
             }
-            let mut v = Vec::with_capacity(n as usize + 1);
+            let mut v: Vec<i64> = Vec::with_capacity(n as usize + 1);
+            // Appends a value: within the coordinate range and above the one before.
+            let push = |v: &mut Vec<i64>, x: i128| {
+                if x.abs() > MAX_COORD as i128 {
+                    return Err(Error::corrupt(SECTION, "a value out of range"));
+                }
+                if v.last().is_some_and(|&p| p as i128 >= x) {
+                    return Err(Error::corrupt(SECTION, "values out of order"));
+                }
+                v.push(x as i64);
+                Ok(())
+            };
             let first = d.int(&mut first)? as i128;
             let lattice = version >= LATTICE_VERSION && n > 0 && d.uniform(2)? == 1;
             if lattice {
@@ -252,7 +263,7 @@ impl ValueMap {
                 if steps < n as i128 || span < steps || first + span > MAX_COORD as i128 {
                     return Err(Error::corrupt(SECTION, "a lattice out of order or range"));
                 }
-                v.push(first);
+                push(&mut v, first)?;
                 let mut k: i128 = 0;
                 for _ in 1..n {
                     k += 1;
@@ -267,12 +278,9 @@ impl ValueMap {
                         return Err(Error::corrupt(SECTION, "a lattice point past the last"));
                     }
                     let x = first + lattice_offset(k, span, steps) + d.int(&mut gaps)? as i128;
-                    v.push(x);
+                    push(&mut v, x)?;
                 }
-                v.push(first + span);
-                if v.windows(2).any(|w| w[0] >= w[1]) {
-                    return Err(Error::corrupt(SECTION, "values out of order"));
-                }
+                push(&mut v, first + span)?;
             } else {
                 let mut x = first;
                 let mut gap: i128 = 0;
@@ -284,13 +292,9 @@ impl ValueMap {
                         }
                         x += gap + 1;
                     }
-                    v.push(x);
+                    push(&mut v, x)?;
                 }
             }
-            if v.iter().any(|x| x.abs() > MAX_COORD as i128) {
-                return Err(Error::corrupt(SECTION, "a value out of range"));
-            }
-            let v: Vec<i64> = v.into_iter().map(|x| x as i64).collect();
             *axis = Some(v);
         }
         Ok(ValueMap { axes })
