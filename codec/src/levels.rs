@@ -2464,7 +2464,7 @@ mod tests {
         [fine, x, coarse]
     }
 
-    /// Mode 6 on Catmull-Clark levels of lazy and interp4: the encoder's phases (from
+    /// Mode 6 on Catmull-Clark levels of lazy, interp4 and interp6: the encoder's phases (from
     /// the fine values) are the decoder's (the edge points' from the coarse values, the
     /// face points' once the edge points are read), so the fine values come back
     /// exactly; a mode 6 level without phases is corrupt.
@@ -2772,7 +2772,7 @@ mod tests {
         assert!(over);
     }
 
-    /// Mode 9 on lazy and interp4 levels: read with the decoder's phases, the level
+    /// Mode 9 on lazy, interp4 and interp6 levels: read with the decoder's phases, the level
     /// comes back synthesised; without phases, before format 21, or read as mode 8 it
     /// does not.
     #[test]

@@ -903,7 +903,7 @@ fn interp4_face_sum<T: Sample>(level: &Level, st: &Interp4, x: &[T], f: usize) -
     (s, fe.len() as i128)
 }
 
-/// The predictions of a predict-only Catmull-Clark transform (lazy or interp4) on one
+/// The predictions of a predict-only Catmull-Clark transform (lazy, interp4 or interp6) on one
 /// level and their phases (SPEC.md 10.6), which mode 6 reads. Its edge points are
 /// predicted from the coarse values, its face points also from the fine edge points.
 pub struct Phaser<'a> {
