@@ -448,11 +448,58 @@ fn corrected_phased_levels_round_trip() {
     }
 }
 
+/// The frozen terrain at 10 bits (interp6) has a level in mode 9 with joint rounding
+/// (SPEC.md 10.9, format 25): it decodes exactly; its flag cleared (rounding apart) gives
+/// an error or another mesh, never this one; the mask's top bit, or the flag on mode 8 or
+/// in a format 24 container, is corrupt.
+#[test]
+fn joint_rounding_levels_need_their_flag() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/golden/");
+    let b = std::fs::read(format!("{dir}terrain_grid33.interp6.q10.v25.swv")).unwrap();
+    let obj = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/corpus/terrain_grid33.obj"
+    ))
+    .unwrap();
+    let m = subwave::load(&obj, Some(10)).unwrap();
+    let info = subwave::inspect(&b, &Limits::default()).unwrap();
+    assert!(info.sections.iter().any(|s| s.mode == Some(9) && s.joint));
+    assert!(subwave::decode_slice(&b).unwrap().mesh == m.mesh);
+    let level = level_payloads(&b)
+        .iter()
+        .position(|p| p[0] & 0x7f == 9 && p[1] & 0x40 != 0)
+        .unwrap();
+    let apart = with_level(&b, level, |p| p[1] &= !0x40);
+    if let Ok(d) = subwave::decode_slice(&apart) {
+        assert!(d.mesh != m.mesh, "read with its corrections rounded apart");
+    }
+    for edit in [(|p: &mut Vec<u8>| p[1] |= 0x80) as fn(&mut Vec<u8>), |p| {
+        p[0] = p[0] & 0x80 | 8
+    }] {
+        match subwave::decode_slice(&with_level(&b, level, edit)) {
+            Err(Error::CorruptStream { what, .. }) => {
+                assert!(what.contains("bad correction weights"), "{what}")
+            }
+            other => panic!("expected bad weights, got {other:?}"),
+        }
+    }
+    // The same sections under format 24, which has no joint flag.
+    let c = subwave_container::Container::parse(&b, &Limits::default()).unwrap();
+    let mut w = ContainerWriter::for_version(24);
+    for s in c.sections.iter().filter(|s| s.kind != SectionKind::END) {
+        w.section(s.kind, s.payload);
+    }
+    match subwave::decode_slice(&w.finish()) {
+        Err(Error::CorruptStream { what, .. }) => assert!(what.contains("bad correction weights")),
+        other => panic!("expected bad weights, got {other:?}"),
+    }
+}
+
 #[test]
 fn every_bit_flip_inside_a_phased_level_is_an_error_or_a_valid_mesh() {
     // The frozen containers with a level in mode 6 (Catmull-Clark, interp4), mode 7
-    // (sqrt(2)), mode 8 (its weights included), mode 9, mode 9 unbinned (format 22) and
-    // mode 6 unbinned on interp6 (format 24):
+    // (sqrt(2)), mode 8 (its weights included), mode 9, mode 9 unbinned (format 22),
+    // mode 6 unbinned on interp6 (format 24) and mode 9 with joint rounding (format 25):
     // every bit of those levels' payloads flipped, checksums made valid, so the phases,
     // shifts, corrections and their bounds meet hostile values.
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/golden/");
@@ -464,6 +511,7 @@ fn every_bit_flip_inside_a_phased_level_is_an_error_or_a_valid_mesh() {
         ("terrain_grid33.lazy.q16.v21.swv", 9),
         ("subdivided_open_cc3.lazy.q12.v22.swv", 0x89),
         ("subdivided_open_cc3.interp6.q12.v24.swv", 0x86),
+        ("terrain_grid33.interp6.q10.v25.swv", 0x89),
     ] {
         let b = std::fs::read(format!("{dir}{file}")).unwrap();
         let payloads = level_payloads(&b);

@@ -114,6 +114,7 @@ fn frozen_containers_still_decode() {
             "subdivided_open_cc3.interp6.q12.v24.swv",
             "subdivided_open_cc3.obj",
         ),
+        ("terrain_grid33.interp6.q10.v25.swv", "terrain_grid33.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);
@@ -123,13 +124,11 @@ fn frozen_containers_still_decode() {
                 .join(obj),
         )
         .unwrap();
-        // A ".q16." (".q12.") container holds the mesh on Draco's 16-bit (12-bit) grid:
-        // it decodes to that.
-        let bits = if swv.contains(".q16.") {
-            Some(16)
-        } else {
-            swv.contains(".q12.").then_some(12)
-        };
+        // A ".q16." (".q12.", ".q10.") container holds the mesh on Draco's 16-bit
+        // (12-bit, 10-bit) grid: it decodes to that.
+        let bits = swv
+            .split('.')
+            .find_map(|p| p.strip_prefix('q')?.parse::<u8>().ok());
         let m = subwave::load(&source, bits).unwrap();
         if !path.exists() && std::env::var_os("SUBWAVE_BLESS").is_some() {
             // A ".flat." container is coded without levels (the flat path), a ".disc."

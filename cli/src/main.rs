@@ -408,7 +408,7 @@ fn print_info(info: &subwave::Info, as_json: bool) {
             "keep_order": h.has_order,
             "value_map": h.has_value_map,
             "sections": info.sections.iter().map(|s| match s.mode {
-                Some(m) => json!({"kind": s.kind, "bytes": s.bytes, "mode": m, "unbinned": s.unbinned}),
+                Some(m) => json!({"kind": s.kind, "bytes": s.bytes, "mode": m, "unbinned": s.unbinned, "joint": s.joint}),
                 None => json!({"kind": s.kind, "bytes": s.bytes}),
             }).collect::<Vec<_>>(),
             "bytes": info.bytes,
@@ -457,8 +457,11 @@ fn print_info(info: &subwave::Info, as_json: bool) {
         .sections
         .iter()
         .map(|s| match s.mode {
-            Some(m) if s.unbinned => format!("{} {} B (mode {m}, unbinned)", s.kind, s.bytes),
-            Some(m) => format!("{} {} B (mode {m})", s.kind, s.bytes),
+            Some(m) => {
+                let joint = if s.joint { " joint" } else { "" };
+                let unbinned = if s.unbinned { ", unbinned" } else { "" };
+                format!("{} {} B (mode {m}{joint}{unbinned})", s.kind, s.bytes)
+            }
             None => format!("{} {} B", s.kind, s.bytes),
         })
         .collect();

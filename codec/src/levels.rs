@@ -58,13 +58,44 @@ pub const PHASE_VERSION: u16 = 18;
 /// Phase bins: the size of a prediction's remainder in sixths of its divisor, 0..=2.
 const PHASE_BINS: usize = 3;
 
-/// Per axis and detail, the phase of the detail's prediction (SPEC.md 10.6): bit 2 set
-/// when the remainder is negative, bits 0 and 1 its bin.
-pub type Phases = [Vec<u8>; 3];
+/// Per axis and detail, the phase of the detail's prediction (SPEC.md 10.6), and for a
+/// Catmull-Clark level its fraction (10.9).
+#[derive(Clone, Default)]
+pub struct Phases {
+    /// Bit 2 set when the remainder is negative, bits 0 and 1 its bin.
+    pub codes: [Vec<u8>; 3],
+    /// Where the unrounded prediction lies from the rounded one, in [`FRAC_DIV`]ths
+    /// (rounded); empty where no level mode reads it (sqrt(2) levels).
+    pub fracs: [Vec<i16>; 3],
+}
 
 /// Detail `i`'s phases on the three axes.
 fn phases_at(p: &Phases, i: usize) -> [u8; 3] {
-    [p[0][i], p[1][i], p[2][i]]
+    [p.codes[0][i], p.codes[1][i], p.codes[2][i]]
+}
+
+/// Detail `i`'s fractions on the three axes (SPEC.md 10.9).
+fn fracs_at(p: &Phases, i: usize) -> [i16; 3] {
+    [p.fracs[0][i], p.fracs[1][i], p.fracs[2][i]]
+}
+
+/// A prediction's fraction (SPEC.md 10.9) is in 512ths.
+pub const FRAC_DIV: i128 = 512;
+
+/// From format 25 mode 9 may round each correction together with the prediction's
+/// fraction, and phase the value by that sum's remainder (SPEC.md 10.9), flagged in its
+/// weights' mask.
+pub const JOINT_VERSION: u16 = 25;
+/// Mode 9's mask bit for joint rounding (format 25 on).
+const JOINT: u8 = 0x40;
+
+/// How mode 9 rounds its corrections (SPEC.md 10.9).
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Rounding {
+    /// Apart from the prediction, the value phased by the prediction's phase (format 21).
+    Apart,
+    /// With the prediction's fraction, the value phased by their sum's phase (format 25).
+    Joint,
 }
 
 /// The phase of a prediction `[n / d]` (9.1 rounding, `d > 0`) from its remainder
@@ -107,6 +138,13 @@ pub fn mode_of(version: u16, payload: &[u8]) -> Option<u8> {
 /// Whether a LEVL payload is unbinned (format 22 on, SPEC.md 10.1).
 pub fn unbinned(version: u16, payload: &[u8]) -> bool {
     version >= UNBINNED_VERSION && payload.first().is_some_and(|b| b & UNBINNED != 0)
+}
+
+/// Whether a LEVL payload is in mode 9 with joint rounding (format 25 on, SPEC.md 10.9).
+pub fn joint(version: u16, payload: &[u8]) -> bool {
+    version >= JOINT_VERSION
+        && mode_of(version, payload) == Some(9)
+        && payload.get(1).is_some_and(|m| m & JOINT != 0)
 }
 
 /// Mode 8's weights are in 32nds, at most 2 in magnitude.
@@ -176,29 +214,53 @@ fn corr_features(level: &Level, x: &[Vec<i64>; 3], i: usize) -> [[i128; 3]; NFEA
     f
 }
 
-/// Mode 8's correction of detail `i`: per axis `[sum w_j F_j / 32]`; `None` beyond the
-/// bound of a detail.
-fn correction(level: &Level, x: &[Vec<i64>; 3], w: &Weights, i: usize) -> Option<[i64; 3]> {
+/// Mode 8's correction numerators of detail `i`: per axis `sum w_j F_j` (SPEC.md 10.8).
+fn correction_sums(level: &Level, x: &[Vec<i64>; 3], w: &Weights, i: usize) -> [i128; 3] {
     let class = (i >= level.ne()) as usize;
     let f = corr_features(level, x, i);
+    std::array::from_fn(|k| match w[class][k] {
+        [0, 0] => 0,
+        wk => (0..NFEAT).map(|j| wk[j] as i128 * f[j][k]).sum(),
+    })
+}
+
+/// Mode 8's correction from its numerators: per axis `[n / 32]`; `None` beyond the
+/// bound of a detail.
+fn correction(n: [i128; 3]) -> Option<[i64; 3]> {
     let mut c = [0i64; 3];
     for k in 0..3 {
-        let wk = w[class][k];
-        if wk == [0; NFEAT] {
-            continue;
-        }
-        let n: i128 = (0..NFEAT).map(|j| wk[j] as i128 * f[j][k]).sum();
-        let q = (2 * n + CORR_DIV).div_euclid(2 * CORR_DIV);
+        // (Floor division by a power of two: an arithmetic shift.)
+        let q = (2 * n[k] + CORR_DIV) >> (2 * CORR_DIV).trailing_zeros();
         c[k] = i64::try_from(q).ok().filter(|q| q.abs() <= MAX_LIFTED)?;
     }
     Some(c)
 }
 
-/// Modes 8 and 9's corrections of every detail of the level whose details are
-/// `x[k][nv..]`; `None` if one is beyond the bound of a detail.
+/// Mode 9's correction from format 25 (SPEC.md 10.9), from mode 8's numerators `n` and
+/// the predictions' fractions: per axis `[(frac + 16 n) / 512]` and the phase of its
+/// remainder; `None` beyond the bound of a detail.
+fn joint_correction(n: [i128; 3], frac: [i16; 3]) -> Option<([i64; 3], [u8; 3])> {
+    let mut c = [0i64; 3];
+    let mut q = [0u8; 3];
+    for k in 0..3 {
+        let a = frac[k] as i128 + (FRAC_DIV / CORR_DIV) * n[k];
+        let v = (2 * a + FRAC_DIV) >> (2 * FRAC_DIV).trailing_zeros();
+        c[k] = i64::try_from(v).ok().filter(|v| v.abs() <= MAX_LIFTED)?;
+        q[k] = phase(a - FRAC_DIV * v, FRAC_DIV);
+    }
+    Some((c, q))
+}
+
+/// Modes 8 and 9's correction numerators of every detail of the level whose details are
+/// `x[k][nv..]`; `None` if a correction (mode 8's) is beyond the bound of a detail (the
+/// numerators then fit 64 bits).
 fn corrections(level: &Level, x: &[Vec<i64>; 3], w: &Weights) -> Option<Vec<[i64; 3]>> {
     (0..level.ne() + level.nf())
-        .map(|i| correction(level, x, w, i))
+        .map(|i| {
+            let n = correction_sums(level, x, w, i);
+            correction(n)?;
+            Some(n.map(|v| v as i64))
+        })
         .collect()
 }
 
@@ -207,17 +269,22 @@ fn corrections(level: &Level, x: &[Vec<i64>; 3], w: &Weights) -> Option<Vec<[i64
 struct Prepared {
     /// The rotated modes' frames (normals included), per detail.
     frames: Vec<Option<RotFrame>>,
-    /// Modes 8 and 9's corrections, per detail (from the level's one set of weights).
+    /// Modes 8 and 9's correction numerators, per detail (from the level's one set of
+    /// weights).
     corrections: Vec<[i64; 3]>,
 }
 
-/// Modes 8 and 9's weights after the mode byte (SPEC.md 10.8), and the stream after them.
-fn read_weights(rest: &[u8]) -> Result<(Weights, &[u8])> {
+/// Modes 8 and 9's weights after the mode byte (SPEC.md 10.8), whether the mask's joint
+/// flag is set (format 25's mode 9, 10.9: open where `joint_open`), and the stream after
+/// them.
+fn read_weights(rest: &[u8], joint_open: bool) -> Result<(Weights, Rounding, &[u8])> {
     let bad = || Error::corrupt("LEVL", "bad correction weights");
     let (&mask, mut rest) = rest.split_first().ok_or_else(bad)?;
-    if mask >> 6 != 0 {
-        return Err(bad());
-    }
+    let rounding = match mask >> 6 {
+        0 => Rounding::Apart,
+        1 if joint_open => Rounding::Joint,
+        _ => return Err(bad()),
+    };
     let mut w: Weights = [[[0; NFEAT]; 3]; 2];
     for (j, p) in w.iter_mut().flatten().enumerate() {
         if mask >> j & 1 == 1 {
@@ -230,7 +297,7 @@ fn read_weights(rest: &[u8]) -> Result<(Weights, &[u8])> {
             rest = r;
         }
     }
-    Ok((w, rest))
+    Ok((w, rounding, rest))
 }
 
 /// The encoder's mode 8 weights for a level whose details are `x[k][nv..]`: per class and
@@ -1329,7 +1396,10 @@ pub fn encode(
         if let Some((w, c)) = made {
             modes.push(Mode::Corrected(w));
             if phases.is_some() && version >= CORRECTED_PHASED_VERSION {
-                modes.push(Mode::CorrectedPhased(w));
+                modes.push(Mode::CorrectedPhased(w, Rounding::Apart));
+                if version >= JOINT_VERSION {
+                    modes.push(Mode::CorrectedPhased(w, Rounding::Joint));
+                }
             }
             prep.corrections = c;
         }
@@ -1465,8 +1535,10 @@ enum Mode<'a> {
     /// x, y, z less weighted sums of the level's earlier details nearby (format 20 on,
     /// Catmull-Clark levels).
     Corrected(Weights),
-    /// Mode 8's values, phased as mode 6's (format 21 on).
-    CorrectedPhased(Weights),
+    /// Mode 8's values, phased as mode 6's (format 21 on); with format 25's joint
+    /// flag, each correction rounded with the prediction's fraction and the value phased
+    /// by their sum.
+    CorrectedPhased(Weights, Rounding),
 }
 
 /// Test helper: the phase (SPEC.md 10.6) of an integer detail `d` whose unrounded
@@ -1500,8 +1572,9 @@ impl Mode<'_> {
     fn bytes(self) -> Vec<u8> {
         match self {
             Mode::Shifted(a, b) => vec![5, a << 4 | b],
-            Mode::Corrected(w) | Mode::CorrectedPhased(w) => {
-                let mut out = vec![self.byte(), 0];
+            Mode::Corrected(w) | Mode::CorrectedPhased(w, _) => {
+                let joint = matches!(self, Mode::CorrectedPhased(_, Rounding::Joint));
+                let mut out = vec![self.byte(), if joint { JOINT } else { 0 }];
                 for (j, p) in w.iter().flatten().enumerate() {
                     if *p != [0; NFEAT] {
                         out[1] |= 1 << j;
@@ -1524,7 +1597,7 @@ impl Mode<'_> {
             Mode::Phased => 6,
             Mode::TangentPhased(_) => 7,
             Mode::Corrected(_) => 8,
-            Mode::CorrectedPhased(_) => 9,
+            Mode::CorrectedPhased(..) => 9,
         }
     }
 
@@ -1532,14 +1605,14 @@ impl Mode<'_> {
     fn phased(self) -> bool {
         matches!(
             self,
-            Mode::Phased | Mode::TangentPhased(_) | Mode::CorrectedPhased(_)
+            Mode::Phased | Mode::TangentPhased(_) | Mode::CorrectedPhased(..)
         )
     }
 
     fn framed(self) -> bool {
         !matches!(
             self,
-            Mode::Plain | Mode::Phased | Mode::Corrected(_) | Mode::CorrectedPhased(_)
+            Mode::Plain | Mode::Phased | Mode::Corrected(_) | Mode::CorrectedPhased(..)
         )
     }
 
@@ -1574,14 +1647,19 @@ fn encode_mode(
     // corrections, from `prep`, made once per level; the normal-frame modes compute the
     // normals here.
     let rotated = matches!(mode, Mode::Rotated | Mode::Shifted(..));
-    let corrected = matches!(mode, Mode::Corrected(_) | Mode::CorrectedPhased(_));
+    let corrected = matches!(mode, Mode::Corrected(_) | Mode::CorrectedPhased(..));
     if (rotated && prep.frames.len() != nd) || (corrected && prep.corrections.len() != nd) {
         return None;
     }
     let framed = mode.framed() && !rotated;
-    let phased = matches!(mode, Mode::Phased | Mode::CorrectedPhased(_));
+    let phased = matches!(mode, Mode::Phased | Mode::CorrectedPhased(..));
     let phases = phases.filter(|_| phased);
-    if phased && !phases.is_some_and(|p| p.iter().all(|p| p.len() == nd)) {
+    if phased && !phases.is_some_and(|p| p.codes.iter().all(|p| p.len() == nd)) {
+        return None;
+    }
+    // Format 25's mode 9 rounds each correction with the prediction's fraction.
+    let joint = matches!(mode, Mode::CorrectedPhased(_, Rounding::Joint));
+    if joint && !phases.is_some_and(|p| p.fracs.iter().all(|p| p.len() == nd)) {
         return None;
     }
     act.resize(nv + nd, 0);
@@ -1600,9 +1678,16 @@ fn encode_mode(
         } else {
             None
         };
-        let offset = match corrected {
-            true => Some(prep.corrections[i]),
-            false => mode.offset(i, fr),
+        let mut joint_phases = None;
+        let offset = match (corrected, phases) {
+            (true, Some(p)) if joint => {
+                let n = prep.corrections[i].map(i128::from);
+                let (c, q) = joint_correction(n, fracs_at(p, i))?;
+                joint_phases = Some(q);
+                Some(c)
+            }
+            (true, _) => Some(correction(prep.corrections[i].map(i128::from))?),
+            (false, _) => mode.offset(i, fr),
         };
         if let Some(c) = offset {
             d = std::array::from_fn(|k| d[k] - c[k]);
@@ -1625,9 +1710,10 @@ fn encode_mode(
                 return None;
             }
         }
-        let ph = match (mode, phases, fr) {
-            (_, Some(p), _) => Phased::Axes(phases_at(p, i)),
-            (Mode::TangentPhased(t), _, Some(_)) => {
+        let ph = match (joint_phases, mode, phases, fr) {
+            (Some(q), ..) => Phased::Axes(q),
+            (_, _, Some(p), _) => Phased::Axes(phases_at(p, i)),
+            (_, Mode::TangentPhased(t), _, Some(_)) => {
                 Phased::Tangent(TanTerms::new(level, coarse, i, t[i], offset?))
             }
             _ => Phased::No,
@@ -1699,7 +1785,9 @@ pub fn decode(
             },
             Some((4, rest)) if version >= ROTATED_VERSION => (Mode::Rotated, rest),
             Some((6, rest)) if version >= PHASE_VERSION => match &phasing {
-                Some(Phasing::Ready(p)) if p.iter().all(|p| p.len() == nd) => (Mode::Phased, rest),
+                Some(Phasing::Ready(p)) if p.codes.iter().all(|p| p.len() == nd) => {
+                    (Mode::Phased, rest)
+                }
                 Some(Phasing::Cc(_)) if !sqrt2 => (Mode::Phased, rest),
                 _ => return Err(no_phases()),
             },
@@ -1710,13 +1798,13 @@ pub fn decode(
                 _ => return Err(Error::corrupt("LEVL", "bad shift weights")),
             },
             Some((8, rest)) if version >= CORRECTED_VERSION && !sqrt2 => {
-                let (w, rest) = read_weights(rest)?;
+                let (w, _, rest) = read_weights(rest, false)?;
                 (Mode::Corrected(w), rest)
             }
             Some((9, rest)) if version >= CORRECTED_PHASED_VERSION && !sqrt2 => match &phasing {
                 Some(Phasing::Cc(_)) => {
-                    let (w, rest) = read_weights(rest)?;
-                    (Mode::CorrectedPhased(w), rest)
+                    let (w, r, rest) = read_weights(rest, version >= JOINT_VERSION)?;
+                    (Mode::CorrectedPhased(w, r), rest)
                 }
                 _ => return Err(no_phases()),
             },
@@ -1748,20 +1836,39 @@ pub fn decode(
     // makes every face point's phases once its edge points are read, then reads the face
     // points with the edge points' details in place (its corrections read details), and
     // synthesises the level after, from the predictions it kept.
-    let corr_phased = matches!(mode, Mode::CorrectedPhased(_));
+    let corr_phased = matches!(mode, Mode::CorrectedPhased(..));
     let phasing = phasing.filter(|_| matches!(mode, Mode::Phased) || corr_phased);
     let ne = level.ne();
     // Mode 9: every detail's prediction on each axis (the edge points' now, the face
     // points' once the edge points are read), and its phase.
     let mut preds: [Vec<i64>; 3] = Default::default();
     let mut cc_phases = Phases::default();
+    // Format 25's mode 9 also reads the predictions' fractions.
+    let joint = matches!(mode, Mode::CorrectedPhased(_, Rounding::Joint));
+    // Mode 9: detail `i`'s prediction, phase and (joint rounding) fraction on one axis.
+    let keep =
+        |p: &crate::transform::Phaser<'_>, xk: &[i64], i: usize, ph: &mut Phases, k: usize| {
+            if joint {
+                let (c, q, f) = p.predict_frac(xk, i);
+                ph.codes[k].push(q);
+                ph.fracs[k].push(f);
+                c
+            } else {
+                let (c, q) = p.predict(xk, i);
+                ph.codes[k].push(q);
+                c
+            }
+        };
     if let Some(Phasing::Cc(p)) = &phasing {
         if corr_phased {
             for k in 0..3 {
-                (preds[k], cc_phases[k]) = (0..ne.min(nd)).map(|e| p.predict(&x[k], e)).unzip();
+                for e in 0..ne.min(nd) {
+                    let c = keep(p, &x[k], e, &mut cc_phases, k);
+                    preds[k].push(c);
+                }
             }
         } else {
-            cc_phases = p.phases(x, ne.min(nd));
+            cc_phases = p.phases(x, ne.min(nd), false);
         }
     }
     for i in 0..nd {
@@ -1777,9 +1884,8 @@ pub fn decode(
                         xk[nv + e] = xk[nv + e].wrapping_add(preds[k][e]);
                     }
                     for f in ne..nd {
-                        let (c, q) = p.predict(xk, f);
+                        let c = keep(p, xk, f, &mut cc_phases, k);
                         preds[k].push(c);
-                        cc_phases[k].push(q);
                     }
                     for e in 0..ne {
                         xk[nv + e] = xk[nv + e].wrapping_sub(preds[k][e]);
@@ -1803,26 +1909,35 @@ pub fn decode(
             }
             _ => None,
         };
+        let out_of_range = || Error::corrupt("LEVL", "detail out of range");
+        let mut joint_phases = None;
         let offset = match mode {
-            Mode::Corrected(w) | Mode::CorrectedPhased(w) => Some(
-                correction(level, x, &w, i)
-                    .ok_or_else(|| Error::corrupt("LEVL", "detail out of range"))?,
-            ),
+            Mode::CorrectedPhased(w, Rounding::Joint) => {
+                let n = correction_sums(level, x, &w, i);
+                let (c, q) =
+                    joint_correction(n, fracs_at(&cc_phases, i)).ok_or_else(out_of_range)?;
+                joint_phases = Some(q);
+                Some(c)
+            }
+            Mode::Corrected(w) | Mode::CorrectedPhased(w, _) => {
+                Some(correction(correction_sums(level, x, &w, i)).ok_or_else(out_of_range)?)
+            }
             _ => mode.offset(i, fr),
         };
-        let ph = match (&phasing, mode, offset) {
-            (Some(Phasing::Ready(p)), ..) => Phased::Axes(phases_at(p, i)),
-            (Some(Phasing::Cc(_)), ..) if i < ne || corr_phased => {
+        let ph = match (joint_phases, &phasing, mode, offset) {
+            (Some(q), ..) => Phased::Axes(q),
+            (_, Some(Phasing::Ready(p)), ..) => Phased::Axes(phases_at(p, i)),
+            (_, Some(Phasing::Cc(_)), ..) if i < ne || corr_phased => {
                 Phased::Axes(phases_at(&cc_phases, i))
             }
-            (Some(Phasing::Cc(p)), ..) => {
+            (_, Some(Phasing::Cc(p)), ..) => {
                 let mut q = [0u8; 3];
                 for k in 0..3 {
                     (fine[k], q[k]) = p.predict(&x[k], i);
                 }
                 Phased::Axes(q)
             }
-            (None, Mode::TangentPhased(t), Some(c)) => {
+            (_, None, Mode::TangentPhased(t), Some(c)) => {
                 Phased::Tangent(TanTerms::new(level, x, i, t[i], c))
             }
             _ => Phased::No,
@@ -2358,10 +2473,23 @@ mod tests {
         phases: Option<&Phases>,
         mode: Mode<'_>,
     ) -> Vec<u8> {
-        let mut m = Models::new(PHASE_VERSION);
+        forced_at(PHASE_VERSION, level, sqrt2, x, coarse, phases, mode)
+    }
+
+    /// [`forced`] with format `version`'s models and stream layout.
+    fn forced_at(
+        version: u16,
+        level: &Level,
+        sqrt2: bool,
+        x: &[Vec<i64>; 3],
+        coarse: &[Vec<i64>; 3],
+        phases: Option<&Phases>,
+        mode: Mode<'_>,
+    ) -> Vec<u8> {
+        let mut m = Models::new(version);
         let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
         let corrections = match mode {
-            Mode::Corrected(w) | Mode::CorrectedPhased(w) => corrections(level, x, &w).unwrap(),
+            Mode::Corrected(w) | Mode::CorrectedPhased(w, _) => corrections(level, x, &w).unwrap(),
             _ => Vec::new(),
         };
         let prep = Prepared {
@@ -2381,7 +2509,7 @@ mod tests {
             false,
             &mut m,
             usize::MAX,
-            PHASE_VERSION,
+            version,
         )
         .unwrap();
         let mut out = mode.bytes();
@@ -2477,7 +2605,7 @@ mod tests {
             let [fine, x, coarse] = synthesised(&level, w, 40, 2);
             let st = Stencils::new(&level, w);
             let p = Phaser::new(&level, w, &st).unwrap();
-            let phases = p.phases(&fine, nd);
+            let phases = p.phases(&fine, nd, true);
             let bytes = forced(&level, false, &x, &coarse, Some(&phases), Mode::Phased);
             let ph = Some(Phasing::Cc(&p));
             let y = decode_fresh(&bytes, &level, false, &coarse, PHASE_VERSION, None, ph);
@@ -2678,7 +2806,7 @@ mod tests {
         let noise: [Vec<i64>; 3] = std::array::from_fn(|k| pseudo(80 + k as u64, nd, 6));
         let gen: Weights = [[[-16, 8], [0, 0], [-12, 6]], [[-4, 8], [0, 0], [-6, 4]]];
         for i in 0..nd {
-            let c = correction(&level, &x, &gen, i).unwrap();
+            let c = correction(correction_sums(&level, &x, &gen, i)).unwrap();
             for k in 0..3 {
                 x[k][nv + i] = noise[k][i] + c[k];
             }
@@ -2768,7 +2896,7 @@ mod tests {
             big[k][nv] = MAX_LIFTED;
         }
         let w: Weights = [[[64, 64]; 3]; 2];
-        let over = (0..nd).any(|i| correction(&level, &big, &w, i).is_none());
+        let over = (0..nd).any(|i| correction(correction_sums(&level, &big, &w, i)).is_none());
         assert!(over);
     }
 
@@ -2784,9 +2912,9 @@ mod tests {
             let [fine, x, coarse] = synthesised(&level, w, 60, 3);
             let st = Stencils::new(&level, w);
             let p = Phaser::new(&level, w, &st).unwrap();
-            let phases = p.phases(&fine, nd);
+            let phases = p.phases(&fine, nd, true);
             let wts: Weights = [[[-12, 6], [5, -3], [64, -64]], [[-4, 9], [0, 0], [-64, 64]]];
-            let mode = Mode::CorrectedPhased(wts);
+            let mode = Mode::CorrectedPhased(wts, Rounding::Apart);
             let bytes = forced(&level, false, &x, &coarse, Some(&phases), mode);
             assert_eq!(bytes[0], 9);
             let v = CORRECTED_PHASED_VERSION;
@@ -2812,6 +2940,140 @@ mod tests {
             assert_ne!(plain[1..], bytes[1..]);
             let y = decode_fresh(&plain, &level, false, &coarse, v, None, None);
             assert_eq!(y.unwrap(), x, "{w:?}");
+        }
+    }
+
+    /// Format 25's joint correction, by hand: `[(frac + 16 n) / 512]` (halves up) and
+    /// the phase of its remainder; the fraction moves it where the correction alone
+    /// would round the other way.
+    #[test]
+    fn joint_correction_rounds_the_fraction_and_the_correction_together() {
+        // n / 32 = 11/32 (0.34) alone rounds to 0; with 200/512 (0.39) it makes 1, and
+        // the sum, 0.73, lies 0.27 below it: negative, bin 1.
+        assert_eq!(
+            joint_correction([11, -11, 0], [200, -200, 0]),
+            Some(([1, -1, 0], [0b101, 0b001, 0]))
+        );
+        assert_eq!(correction([11, -11, 0]), Some([0, 0, 0]));
+        // Halves round up; a remainder of half the divisor is bin 2.
+        assert_eq!(
+            joint_correction([0, 0, 16], [256, -256, 0]),
+            Some(([1, 0, 1], [0b110, 0b110, 0b110]))
+        );
+        // Three-quarters: 1, a quarter below: bin 1; a tenth: 0, bin 0.
+        assert_eq!(
+            joint_correction([8, 0, 0], [256, 51, -51]),
+            Some(([1, 0, 0], [0b101, 0, 0b100]))
+        );
+        // Beyond a detail's bound.
+        let big = (MAX_LIFTED as i128 + 1) * 32;
+        assert_eq!(joint_correction([big, 0, 0], [0; 3]), None);
+        assert!(joint_correction([big - 32, 0, 0], [0; 3]).is_some());
+    }
+
+    /// Fine values that are their prediction plus their correction rounded once, now
+    /// and then off by 16: mode 9 with joint rounding (format 25) codes them smaller than
+    /// with the correction rounded apart, the encoder chooses it from format 25 on and
+    /// not before, and it decodes exactly; before format 25 its flag is corrupt.
+    #[test]
+    fn joint_rounding_pays_where_values_follow_prediction_plus_correction() {
+        use crate::transform::{Phaser, Stencils, Wavelet};
+        let (level, _) = grid_level(17);
+        let (nv, nd) = (level.nv, level.ne() + level.nf());
+        let gen: Weights = [[[-9, 3]; 3], [[-3, 4]; 3]];
+        for w in [Wavelet::Lazy, Wavelet::Interp4, Wavelet::Interp6] {
+            let st = Stencils::new(&level, w);
+            let p = Phaser::new(&level, w, &st).unwrap();
+            let noise: [Vec<i64>; 3] = std::array::from_fn(|k| pseudo(70 + k as u64, nd, 3));
+            let mut fine: [Vec<i64>; 3] = std::array::from_fn(|k| {
+                let mut v = pseudo(40 + k as u64, nv, 10);
+                v.resize(nv + nd, 0);
+                v
+            });
+            // The details, as the encoder's analysis leaves them.
+            let mut x = fine.clone();
+            for i in 0..nd {
+                let n = correction_sums(&level, &x, &gen, i);
+                let pred: [(i64, u8, i16); 3] =
+                    std::array::from_fn(|k| p.predict_frac(&fine[k], i));
+                let (c, _) = joint_correction(n, pred.map(|q| q.2)).unwrap();
+                for k in 0..3 {
+                    // One value in eight off by 16.
+                    let off = [0, 0, 0, 1, 0, 0, 0, -1][noise[k][i].rem_euclid(8) as usize];
+                    x[k][nv + i] = c[k] + off;
+                    fine[k][nv + i] = pred[k].0 + x[k][nv + i];
+                }
+            }
+            let coarse: [Vec<i64>; 3] = std::array::from_fn(|k| x[k][..nv].to_vec());
+            let phases = p.phases(&fine, nd, true);
+            let at = |r: Rounding| {
+                let mode = Mode::CorrectedPhased(gen, r);
+                forced_at(
+                    JOINT_VERSION,
+                    &level,
+                    false,
+                    &x,
+                    &coarse,
+                    Some(&phases),
+                    mode,
+                )
+            };
+            let (joint, apart) = (at(Rounding::Joint), at(Rounding::Apart));
+            assert_eq!(joint[..2], [9, 0b111111 | JOINT]);
+            assert!(
+                joint.len() < apart.len(),
+                "{w:?}: {} {}",
+                joint.len(),
+                apart.len()
+            );
+            let read = |bytes: &[u8], version: u16| {
+                let ph = Some(Phasing::Cc(&p));
+                decode_fresh(bytes, &level, false, &coarse, version, None, ph)
+            };
+            assert_eq!(read(&joint, JOINT_VERSION).unwrap(), fine, "{w:?}");
+            assert_eq!(read(&apart, JOINT_VERSION).unwrap(), fine, "{w:?}");
+            let err = read(&joint, JOINT_VERSION - 1).unwrap_err().to_string();
+            assert!(err.contains("bad correction weights"), "{w:?}: {err}");
+            // Both mask bits 6 and 7, or bit 6 on mode 8, are corrupt.
+            let mut bad = joint.clone();
+            bad[1] |= 0x80;
+            let err = read(&bad, JOINT_VERSION).unwrap_err().to_string();
+            assert!(err.contains("bad correction weights"), "{w:?}: {err}");
+            bad[0] = 8;
+            bad[1] = joint[1];
+            let err = read(&bad, JOINT_VERSION).unwrap_err().to_string();
+            assert!(err.contains("bad correction weights"), "{w:?}: {err}");
+            // The encoder, with weights of its own: it tries joint rounding from format 25
+            // (never smaller there than before), and not before.
+            let mut sizes = Vec::new();
+            for version in [JOINT_VERSION - 1, JOINT_VERSION] {
+                let mut act = vec![UNKNOWN; nv];
+                let mut models = LevelModels::new(version);
+                let bytes = encode(
+                    &level,
+                    false,
+                    &x,
+                    &coarse,
+                    &mut act,
+                    &mut models,
+                    None,
+                    Some(&phases),
+                    usize::MAX,
+                )
+                .unwrap();
+                if version < JOINT_VERSION && bytes[0] & 0x7f == 9 {
+                    assert_eq!(bytes[1] & JOINT, 0, "{w:?}");
+                }
+                // (A level in a phased mode comes back synthesised, else as details.)
+                let want = if matches!(bytes[0] & 0x7f, 6 | 9) {
+                    &fine
+                } else {
+                    &x
+                };
+                assert_eq!(&read(&bytes, version).unwrap(), want, "{w:?} {version}");
+                sizes.push(bytes.len());
+            }
+            assert!(sizes[1] <= sizes[0], "{w:?}: {sizes:?}");
         }
     }
 

@@ -94,6 +94,9 @@ pub struct SectionInfo {
     pub mode: Option<u8>,
     /// Whether a level section is unbinned (SPEC.md 10.1, format 22 on).
     pub unbinned: bool,
+    /// Whether a mode 9 level rounds its corrections jointly (SPEC.md 10.9, format 25
+    /// on).
+    pub joint: bool,
 }
 
 /// The result of [`encode`].
@@ -223,7 +226,7 @@ fn code_hierarchy(
             // values (the decoder makes them as it reads the level).
             if canon.poles.is_empty() {
                 if let Some(p) = transform::Phaser::new(level, w, &st) {
-                    phases[l] = Some(p.phases(&x, level.ne() + level.nf()));
+                    phases[l] = Some(p.phases(&x, level.ne() + level.nf(), true));
                 }
             }
             for xs in x.iter_mut() {
@@ -748,8 +751,9 @@ fn expect_kind(c: &Container<'_>, i: usize, kind: SectionKind, what: &str) -> Re
     }
 }
 
-/// A section's entry in the section table: a level section's mode (version 3 on) and
-/// unbinned flag (version 22 on) read from its payload (SPEC.md 10.1).
+/// A section's entry in the section table: a level section's mode (version 3 on),
+/// unbinned flag (version 22 on) and mode 9's joint flag (version 25 on) read from its
+/// payload (SPEC.md 10.1, 10.9).
 fn section_info(kind: SectionKind, bytes: usize, version: u16, payload: &[u8]) -> SectionInfo {
     let level = kind == SectionKind::LEVEL;
     SectionInfo {
@@ -757,6 +761,7 @@ fn section_info(kind: SectionKind, bytes: usize, version: u16, payload: &[u8]) -
         bytes,
         mode: level.then(|| levels::mode_of(version, payload)).flatten(),
         unbinned: level && levels::unbinned(version, payload),
+        joint: level && levels::joint(version, payload),
     }
 }
 

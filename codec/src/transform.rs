@@ -929,15 +929,47 @@ impl<'a> Phaser<'a> {
     }
 
     /// The phases of details `0..n` on the three axes of `x` (for face points, the
-    /// values must hold the fine edge points).
-    pub fn phases(&self, x: &[Vec<i64>; 3], n: usize) -> crate::levels::Phases {
-        std::array::from_fn(|k| (0..n).map(|i| self.predict(&x[k], i).1).collect())
+    /// values must hold the fine edge points), and with `fracs` their fractions
+    /// (SPEC.md 10.9).
+    pub fn phases(&self, x: &[Vec<i64>; 3], n: usize, fracs: bool) -> crate::levels::Phases {
+        let mut p = crate::levels::Phases::default();
+        for k in 0..3 {
+            for i in 0..n {
+                if fracs {
+                    let (_, q, f) = self.predict_frac(&x[k], i);
+                    p.codes[k].push(q);
+                    p.fracs[k].push(f);
+                } else {
+                    p.codes[k].push(self.predict(&x[k], i).1);
+                }
+            }
+        }
+        p
     }
 
     /// Detail `i`'s (edge points `0..ne`, then face points) correction and phase on one
-    /// axis, from the values `x` (the coarse values and, for a face point, the fine
-    /// edge points): the fine value is the detail plus the correction.
+    /// axis, from the values `x` (the coarse values and, for a face point, the fine edge
+    /// points): the fine value is the detail plus the correction (SPEC.md 10.6).
+    #[inline]
     pub fn predict(&self, x: &[i64], i: usize) -> (i64, u8) {
+        let (p, r, d) = self.exact(x, i);
+        (p, crate::levels::phase(r, d))
+    }
+
+    /// [`Phaser::predict`] and the fraction: the unrounded prediction lies about
+    /// `fraction / 512` above the correction (SPEC.md 10.9).
+    #[inline]
+    pub fn predict_frac(&self, x: &[i64], i: usize) -> (i64, u8, i16) {
+        let (p, r, d) = self.exact(x, i);
+        // (|r| <= d / 2, so the fraction is at most 256 in magnitude.)
+        let frac = round_div(crate::levels::FRAC_DIV * r, d) as i16;
+        (p, crate::levels::phase(r, d), frac)
+    }
+
+    /// Detail `i`'s correction `p`, and where its unrounded prediction lies: `r / d`
+    /// above `p`.
+    #[inline(always)]
+    fn exact(&self, x: &[i64], i: usize) -> (i64, i128, i128) {
         let level = self.level;
         let ne = level.ne();
         let (n, d, sign) = match &self.interp4 {
@@ -969,10 +1001,9 @@ impl<'a> Phaser<'a> {
             }
         };
         let p = round_div(n, d);
-        let r = n - p as i128 * d;
         // The detail is `x - [N / D]` (interp4) or `x + [N / D]` (lazy): the unrounded
         // prediction lies `r / D` above (or below) the rounded one.
-        (sign * p, crate::levels::phase(sign as i128 * r, d))
+        (sign * p, sign as i128 * (n - p as i128 * d), d)
     }
 }
 
@@ -1121,8 +1152,13 @@ mod tests {
                     analyse(level, w, &mut e);
                     for i in 0..level.ne() + level.nf() {
                         let j = level.nv + i;
-                        let (c, q) = p.predict(&x, i);
+                        let (c, q, frac) = p.predict_frac(&x, i);
+                        assert_eq!(p.predict(&x, i), (c, q));
                         assert_eq!(d[j] + c, x[j], "{w:?} detail {i}");
+                        // The unrounded prediction lies `d - e` above the rounded one:
+                        // the fraction is that in 512ths, rounded.
+                        let off = frac as f64 / 512.0 - (d[j] as f64 - e[j]);
+                        assert!(off.abs() <= 1.0 / 1024.0 + 1e-9, "{w:?} detail {i}: {off}");
                         if let Some(want) = crate::levels::expected_phase(d[j], e[j]) {
                             assert_eq!(q, want, "{w:?} detail {i}: {} vs {}", d[j], e[j]);
                             seen[q as usize] += 1;

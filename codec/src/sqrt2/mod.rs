@@ -432,7 +432,10 @@ pub fn predictions_with(
     let small = small_values(x, level.nv);
     let nf = level.nf();
     let mut out: [Vec<i64>; 3] = std::array::from_fn(|_| Vec::with_capacity(nf));
-    let mut ph: Option<Phases> = phases.then(|| std::array::from_fn(|_| Vec::with_capacity(nf)));
+    let mut ph: Option<Phases> = phases.then(|| Phases {
+        codes: std::array::from_fn(|_| Vec::with_capacity(nf)),
+        fracs: Default::default(),
+    });
     for f in 0..nf {
         let (p, q) = match ph {
             Some(_) => face_prediction::<true>(&level.coarse, &nb, f, x, small),
@@ -442,7 +445,7 @@ pub fn predictions_with(
             o.push(p);
         }
         if let Some(ph) = &mut ph {
-            for (o, q) in ph.iter_mut().zip(q) {
+            for (o, q) in ph.codes.iter_mut().zip(q) {
                 o.push(q);
             }
         }
@@ -747,7 +750,11 @@ mod prediction_tests {
                         continue; // beyond f64's exact integers
                     }
                     if let Some(want) = crate::levels::expected_phase(d[i], e[i]) {
-                        assert_eq!(ph[k][f], want, "face {f} axis {k}: {} vs {}", d[i], e[i]);
+                        assert_eq!(
+                            ph.codes[k][f], want,
+                            "face {f} axis {k}: {} vs {}",
+                            d[i], e[i]
+                        );
                         seen[want as usize] += 1;
                     }
                 }
