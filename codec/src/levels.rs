@@ -267,6 +267,8 @@ fn corrections(level: &Level, x: &[Vec<i64>; 3], w: &Weights) -> Option<Vec<[i64
 /// What [`encode`] makes once per level for the modes that read it.
 #[derive(Default)]
 struct Prepared {
+    /// The coarse faces' normals, for the normal-frame and rotated modes.
+    normals: Vec<[i128; 3]>,
     /// The rotated modes' frames (normals included), per detail.
     frames: Vec<Option<RotFrame>>,
     /// Modes 8 and 9's correction numerators, per detail (from the level's one set of
@@ -1073,15 +1075,18 @@ impl RotFrame {
 }
 
 /// Every detail's [`RotFrame`] (`None` where the coarse normal is zero), computed once
-/// per level for all the encoder's rotated modes.
-fn rot_frames(level: &Level, coarse: &[Vec<i64>; 3], sqrt2: bool) -> Vec<Option<RotFrame>> {
-    let normals = face_normals(level, coarse);
+/// per level for all the encoder's rotated modes, from the coarse faces' `normals`.
+fn rot_frames(
+    level: &Level,
+    coarse: &[Vec<i64>; 3],
+    normals: &[[i128; 3]],
+    sqrt2: bool,
+) -> Vec<Option<RotFrame>> {
     let ne = if sqrt2 { level.ne() } else { 0 };
     (0..details(level, sqrt2))
         .map(|i| {
             let fd = ne + i;
-            frame(level, &normals, fd)
-                .map(|(_, n)| RotFrame::new(level, coarse, sqrt2, fd, n, true))
+            frame(level, normals, fd).map(|(_, n)| RotFrame::new(level, coarse, sqrt2, fd, n, true))
         })
         .collect()
 }
@@ -1407,7 +1412,8 @@ pub fn encode(
     let rotated = version >= ROTATED_VERSION && models.rotated && (open(4) || open(5));
     if rotated {
         modes.push(Mode::Rotated);
-        prep.frames = rot_frames(level, coarse, sqrt2);
+        prep.normals = face_normals(level, coarse);
+        prep.frames = rot_frames(level, coarse, &prep.normals, sqrt2);
         match shift_weights(level, x, &prep.frames) {
             (0, 0) => {}
             (a, b) => modes.push(Mode::Shifted(a, b)),
@@ -1415,6 +1421,10 @@ pub fn encode(
     }
     if modes.iter().any(|m| open(m.byte())) {
         modes.retain(|m| open(m.byte()));
+    }
+    // The normals, once for every mode that reads them.
+    if prep.normals.is_empty() && modes.iter().any(|m| m.framed()) {
+        prep.normals = face_normals(level, coarse);
     }
     let start = models.start();
     // The smallest mode's payload, with the activities, magnitudes and models it leaves.
@@ -1643,9 +1653,9 @@ fn encode_mode(
 ) -> Option<Vec<u8>> {
     let mut enc = Encoder::new();
     let (nv, nd) = (level.nv, details(level, sqrt2));
-    // The rotated modes take their frames (normals included), modes 8 and 9 their
-    // corrections, from `prep`, made once per level; the normal-frame modes compute the
-    // normals here.
+    // The rotated modes take their frames (normals included), the normal-frame modes
+    // the normals and modes 8 and 9 their corrections from `prep`, made once per level
+    // (the normals here where `prep` has none).
     let rotated = matches!(mode, Mode::Rotated | Mode::Shifted(..));
     let corrected = matches!(mode, Mode::Corrected(_) | Mode::CorrectedPhased(..));
     if (rotated && prep.frames.len() != nd) || (corrected && prep.corrections.len() != nd) {
@@ -1665,16 +1675,19 @@ fn encode_mode(
     act.resize(nv + nd, 0);
     mags.resize(nv, [UNKNOWN; 3]);
     mags.resize(nv + nd, [0; 3]);
-    let normals = if framed {
-        face_normals(level, coarse)
-    } else {
-        Vec::new()
+    let made;
+    let normals = match framed && prep.normals.is_empty() {
+        true => {
+            made = face_normals(level, coarse);
+            &made
+        }
+        false => &prep.normals,
     };
     for i in 0..nd {
         let (class, bins, fd) = contexts(level, act, mags, sqrt2, m.bins, i);
         let mut d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
         let fr = if framed {
-            frame(level, &normals, fd)
+            frame(level, normals, fd)
         } else {
             None
         };
@@ -2320,7 +2333,7 @@ mod tests {
         limit: usize,
     ) -> Option<Vec<u8>> {
         let prep = Prepared {
-            frames: rot_frames(level, coarse, false),
+            frames: rot_frames(level, coarse, &face_normals(level, coarse), false),
             ..Default::default()
         };
         let mut m = Models::new(ROTATED_VERSION);
@@ -2380,7 +2393,7 @@ mod tests {
                 };
             }
         }
-        let frames = rot_frames(&level, &coarse, false);
+        let frames = rot_frames(&level, &coarse, &face_normals(&level, &coarse), false);
         let out_of_range = frames.iter().enumerate().any(|(i, f)| {
             f.as_ref().is_some_and(|f| {
                 let d = std::array::from_fn(|k| x[k][level.nv + i]);
@@ -2418,7 +2431,7 @@ mod tests {
         let (level, coarse, mut x) = rotated_fixture(4);
         let nv = level.nv;
         follow_faces(&level, &coarse, &mut x);
-        let frames = rot_frames(&level, &coarse, false);
+        let frames = rot_frames(&level, &coarse, &face_normals(&level, &coarse), false);
         assert_eq!(shift_weights(&level, &x, &frames), (4, 4));
         let plain = code_in_mode(&level, &coarse, &x, Mode::Rotated);
         let shifted = code_in_mode(&level, &coarse, &x, Mode::Shifted(4, 4));
