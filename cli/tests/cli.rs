@@ -133,6 +133,26 @@ fn info_and_verify_json_have_their_keys() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("bits per vertex"));
 }
 
+/// A level in mode 9 with joint rounding (format 25) is named so by `info`, in text and
+/// in JSON; other level sections say `"joint": false`.
+#[test]
+fn info_names_joint_rounding() {
+    let swv = corpus("golden/terrain_grid33.interp6.q10.v25.swv");
+    let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
+    let levels: Vec<_> = v["sections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|s| s["kind"] == "LEVL")
+        .collect();
+    let joint: Vec<_> = levels.iter().filter(|s| s["joint"] == true).collect();
+    assert_eq!(joint.len(), 1, "{v}");
+    assert_eq!(joint[0]["mode"], 9);
+    assert!(levels.iter().all(|s| s.get("joint").is_some()), "{v}");
+    let text = String::from_utf8_lossy(&run(&["info", swv.to_str().unwrap()]).stdout).to_string();
+    assert!(text.contains("(mode 9 joint, unbinned)"), "{text}");
+}
+
 #[test]
 fn errors_exit_1_with_one_line_naming_the_file() {
     let bad = tmp("bad.swv");
