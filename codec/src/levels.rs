@@ -1654,14 +1654,16 @@ fn encode_mode(
     let mut enc = Encoder::new();
     let (nv, nd) = (level.nv, details(level, sqrt2));
     // The rotated modes take their frames (normals included), the normal-frame modes
-    // the normals and modes 8 and 9 their corrections from `prep`, made once per level
-    // (the normals here where `prep` has none).
+    // the normals and modes 8 and 9 their corrections from `prep`, made once per level.
     let rotated = matches!(mode, Mode::Rotated | Mode::Shifted(..));
     let corrected = matches!(mode, Mode::Corrected(_) | Mode::CorrectedPhased(..));
-    if (rotated && prep.frames.len() != nd) || (corrected && prep.corrections.len() != nd) {
+    let framed = mode.framed() && !rotated;
+    if (rotated && prep.frames.len() != nd)
+        || (corrected && prep.corrections.len() != nd)
+        || (framed && prep.normals.len() != level.nf())
+    {
         return None;
     }
-    let framed = mode.framed() && !rotated;
     let phased = matches!(mode, Mode::Phased | Mode::CorrectedPhased(..));
     let phases = phases.filter(|_| phased);
     if phased && !phases.is_some_and(|p| p.codes.iter().all(|p| p.len() == nd)) {
@@ -1675,19 +1677,11 @@ fn encode_mode(
     act.resize(nv + nd, 0);
     mags.resize(nv, [UNKNOWN; 3]);
     mags.resize(nv + nd, [0; 3]);
-    let made;
-    let normals = match framed && prep.normals.is_empty() {
-        true => {
-            made = face_normals(level, coarse);
-            &made
-        }
-        false => &prep.normals,
-    };
     for i in 0..nd {
         let (class, bins, fd) = contexts(level, act, mags, sqrt2, m.bins, i);
         let mut d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
         let fr = if framed {
-            frame(level, normals, fd)
+            frame(level, &prep.normals, fd)
         } else {
             None
         };
@@ -2332,8 +2326,10 @@ mod tests {
         mode: Mode<'_>,
         limit: usize,
     ) -> Option<Vec<u8>> {
+        let normals = face_normals(level, coarse);
         let prep = Prepared {
-            frames: rot_frames(level, coarse, &face_normals(level, coarse), false),
+            frames: rot_frames(level, coarse, &normals, false),
+            normals,
             ..Default::default()
         };
         let mut m = Models::new(ROTATED_VERSION);
@@ -2506,6 +2502,7 @@ mod tests {
             _ => Vec::new(),
         };
         let prep = Prepared {
+            normals: face_normals(level, coarse),
             corrections,
             ..Default::default()
         };

@@ -582,8 +582,10 @@ fn lift<T: Sample>(
 ) {
     match w {
         Wavelet::DyadicSym => dyadic_sym(level, x, forward, skip),
-        Wavelet::Interp4 => interp4(level, &st.interp4(level, false), x, forward, skip),
-        Wavelet::Interp6 => interp4(level, &st.interp4(level, true), x, forward, skip),
+        Wavelet::Interp4 | Wavelet::Interp6 => {
+            let six = w == Wavelet::Interp6;
+            interp4(level, &st.interp4(level, six), x, forward, skip)
+        }
         _ if forward => {
             for &s in w.steps() {
                 step(level, x, s, true, skip);
