@@ -495,11 +495,59 @@ fn joint_rounding_levels_need_their_flag() {
     }
 }
 
+/// Format 26's zero slots (SPEC.md 10.1): the frozen terrain container's levels leave x
+/// and y out. Read with a level's flags cleared, that level's stream is read as if it
+/// held them: an error or another mesh, never this one. With a flag cleared but another
+/// added (z left out instead of y), the same. The flags in a format 25 container are an
+/// unknown mode.
+#[test]
+fn zero_slots_are_left_out_only_with_their_flags() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/golden/");
+    let b = std::fs::read(format!("{dir}terrain_grid33.interp6.q10.v26.swv")).unwrap();
+    let obj = std::fs::read(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/corpus/terrain_grid33.obj"
+    ))
+    .unwrap();
+    let m = subwave::load(&obj, Some(10)).unwrap();
+    let info = subwave::inspect(&b, &Limits::default()).unwrap();
+    let levels: Vec<_> = info.sections.iter().filter(|s| s.kind == "LEVL").collect();
+    assert!(!levels.is_empty());
+    assert!(levels.iter().all(|s| s.zero_slots == [0, 1]), "{levels:?}");
+    assert!(subwave::decode_slice(&b).unwrap().mesh == m.mesh);
+    let payloads = level_payloads(&b);
+    for (level, p) in payloads.iter().enumerate() {
+        assert_eq!(p[0] & 0x70, 0x30, "level {level}");
+        for edit in [
+            (|p: &mut Vec<u8>| p[0] &= !0x70) as fn(&mut Vec<u8>),
+            |p| p[0] &= !0x10,
+            |p| p[0] ^= 0x60,
+        ] {
+            if let Ok(d) = subwave::decode_slice(&with_level(&b, level, edit)) {
+                assert!(d.mesh != m.mesh, "level {level} read with other zero slots");
+            }
+        }
+    }
+    // The same sections under format 25, whose mode byte has no zero-slot flags.
+    let c = subwave_container::Container::parse(&b, &Limits::default()).unwrap();
+    let mut w = ContainerWriter::for_version(25);
+    for s in c.sections.iter().filter(|s| s.kind != SectionKind::END) {
+        w.section(s.kind, s.payload);
+    }
+    match subwave::decode_slice(&w.finish()) {
+        Err(Error::CorruptStream { what, .. }) => {
+            assert!(what.contains("unknown level mode"), "{what}")
+        }
+        other => panic!("expected an unknown mode, got {other:?}"),
+    }
+}
+
 #[test]
 fn every_bit_flip_inside_a_phased_level_is_an_error_or_a_valid_mesh() {
     // The frozen containers with a level in mode 6 (Catmull-Clark, interp4), mode 7
     // (sqrt(2)), mode 8 (its weights included), mode 9, mode 9 unbinned (format 22),
-    // mode 6 unbinned on interp6 (format 24) and mode 9 with joint rounding (format 25):
+    // mode 6 unbinned on interp6 (format 24), mode 9 with joint rounding (format 25) and
+    // the same with slots 0 and 1 left out (format 26):
     // every bit of those levels' payloads flipped, checksums made valid, so the phases,
     // shifts, corrections and their bounds meet hostile values.
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/golden/");
@@ -512,6 +560,7 @@ fn every_bit_flip_inside_a_phased_level_is_an_error_or_a_valid_mesh() {
         ("subdivided_open_cc3.lazy.q12.v22.swv", 0x89),
         ("subdivided_open_cc3.interp6.q12.v24.swv", 0x86),
         ("terrain_grid33.interp6.q10.v25.swv", 0x89),
+        ("terrain_grid33.interp6.q10.v26.swv", 0xb9),
     ] {
         let b = std::fs::read(format!("{dir}{file}")).unwrap();
         let payloads = level_payloads(&b);

@@ -115,6 +115,7 @@ fn frozen_containers_still_decode() {
             "subdivided_open_cc3.obj",
         ),
         ("terrain_grid33.interp6.q10.v25.swv", "terrain_grid33.obj"),
+        ("terrain_grid33.interp6.q10.v26.swv", "terrain_grid33.obj"),
     ];
     for (swv, obj) in frozen {
         let path = golden_dir().join(swv);

@@ -408,7 +408,7 @@ fn print_info(info: &subwave::Info, as_json: bool) {
             "keep_order": h.has_order,
             "value_map": h.has_value_map,
             "sections": info.sections.iter().map(|s| match s.mode {
-                Some(m) => json!({"kind": s.kind, "bytes": s.bytes, "mode": m, "unbinned": s.unbinned, "joint": s.joint}),
+                Some(m) => json!({"kind": s.kind, "bytes": s.bytes, "mode": m, "unbinned": s.unbinned, "joint": s.joint, "zero_slots": s.zero_slots}),
                 None => json!({"kind": s.kind, "bytes": s.bytes}),
             }).collect::<Vec<_>>(),
             "bytes": info.bytes,
@@ -460,7 +460,14 @@ fn print_info(info: &subwave::Info, as_json: bool) {
             Some(m) => {
                 let joint = if s.joint { " joint" } else { "" };
                 let unbinned = if s.unbinned { ", unbinned" } else { "" };
-                format!("{} {} B (mode {m}{joint}{unbinned})", s.kind, s.bytes)
+                let zero = match s.zero_slots.as_slice() {
+                    [] => String::new(),
+                    z => {
+                        let list: Vec<String> = z.iter().map(u8::to_string).collect();
+                        format!(", zero slots {}", list.join(" "))
+                    }
+                };
+                format!("{} {} B (mode {m}{joint}{unbinned}{zero})", s.kind, s.bytes)
             }
             None => format!("{} {} B", s.kind, s.bytes),
         })

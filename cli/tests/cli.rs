@@ -153,6 +153,39 @@ fn info_names_joint_rounding() {
     assert!(text.contains("(mode 9 joint, unbinned)"), "{text}");
 }
 
+/// Format 26's zero slots: `info` lists a level's left-out slots, in text and in JSON
+/// (`"zero_slots": []` where none are, as in a format 25 container).
+#[test]
+fn info_lists_zero_slots() {
+    let sections = |file: &str| {
+        let swv = corpus(file);
+        let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
+        let levels: Vec<_> = v["sections"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|s| s["kind"] == "LEVL")
+            .cloned()
+            .collect();
+        let out = run(&["info", swv.to_str().unwrap()]);
+        (levels, String::from_utf8_lossy(&out.stdout).to_string())
+    };
+    let (levels, text) = sections("golden/terrain_grid33.interp6.q10.v26.swv");
+    assert!(!levels.is_empty());
+    for s in &levels {
+        assert_eq!(s["zero_slots"], serde_json::json!([0, 1]), "{s}");
+    }
+    assert!(
+        text.contains("(mode 9 joint, unbinned, zero slots 0 1)"),
+        "{text}"
+    );
+    let (levels, text) = sections("golden/terrain_grid33.interp6.q10.v25.swv");
+    for s in &levels {
+        assert_eq!(s["zero_slots"], serde_json::json!([]), "{s}");
+    }
+    assert!(!text.contains("zero slots"), "{text}");
+}
+
 #[test]
 fn errors_exit_1_with_one_line_naming_the_file() {
     let bad = tmp("bad.swv");

@@ -124,15 +124,34 @@ pub const UNBINNED_VERSION: u16 = 22;
 /// The mode byte's unbinned flag (format 22 on).
 const UNBINNED: u8 = 0x80;
 
+/// From format 26 the mode byte's bits 4 to 6 flag the slots whose coded values are
+/// all 0 at the level and left out of its stream (SPEC.md 10.1): a terrain grid's x and
+/// y, a flat mesh's z.
+pub const ZERO_VERSION: u16 = 26;
+/// The mode byte's zero-slot flags (format 26 on), slot s at bit `ZERO_SHIFT + s`.
+const ZERO_SLOTS: u8 = 0x70;
+const ZERO_SHIFT: u32 = 4;
+
 /// A LEVL payload's mode (SPEC.md 10.1): its first byte, without format 22's unbinned
-/// flag; `None` for an empty payload or before format 3.
+/// flag and format 26's zero-slot flags; `None` for an empty payload or before format 3.
 pub fn mode_of(version: u16, payload: &[u8]) -> Option<u8> {
     let &b = payload.first().filter(|_| version >= 3)?;
-    Some(if version >= UNBINNED_VERSION {
+    Some(if version >= ZERO_VERSION {
+        b & !(UNBINNED | ZERO_SLOTS)
+    } else if version >= UNBINNED_VERSION {
         b & !UNBINNED
     } else {
         b
     })
+}
+
+/// A LEVL payload's zero-slot flags (format 26 on, SPEC.md 10.1): bit s set when slot
+/// s's values are all 0 and not coded.
+pub fn zero_slots(version: u16, payload: &[u8]) -> u8 {
+    match payload.first() {
+        Some(&b) if version >= ZERO_VERSION => (b & ZERO_SLOTS) >> ZERO_SHIFT,
+        _ => 0,
+    }
 }
 
 /// Whether a LEVL payload is unbinned (format 22 on, SPEC.md 10.1).
@@ -1239,6 +1258,7 @@ fn put(
     fr: Option<(usize, [i64; 3])>,
     ph: Phased,
     unbinned: bool,
+    zero: u8,
 ) -> Option<[u8; 3]> {
     let (order, n) = plan(fr);
     let mut prev = 0;
@@ -1261,6 +1281,14 @@ fn put(
         if q.is_some_and(|q| q & 4 != 0) {
             v = -v;
         }
+        // A zero slot's values are left out (format 26): all 0, else not this coding.
+        if zero >> slot & 1 == 1 {
+            if v != 0 {
+                return None;
+            }
+            prev = 0;
+            continue;
+        }
         let c = Ctx {
             class,
             slot,
@@ -1277,6 +1305,7 @@ fn put(
     Some(mags)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn get(
     dec: &mut Decoder,
     m: &mut Models,
@@ -1285,6 +1314,7 @@ fn get(
     fr: Option<(usize, [i64; 3])>,
     ph: Phased,
     unbinned: bool,
+    zero: u8,
 ) -> Result<([i64; 3], [u8; 3])> {
     let (order, n) = plan(fr);
     let mut d = [0i64; 3];
@@ -1312,8 +1342,15 @@ fn get(
             bin: q.map(|(_, q)| (q & 3) as usize),
             unbinned,
         };
-        let v = dec.int(m.model(c))?;
-        m.learn(c, v);
+        // A zero slot's values are not in the stream (format 26), and no model learns
+        // them.
+        let v = if zero >> slot & 1 == 1 {
+            0
+        } else {
+            let v = dec.int(m.model(c))?;
+            m.learn(c, v);
+            v
+        };
         prev = class_of(v);
         let v = match q {
             Some((s, q)) => {
@@ -1353,7 +1390,7 @@ pub fn encode(
     if version < 3 {
         let mut m = models.start();
         let mut mags = std::mem::take(&mut models.mags);
-        let body = encode_mode(
+        let (_, body) = encode_mode(
             level,
             sqrt2,
             x,
@@ -1382,7 +1419,7 @@ pub fn encode(
     // mode is tried unbinned as well.
     let unbin_open = version >= UNBINNED_VERSION;
     let plan_unbinned = only.map(|o| unbin_open && o & UNBINNED != 0);
-    let only = only.map(|o| if unbin_open { o & !UNBINNED } else { o });
+    let only = only.and_then(|o| mode_of(version, &[o]));
     let plain = |m: u8| matches!(m, 0 | 6);
     let open = |m: u8| only.is_none_or(|o| o == m || (plain(o) && plain(m)));
     let mut modes = vec![Mode::Plain, Mode::Framed];
@@ -1463,12 +1500,13 @@ pub fn encode(
         let mut a = act.clone();
         let mut mg = models.mags.clone();
         let mut m = models.ready(start.clone(), mode);
-        let Some(body) = encode_mode(
+        let Some((zero, body)) = encode_mode(
             level, sqrt2, x, coarse, &prep, phases, &mut a, &mut mg, mode, unbinned, &mut m, room,
             version,
         ) else {
             return;
         };
+        bytes[0] |= zero << ZERO_SHIFT;
         let size = body.len() + head;
         if best.as_ref().is_none_or(|(j, b)| {
             let bs = b.body.len() + b.mode.len();
@@ -1650,7 +1688,7 @@ fn encode_mode(
     m: &mut Models,
     limit: usize,
     version: u16,
-) -> Option<Vec<u8>> {
+) -> Option<(u8, Vec<u8>)> {
     let mut enc = Encoder::new();
     let (nv, nd) = (level.nv, details(level, sqrt2));
     // The rotated modes take their frames (normals included), the normal-frame modes
@@ -1674,6 +1712,13 @@ fn encode_mode(
     if joint && !phases.is_some_and(|p| p.fracs.iter().all(|p| p.len() == nd)) {
         return None;
     }
+    // Format 26: the modes that code the axes themselves leave out the axes whose
+    // values are all 0.
+    let zero = if version >= ZERO_VERSION && !mode.framed() && nd > 0 {
+        zero_axes(x, nv, nd, mode, prep, phases)
+    } else {
+        0
+    };
     act.resize(nv + nd, 0);
     mags.resize(nv, [UNKNOWN; 3]);
     mags.resize(nv + nd, [0; 3]);
@@ -1725,14 +1770,46 @@ fn encode_mode(
             }
             _ => Phased::No,
         };
-        mags[nv + i] = put(&mut enc, m, class, bins, d, fr, ph, unbinned)?;
+        mags[nv + i] = put(&mut enc, m, class, bins, d, fr, ph, unbinned, zero)?;
         act[nv + i] = activity(d);
         if i % 64 == 63 && enc.written() > limit {
             return None;
         }
     }
     let body = enc.finish_for(version);
-    (body.len() <= limit).then_some(body)
+    (body.len() <= limit).then_some((zero, body))
+}
+
+/// Format 26's zero slots of a mode that codes the axes themselves (0, 6, 8 or 9): the
+/// axes whose details `x[k][nv..nv + nd]` are all 0 and stay 0 once corrected (modes 8
+/// and 9; with joint rounding a prediction's fraction alone can make a correction).
+fn zero_axes(
+    x: &[Vec<i64>; 3],
+    nv: usize,
+    nd: usize,
+    mode: Mode<'_>,
+    prep: &Prepared,
+    phases: Option<&Phases>,
+) -> u8 {
+    let corrected = matches!(mode, Mode::Corrected(_) | Mode::CorrectedPhased(..));
+    let joint = matches!(mode, Mode::CorrectedPhased(_, Rounding::Joint));
+    let mut zero = 0;
+    for k in 0..3 {
+        let fractions_round_to_0 = || {
+            phases.is_some_and(|p| {
+                p.fracs[k]
+                    .iter()
+                    .all(|&f| joint_correction([0; 3], [f, 0, 0]).is_some_and(|(c, _)| c[0] == 0))
+            })
+        };
+        if x[k][nv..nv + nd].iter().all(|&v| v == 0)
+            && (!corrected || prep.corrections.iter().all(|n| n[k] == 0))
+            && (!joint || fractions_round_to_0())
+        {
+            zero |= 1 << k;
+        }
+    }
+    zero
 }
 
 /// `a + b` per component, `None` on overflow (see [`in_range`]).
@@ -1777,6 +1854,8 @@ pub fn decode(
     let no_phases = || Error::corrupt("LEVL", "phase mode on a level without prediction phases");
     // Format 22: the mode byte's top bit makes the level unbinned.
     let unbinned = unbinned(version, payload);
+    // Format 26: the slots left out of the stream.
+    let zero = zero_slots(version, payload);
     let first = mode_of(version, payload);
     let (mode, payload) = if version >= 3 {
         match first.zip(payload.get(1..)) {
@@ -1957,6 +2036,7 @@ pub fn decode(
             fr.filter(|_| rotation.is_none()),
             ph,
             unbinned,
+            zero,
         )?;
         mags[nv + i] = mg;
         let mut d = r;
@@ -2349,6 +2429,7 @@ mod tests {
             limit,
             ROTATED_VERSION,
         )
+        .map(|(_, body)| body)
     }
 
     /// Codes `x`'s details in `mode`, decodes them and checks the round trip; the
@@ -2506,7 +2587,7 @@ mod tests {
             corrections,
             ..Default::default()
         };
-        let body = encode_mode(
+        let (zero, body) = encode_mode(
             level,
             sqrt2,
             x,
@@ -2523,6 +2604,7 @@ mod tests {
         )
         .unwrap();
         let mut out = mode.bytes();
+        out[0] |= zero << ZERO_SHIFT;
         out.extend(body);
         out
     }
@@ -2979,6 +3061,125 @@ mod tests {
         let big = (MAX_LIFTED as i128 + 1) * 32;
         assert_eq!(joint_correction([big, 0, 0], [0; 3]), None);
         assert!(joint_correction([big - 32, 0, 0], [0; 3]).is_some());
+    }
+
+    /// Format 26's zero slots: on a level whose x and y details are all 0 (a terrain
+    /// grid's, say) the modes that code the axes themselves flag slots 0 and 1 and leave
+    /// them out, which codes smaller than format 25 and decodes exactly; the flags are
+    /// an unknown mode before format 26, and a level read with them cleared is not read
+    /// as it was written.
+    #[test]
+    fn zero_slots_leave_out_axes_whose_values_are_all_0() {
+        use crate::transform::{Phaser, Stencils, Wavelet};
+        let (level, _) = grid_level(17);
+        let (nv, nd) = (level.nv, level.ne() + level.nf());
+        let st = Stencils::new(&level, Wavelet::Lazy);
+        let p = Phaser::new(&level, Wavelet::Lazy, &st).unwrap();
+        // x and y on a lattice (details 0), z rough.
+        let coarse: [Vec<i64>; 3] = [
+            (0..nv as i64).map(|i| 8 * (i % 9)).collect(),
+            (0..nv as i64).map(|i| 8 * (i / 9)).collect(),
+            pseudo(5, nv, 200),
+        ];
+        let mut x = coarse.clone();
+        x[0].resize(nv + nd, 0);
+        x[1].resize(nv + nd, 0);
+        x[2].extend(pseudo(6, nd, 9));
+        // The fine values: predictions plus details (mode 6 and 9's decoder gives these).
+        let mut fine = x.clone();
+        for i in 0..nd {
+            for k in 0..3 {
+                fine[k][nv + i] = p.predict(&fine[k], i).0 + x[k][nv + i];
+            }
+        }
+        let phases = p.phases(&fine, nd, true);
+        let w: Weights = [[[4, 0]; 3], [[0, 4]; 3]];
+        for mode in [
+            Mode::Plain,
+            Mode::Phased,
+            Mode::Corrected(w),
+            Mode::CorrectedPhased(w, Rounding::Apart),
+            Mode::CorrectedPhased(w, Rounding::Joint),
+        ] {
+            let name = mode.byte();
+            let phased = mode.phased();
+            let read = |bytes: &[u8], version: u16| {
+                let ph = phased.then_some(Phasing::Cc(&p));
+                decode_fresh(bytes, &level, false, &coarse, version, None, ph)
+            };
+            let want = if phased { &fine } else { &x };
+            let with = forced_at(
+                ZERO_VERSION,
+                &level,
+                false,
+                &x,
+                &coarse,
+                Some(&phases),
+                mode,
+            );
+            let without = forced_at(
+                ZERO_VERSION - 1,
+                &level,
+                false,
+                &x,
+                &coarse,
+                Some(&phases),
+                mode,
+            );
+            assert_eq!(with[0], 0x30 | name, "mode {name}");
+            assert_eq!(without[0], name, "mode {name}");
+            assert!(
+                with.len() < without.len(),
+                "mode {name}: {} {}",
+                with.len(),
+                without.len()
+            );
+            assert_eq!(&read(&with, ZERO_VERSION).unwrap(), want, "mode {name}");
+            assert_eq!(
+                &read(&without, ZERO_VERSION - 1).unwrap(),
+                want,
+                "mode {name}"
+            );
+            // Format 25 knows no flags; cleared, the stream is read as if it held x and y.
+            let err = read(&with, ZERO_VERSION - 1).unwrap_err().to_string();
+            assert!(err.contains("unknown level mode"), "mode {name}: {err}");
+            let mut cleared = with.clone();
+            cleared[0] = name;
+            if let Ok(y) = read(&cleared, ZERO_VERSION) {
+                assert!(&y != want, "mode {name}");
+            }
+        }
+        // A slot flagged with a value other than 0 is not a coding of the level.
+        let mut m = Models::new(ZERO_VERSION);
+        let mut enc = Encoder::new();
+        let put = |m: &mut Models, enc: &mut Encoder, d, zero| {
+            put(enc, m, 0, [0; 3], d, None, Phased::No, false, zero)
+        };
+        assert_eq!(put(&mut m, &mut enc, [0, 0, 3], 0b011), Some([0, 0, 2]));
+        assert_eq!(put(&mut m, &mut enc, [0, 1, 3], 0b011), None);
+        // And the encoder flags them itself from format 26, not before.
+        for version in [ZERO_VERSION - 1, ZERO_VERSION] {
+            let mut act = vec![UNKNOWN; nv];
+            let mut models = LevelModels::new(version);
+            let bytes = encode(
+                &level,
+                false,
+                &x,
+                &coarse,
+                &mut act,
+                &mut models,
+                None,
+                Some(&phases),
+                usize::MAX,
+            )
+            .unwrap();
+            let flags = if version >= ZERO_VERSION { 0x30 } else { 0 };
+            assert_eq!(bytes[0] & 0x70, flags, "{version}");
+            let mode = mode_of(version, &bytes).unwrap();
+            let ph = matches!(mode, 6 | 9).then_some(Phasing::Cc(&p));
+            let y = decode_fresh(&bytes, &level, false, &coarse, version, None, ph).unwrap();
+            assert_eq!(&y, if matches!(mode, 6 | 9) { &fine } else { &x });
+        }
     }
 
     /// Fine values that are their prediction plus their correction rounded once, now

@@ -97,6 +97,9 @@ pub struct SectionInfo {
     /// Whether a mode 9 level rounds its corrections jointly (SPEC.md 10.9, format 25
     /// on).
     pub joint: bool,
+    /// A level section's slots whose values are all 0 and left out of its stream
+    /// (SPEC.md 10.1, format 26 on), in increasing order.
+    pub zero_slots: Vec<u8>,
 }
 
 /// The result of [`encode`].
@@ -618,7 +621,10 @@ fn encode_with(
             // models learnt in another frame: the best coding without the rotated modes
             // can be smaller in all. (Without a rotated level it would be this coding
             // again: the same modes win, the rotated ones coming last on ties.)
-            let rotated = p.modes().iter().any(|m| matches!(m, 4 | 5));
+            let rotated = p
+                .modes()
+                .iter()
+                .any(|&m| matches!(levels::mode_of(FORMAT_VERSION, &[m]), Some(4 | 5)));
             if let (true, Transform::Wavelet(w)) = (rotated, p.header.transform) {
                 let d = p.header.disc;
                 try_code(&mut p, w, d, false);
@@ -752,8 +758,8 @@ fn expect_kind(c: &Container<'_>, i: usize, kind: SectionKind, what: &str) -> Re
 }
 
 /// A section's entry in the section table: a level section's mode (version 3 on),
-/// unbinned flag (version 22 on) and mode 9's joint flag (version 25 on) read from its
-/// payload (SPEC.md 10.1, 10.9).
+/// unbinned flag (version 22 on), mode 9's joint flag (version 25 on) and zero slots
+/// (version 26 on) read from its payload (SPEC.md 10.1, 10.9).
 fn section_info(kind: SectionKind, bytes: usize, version: u16, payload: &[u8]) -> SectionInfo {
     let level = kind == SectionKind::LEVEL;
     SectionInfo {
@@ -762,6 +768,13 @@ fn section_info(kind: SectionKind, bytes: usize, version: u16, payload: &[u8]) -
         mode: level.then(|| levels::mode_of(version, payload)).flatten(),
         unbinned: level && levels::unbinned(version, payload),
         joint: level && levels::joint(version, payload),
+        zero_slots: match level {
+            true => {
+                let z = levels::zero_slots(version, payload);
+                (0..3).filter(|s| z >> s & 1 == 1).collect()
+            }
+            false => Vec::new(),
+        },
     }
 }
 

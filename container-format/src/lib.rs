@@ -29,7 +29,7 @@ use std::fmt;
 pub const MAGIC: [u8; 8] = [0x89, b'S', b'W', b'V', b'\r', b'\n', 0x1a, b'\n'];
 
 /// The format version this crate writes and the newest it reads.
-pub const FORMAT_VERSION: u16 = 25;
+pub const FORMAT_VERSION: u16 = 26;
 
 /// From this version a section is framed by a one-byte kind and a varint length
 /// ([`section_overhead`]); before it, by a four-byte kind and a `u32` length.
