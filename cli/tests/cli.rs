@@ -186,6 +186,35 @@ fn info_lists_zero_slots() {
     assert!(!text.contains("zero slots"), "{text}");
 }
 
+/// A subdivision fit's level sections (SPEC.md 10.4) have no mode byte: `info` gives
+/// them no mode (it once read their first byte as one).
+#[test]
+fn info_gives_fit_levels_no_mode() {
+    let swv = tmp("fit.swv");
+    let src = corpus("subdivided_cc3.obj");
+    let o = run(&[
+        "compress",
+        src.to_str().unwrap(),
+        swv.to_str().unwrap(),
+        "--transform",
+        "fit",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
+    assert!(v["transform"].as_str().unwrap().starts_with("fit"), "{v}");
+    let levels: Vec<_> = v["sections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|s| s["kind"] == "LEVL")
+        .collect();
+    assert!(!levels.is_empty(), "{v}");
+    assert!(levels.iter().all(|s| s.get("mode").is_none()), "{v}");
+    let out = run(&["info", swv.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!text.contains("(mode"), "{text}");
+}
+
 #[test]
 fn errors_exit_1_with_one_line_naming_the_file() {
     let bad = tmp("bad.swv");

@@ -666,6 +666,7 @@ fn encode_with(
         }
     };
     let header = payloads.header.clone();
+    let transform = header.transform;
     let mut w = ContainerWriter::new();
     let mut sections = Vec::new();
     let mut put = |w: &mut ContainerWriter, kind: SectionKind, payload: &[u8]| {
@@ -678,7 +679,13 @@ fn encode_with(
         w.section(kind, payload);
         let bytes =
             payload.len() + subwave_container::section_overhead(FORMAT_VERSION, payload.len());
-        sections.push(section_info(kind, bytes, FORMAT_VERSION, payload));
+        sections.push(section_info(
+            kind,
+            bytes,
+            FORMAT_VERSION,
+            transform,
+            payload,
+        ));
         Ok(())
     };
     put(&mut w, SectionKind::HEADER, &header.write())?;
@@ -694,7 +701,13 @@ fn encode_with(
     }
     let bytes = w.finish();
     let end = subwave_container::section_overhead(FORMAT_VERSION, 0);
-    sections.push(section_info(SectionKind::END, end, FORMAT_VERSION, &[]));
+    sections.push(section_info(
+        SectionKind::END,
+        end,
+        FORMAT_VERSION,
+        transform,
+        &[],
+    ));
     Ok(Encoded {
         bytes,
         order,
@@ -759,9 +772,17 @@ fn expect_kind(c: &Container<'_>, i: usize, kind: SectionKind, what: &str) -> Re
 
 /// A section's entry in the section table: a level section's mode (version 3 on),
 /// unbinned flag (version 22 on), mode 9's joint flag (version 25 on) and zero slots
-/// (version 26 on) read from its payload (SPEC.md 10.1, 10.9).
-fn section_info(kind: SectionKind, bytes: usize, version: u16, payload: &[u8]) -> SectionInfo {
-    let level = kind == SectionKind::LEVEL;
+/// (version 26 on) read from its payload (SPEC.md 10.1, 10.9); none of them under
+/// `transform` 9, whose level sections have no mode byte (10.4).
+fn section_info(
+    kind: SectionKind,
+    bytes: usize,
+    version: u16,
+    transform: Transform,
+    payload: &[u8],
+) -> SectionInfo {
+    let fit = matches!(transform, Transform::Fit { .. });
+    let level = kind == SectionKind::LEVEL && !fit;
     SectionInfo {
         kind: kind.to_string(),
         bytes,
@@ -782,13 +803,14 @@ fn section_info(kind: SectionKind, bytes: usize, version: u16, payload: &[u8]) -
 pub fn inspect(bytes: &[u8], limits: &Limits) -> Result<Info> {
     let c = Container::parse(bytes, limits)?;
     let header = layout(&c, limits, true)?;
+    let t = header.transform;
     Ok(Info {
         version: c.version,
         header,
         sections: c
             .sections
             .iter()
-            .map(|s| section_info(s.kind, s.total_len(), c.version, s.payload))
+            .map(|s| section_info(s.kind, s.total_len(), c.version, t, s.payload))
             .collect(),
         bytes: bytes.len(),
     })
