@@ -448,20 +448,31 @@ fn corrected_phased_levels_round_trip() {
     }
 }
 
+/// A frozen container of `corpus/terrain_grid33.obj` on the 10-bit grid, and that mesh.
+fn frozen_terrain_q10(file: &str) -> (Vec<u8>, subwave::Loaded) {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/");
+    let b = std::fs::read(format!("{dir}golden/{file}")).unwrap();
+    let obj = std::fs::read(format!("{dir}terrain_grid33.obj")).unwrap();
+    (b, subwave::load(&obj, Some(10)).unwrap())
+}
+
+/// A container's sections written again under format `version` (checksums valid).
+fn under_version(bytes: &[u8], version: u16) -> Vec<u8> {
+    let c = subwave_container::Container::parse(bytes, &Limits::default()).unwrap();
+    let mut w = ContainerWriter::for_version(version);
+    for s in c.sections.iter().filter(|s| s.kind != SectionKind::END) {
+        w.section(s.kind, s.payload);
+    }
+    w.finish()
+}
+
 /// The frozen terrain at 10 bits (interp6) has a level in mode 9 with joint rounding
 /// (SPEC.md 10.9, format 25): it decodes exactly; its flag cleared (rounding apart) gives
 /// an error or another mesh, never this one; the mask's top bit, or the flag on mode 8 or
 /// in a format 24 container, is corrupt.
 #[test]
 fn joint_rounding_levels_need_their_flag() {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/golden/");
-    let b = std::fs::read(format!("{dir}terrain_grid33.interp6.q10.v25.swv")).unwrap();
-    let obj = std::fs::read(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/corpus/terrain_grid33.obj"
-    ))
-    .unwrap();
-    let m = subwave::load(&obj, Some(10)).unwrap();
+    let (b, m) = frozen_terrain_q10("terrain_grid33.interp6.q10.v25.swv");
     let info = subwave::inspect(&b, &Limits::default()).unwrap();
     assert!(info.sections.iter().any(|s| s.mode == Some(9) && s.joint));
     assert!(subwave::decode_slice(&b).unwrap().mesh == m.mesh);
@@ -484,12 +495,7 @@ fn joint_rounding_levels_need_their_flag() {
         }
     }
     // The same sections under format 24, which has no joint flag.
-    let c = subwave_container::Container::parse(&b, &Limits::default()).unwrap();
-    let mut w = ContainerWriter::for_version(24);
-    for s in c.sections.iter().filter(|s| s.kind != SectionKind::END) {
-        w.section(s.kind, s.payload);
-    }
-    match subwave::decode_slice(&w.finish()) {
+    match subwave::decode_slice(&under_version(&b, 24)) {
         Err(Error::CorruptStream { what, .. }) => assert!(what.contains("bad correction weights")),
         other => panic!("expected bad weights, got {other:?}"),
     }
@@ -502,14 +508,7 @@ fn joint_rounding_levels_need_their_flag() {
 /// unknown mode.
 #[test]
 fn zero_slots_are_left_out_only_with_their_flags() {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/golden/");
-    let b = std::fs::read(format!("{dir}terrain_grid33.interp6.q10.v26.swv")).unwrap();
-    let obj = std::fs::read(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/corpus/terrain_grid33.obj"
-    ))
-    .unwrap();
-    let m = subwave::load(&obj, Some(10)).unwrap();
+    let (b, m) = frozen_terrain_q10("terrain_grid33.interp6.q10.v26.swv");
     let info = subwave::inspect(&b, &Limits::default()).unwrap();
     let levels: Vec<_> = info.sections.iter().filter(|s| s.kind == "LEVL").collect();
     assert!(!levels.is_empty());
@@ -529,12 +528,7 @@ fn zero_slots_are_left_out_only_with_their_flags() {
         }
     }
     // The same sections under format 25, whose mode byte has no zero-slot flags.
-    let c = subwave_container::Container::parse(&b, &Limits::default()).unwrap();
-    let mut w = ContainerWriter::for_version(25);
-    for s in c.sections.iter().filter(|s| s.kind != SectionKind::END) {
-        w.section(s.kind, s.payload);
-    }
-    match subwave::decode_slice(&w.finish()) {
+    match subwave::decode_slice(&under_version(&b, 25)) {
         Err(Error::CorruptStream { what, .. }) => {
             assert!(what.contains("unknown level mode"), "{what}")
         }

@@ -1,7 +1,7 @@
 //! The `subwave` command as a user runs it: exit codes, files and pipes, JSON output.
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
 fn bin() -> Command {
@@ -22,6 +22,30 @@ fn tmp(name: &str) -> PathBuf {
 
 fn run(args: &[&str]) -> Output {
     bin().args(args).output().unwrap()
+}
+
+/// `subwave compress input <tmp>/name extra...`, which must succeed: the container.
+fn compressed(input: &Path, name: &str, extra: &[&str]) -> PathBuf {
+    let swv = tmp(name);
+    let mut args = vec!["compress", input.to_str().unwrap(), swv.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let o = run(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    swv
+}
+
+/// `info`'s level sections in JSON, and its text, for a container.
+fn info_levels(swv: &Path) -> (Vec<serde_json::Value>, String) {
+    let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
+    let levels = v["sections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|s| s["kind"] == "LEVL")
+        .cloned()
+        .collect();
+    let out = run(&["info", swv.to_str().unwrap()]);
+    (levels, String::from_utf8_lossy(&out.stdout).to_string())
 }
 
 fn json(out: &Output) -> serde_json::Value {
@@ -86,16 +110,7 @@ fn pipes_work_both_ways() {
 #[test]
 fn info_and_verify_json_have_their_keys() {
     let input = corpus("terrain_grid33.obj");
-    let swv = tmp("terrain.swv");
-    assert!(run(&[
-        "compress",
-        input.to_str().unwrap(),
-        swv.to_str().unwrap(),
-        "--bits",
-        "12"
-    ])
-    .status
-    .success());
+    let swv = compressed(&input, "terrain.swv", &["--bits", "12"]);
     let o = run(&["info", swv.to_str().unwrap(), "--json"]);
     assert!(o.status.success());
     let v = json(&o);
@@ -138,18 +153,14 @@ fn info_and_verify_json_have_their_keys() {
 #[test]
 fn info_names_joint_rounding() {
     let swv = corpus("golden/terrain_grid33.interp6.q10.v25.swv");
-    let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
-    let levels: Vec<_> = v["sections"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|s| s["kind"] == "LEVL")
-        .collect();
+    let (levels, text) = info_levels(&swv);
     let joint: Vec<_> = levels.iter().filter(|s| s["joint"] == true).collect();
-    assert_eq!(joint.len(), 1, "{v}");
+    assert_eq!(joint.len(), 1, "{levels:?}");
     assert_eq!(joint[0]["mode"], 9);
-    assert!(levels.iter().all(|s| s.get("joint").is_some()), "{v}");
-    let text = String::from_utf8_lossy(&run(&["info", swv.to_str().unwrap()]).stdout).to_string();
+    assert!(
+        levels.iter().all(|s| s.get("joint").is_some()),
+        "{levels:?}"
+    );
     assert!(text.contains("(mode 9 joint, unbinned)"), "{text}");
 }
 
@@ -157,19 +168,7 @@ fn info_names_joint_rounding() {
 /// (`"zero_slots": []` where none are, as in a format 25 container).
 #[test]
 fn info_lists_zero_slots() {
-    let sections = |file: &str| {
-        let swv = corpus(file);
-        let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
-        let levels: Vec<_> = v["sections"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .filter(|s| s["kind"] == "LEVL")
-            .cloned()
-            .collect();
-        let out = run(&["info", swv.to_str().unwrap()]);
-        (levels, String::from_utf8_lossy(&out.stdout).to_string())
-    };
+    let sections = |file: &str| info_levels(&corpus(file));
     let (levels, text) = sections("golden/terrain_grid33.interp6.q10.v26.swv");
     assert!(!levels.is_empty());
     for s in &levels {
@@ -190,28 +189,13 @@ fn info_lists_zero_slots() {
 /// them no mode (it once read their first byte as one).
 #[test]
 fn info_gives_fit_levels_no_mode() {
-    let swv = tmp("fit.swv");
     let src = corpus("subdivided_cc3.obj");
-    let o = run(&[
-        "compress",
-        src.to_str().unwrap(),
-        swv.to_str().unwrap(),
-        "--transform",
-        "fit",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let swv = compressed(&src, "fit.swv", &["--transform", "fit"]);
     let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
     assert!(v["transform"].as_str().unwrap().starts_with("fit"), "{v}");
-    let levels: Vec<_> = v["sections"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|s| s["kind"] == "LEVL")
-        .collect();
+    let (levels, text) = info_levels(&swv);
     assert!(!levels.is_empty(), "{v}");
     assert!(levels.iter().all(|s| s.get("mode").is_none()), "{v}");
-    let out = run(&["info", swv.to_str().unwrap()]);
-    let text = String::from_utf8_lossy(&out.stdout);
     assert!(!text.contains("(mode"), "{text}");
 }
 
@@ -295,15 +279,7 @@ fn warnings_name_what_was_dropped_and_q_silences_them() {
 #[test]
 fn info_reports_a_polar_hierarchy_and_its_poles() {
     let input = corpus("sphere_polar3.obj");
-    let swv = tmp("polar.swv");
-    assert!(run(&[
-        "compress",
-        input.to_str().unwrap(),
-        swv.to_str().unwrap(),
-        "--keep-order"
-    ])
-    .status
-    .success());
+    let swv = compressed(&input, "polar.swv", &["--keep-order"]);
     let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
     assert_eq!(v["family"], "polar");
     assert_eq!(v["levels"], 3);
@@ -312,16 +288,7 @@ fn info_reports_a_polar_hierarchy_and_its_poles() {
     let text = run(&["info", swv.to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&text.stdout).contains("poles           2"));
     // The polar wavelet in the discs, forced, round-trips through the command too.
-    let forced = tmp("polar-disc.swv");
-    assert!(run(&[
-        "compress",
-        input.to_str().unwrap(),
-        forced.to_str().unwrap(),
-        "--polar-disc",
-        "lazy-radial"
-    ])
-    .status
-    .success());
+    let forced = compressed(&input, "polar-disc.swv", &["--polar-disc", "lazy-radial"]);
     let v2 = json(&run(&["info", forced.to_str().unwrap(), "--json"]));
     assert_eq!(v2["disc_transform"], "polar-lazy (radial first)");
     let o = run(&[
@@ -346,15 +313,7 @@ fn info_reports_a_polar_hierarchy_and_its_poles() {
 #[test]
 fn max_level_on_a_cut_file_and_info_reports_cc() {
     let input = corpus("cube_cc4.obj");
-    let swv = tmp("levels.swv");
-    let o = run(&[
-        "compress",
-        input.to_str().unwrap(),
-        swv.to_str().unwrap(),
-        "--transform",
-        "bilinear",
-    ]);
-    assert!(o.status.success());
+    let swv = compressed(&input, "levels.swv", &["--transform", "bilinear"]);
     let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
     assert_eq!(v["family"], "cc");
     assert_eq!(v["levels"], 4);

@@ -2566,6 +2566,32 @@ mod tests {
         forced_at(PHASE_VERSION, level, sqrt2, x, coarse, phases, mode)
     }
 
+    /// A Catmull-Clark level with phases coded by [`encode`] as format `version`'s first
+    /// level, in the mode it finds smallest.
+    fn encode_phased_fresh(
+        version: u16,
+        level: &Level,
+        x: &[Vec<i64>; 3],
+        coarse: &[Vec<i64>; 3],
+        phases: &Phases,
+    ) -> Vec<u8> {
+        let mut act = vec![UNKNOWN; level.nv];
+        let mut models = LevelModels::new(version);
+        let ph = Some(phases);
+        encode(
+            level,
+            false,
+            x,
+            coarse,
+            &mut act,
+            &mut models,
+            None,
+            ph,
+            usize::MAX,
+        )
+        .unwrap()
+    }
+
     /// [`forced`] with format `version`'s models and stream layout.
     fn forced_at(
         version: u16,
@@ -3079,12 +3105,12 @@ mod tests {
         let coarse: [Vec<i64>; 3] = [
             (0..nv as i64).map(|i| 8 * (i % 9)).collect(),
             (0..nv as i64).map(|i| 8 * (i / 9)).collect(),
-            pseudo(5, nv, 200),
+            pseudo(5, nv, 9),
         ];
         let mut x = coarse.clone();
         x[0].resize(nv + nd, 0);
         x[1].resize(nv + nd, 0);
-        x[2].extend(pseudo(6, nd, 9));
+        x[2].extend(pseudo(6, nd, 4));
         // The fine values: predictions plus details (mode 6 and 9's decoder gives these).
         let mut fine = x.clone();
         for i in 0..nd {
@@ -3108,24 +3134,8 @@ mod tests {
                 decode_fresh(bytes, &level, false, &coarse, version, None, ph)
             };
             let want = if phased { &fine } else { &x };
-            let with = forced_at(
-                ZERO_VERSION,
-                &level,
-                false,
-                &x,
-                &coarse,
-                Some(&phases),
-                mode,
-            );
-            let without = forced_at(
-                ZERO_VERSION - 1,
-                &level,
-                false,
-                &x,
-                &coarse,
-                Some(&phases),
-                mode,
-            );
+            let at = |v| forced_at(v, &level, false, &x, &coarse, Some(&phases), mode);
+            let (with, without) = (at(ZERO_VERSION), at(ZERO_VERSION - 1));
             assert_eq!(with[0], 0x30 | name, "mode {name}");
             assert_eq!(without[0], name, "mode {name}");
             assert!(
@@ -3159,20 +3169,7 @@ mod tests {
         assert_eq!(put(&mut m, &mut enc, [0, 1, 3], 0b011), None);
         // And the encoder flags them itself from format 26, not before.
         for version in [ZERO_VERSION - 1, ZERO_VERSION] {
-            let mut act = vec![UNKNOWN; nv];
-            let mut models = LevelModels::new(version);
-            let bytes = encode(
-                &level,
-                false,
-                &x,
-                &coarse,
-                &mut act,
-                &mut models,
-                None,
-                Some(&phases),
-                usize::MAX,
-            )
-            .unwrap();
+            let bytes = encode_phased_fresh(version, &level, &x, &coarse, &phases);
             let flags = if version >= ZERO_VERSION { 0x30 } else { 0 };
             assert_eq!(bytes[0] & 0x70, flags, "{version}");
             let mode = mode_of(version, &bytes).unwrap();
@@ -3258,20 +3255,7 @@ mod tests {
             // (never smaller there than before), and not before.
             let mut sizes = Vec::new();
             for version in [JOINT_VERSION - 1, JOINT_VERSION] {
-                let mut act = vec![UNKNOWN; nv];
-                let mut models = LevelModels::new(version);
-                let bytes = encode(
-                    &level,
-                    false,
-                    &x,
-                    &coarse,
-                    &mut act,
-                    &mut models,
-                    None,
-                    Some(&phases),
-                    usize::MAX,
-                )
-                .unwrap();
+                let bytes = encode_phased_fresh(version, &level, &x, &coarse, &phases);
                 if version < JOINT_VERSION && bytes[0] & 0x7f == 9 {
                     assert_eq!(bytes[1] & JOINT, 0, "{w:?}");
                 }
