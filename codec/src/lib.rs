@@ -89,8 +89,9 @@ pub struct SectionInfo {
     /// Bytes it occupies, overhead included.
     pub bytes: usize,
     /// A level section's coding mode (SPEC.md 10.1, 10.2: 0 plain, 1 normal frame, 2
-    /// tangent, ..., 9 phased corrected; without format 22's unbinned flag), for
-    /// containers of version 3 on; `None` for other sections.
+    /// tangent, ..., 9 phased corrected; without format 22's unbinned flag and format
+    /// 26's zero-slot flags), for containers of version 3 on; `None` for other sections
+    /// and for a subdivision fit's levels (10.4), which have no mode.
     pub mode: Option<u8>,
     /// Whether a level section is unbinned (SPEC.md 10.1, format 22 on).
     pub unbinned: bool,
