@@ -1390,7 +1390,7 @@ pub fn encode(
     if version < 3 {
         let mut m = models.start();
         let mut mags = std::mem::take(&mut models.mags);
-        let (_, body) = encode_mode(
+        let body = encode_mode(
             level,
             sqrt2,
             x,
@@ -1404,6 +1404,7 @@ pub fn encode(
             &mut m,
             usize::MAX,
             version,
+            0,
         )
         .expect("plain details are in range");
         models.mags = mags;
@@ -1497,31 +1498,49 @@ pub fn encode(
             .as_ref()
             .map_or(cap, |(_, b)| (b.body.len() + b.mode.len()).min(cap))
             .saturating_sub(head);
-        let mut a = act.clone();
-        let mut mg = models.mags.clone();
-        let mut m = models.ready(start.clone(), mode);
-        let Some((zero, body)) = encode_mode(
-            level, sqrt2, x, coarse, &prep, phases, &mut a, &mut mg, mode, unbinned, &mut m, room,
-            version,
-        ) else {
+        // Codes the level in this mode with zero slots `zero` (format 26).
+        let code = |zero: u8| {
+            let mut a = act.clone();
+            let mut mg = models.mags.clone();
+            let mut m = models.ready(start.clone(), mode);
+            let body = encode_mode(
+                level, sqrt2, x, coarse, &prep, phases, &mut a, &mut mg, mode, unbinned, &mut m,
+                room, version, zero,
+            )?;
+            let mut mode = bytes.clone();
+            mode[0] |= zero << ZERO_SHIFT;
+            Some(Tried {
+                mode,
+                body,
+                act: a,
+                mags: mg,
+                models: m,
+            })
+        };
+        let Some(mut tried) = code(axis_zero_slots(
+            version, level, sqrt2, x, mode, &prep, phases,
+        )) else {
             return;
         };
-        bytes[0] |= zero << ZERO_SHIFT;
-        let size = body.len() + head;
+        // A mode whose slots are not the axes (a frame's) shows its zero slots once coded,
+        // as a flat mesh's normal part: coded again without them, kept if smaller.
+        if version >= ZERO_VERSION && mode.framed() {
+            let fine = &tried.mags[level.nv..];
+            let zero = (0..3)
+                .filter(|&s| fine.iter().all(|g| g[s] == 0))
+                .fold(0, |z, s| z | 1 << s);
+            if zero != 0 && !fine.is_empty() {
+                if let Some(t) = code(zero).filter(|t| t.body.len() <= tried.body.len()) {
+                    tried = t;
+                }
+            }
+        }
+        let size = tried.body.len() + head;
         if best.as_ref().is_none_or(|(j, b)| {
             let bs = b.body.len() + b.mode.len();
             size < bs || (size == bs && i < *j)
         }) {
-            *best = Some((
-                i,
-                Tried {
-                    mode: bytes,
-                    body,
-                    act: a,
-                    mags: mg,
-                    models: m,
-                },
-            ));
+            *best = Some((i, tried));
         }
     };
     // Without a plan, the open modes binned, then the best of them unbinned (kept only
@@ -1688,7 +1707,8 @@ fn encode_mode(
     m: &mut Models,
     limit: usize,
     version: u16,
-) -> Option<(u8, Vec<u8>)> {
+    zero: u8,
+) -> Option<Vec<u8>> {
     let mut enc = Encoder::new();
     let (nv, nd) = (level.nv, details(level, sqrt2));
     // The rotated modes take their frames (normals included), the normal-frame modes
@@ -1712,13 +1732,6 @@ fn encode_mode(
     if joint && !phases.is_some_and(|p| p.fracs.iter().all(|p| p.len() == nd)) {
         return None;
     }
-    // Format 26: the modes that code the axes themselves leave out the axes whose
-    // values are all 0.
-    let zero = if version >= ZERO_VERSION && !mode.framed() && nd > 0 {
-        zero_axes(x, nv, nd, mode, prep, phases)
-    } else {
-        0
-    };
     act.resize(nv + nd, 0);
     mags.resize(nv, [UNKNOWN; 3]);
     mags.resize(nv + nd, [0; 3]);
@@ -1777,20 +1790,26 @@ fn encode_mode(
         }
     }
     let body = enc.finish_for(version);
-    (body.len() <= limit).then_some((zero, body))
+    (body.len() <= limit).then_some(body)
 }
 
 /// Format 26's zero slots of a mode that codes the axes themselves (0, 6, 8 or 9): the
 /// axes whose details `x[k][nv..nv + nd]` are all 0 and stay 0 once corrected (modes 8
-/// and 9; with joint rounding a prediction's fraction alone can make a correction).
-fn zero_axes(
+/// and 9; with joint rounding a prediction's fraction alone can make a correction). 0
+/// for the other modes, before format 26 and on a level without details.
+fn axis_zero_slots(
+    version: u16,
+    level: &Level,
+    sqrt2: bool,
     x: &[Vec<i64>; 3],
-    nv: usize,
-    nd: usize,
     mode: Mode<'_>,
     prep: &Prepared,
     phases: Option<&Phases>,
 ) -> u8 {
+    let (nv, nd) = (level.nv, details(level, sqrt2));
+    if version < ZERO_VERSION || mode.framed() || nd == 0 {
+        return 0;
+    }
     let corrected = matches!(mode, Mode::Corrected(_) | Mode::CorrectedPhased(..));
     let joint = matches!(mode, Mode::CorrectedPhased(_, Rounding::Joint));
     let mut zero = 0;
@@ -2428,8 +2447,8 @@ mod tests {
             &mut m,
             limit,
             ROTATED_VERSION,
+            0,
         )
-        .map(|(_, body)| body)
     }
 
     /// Codes `x`'s details in `mode`, decodes them and checks the round trip; the
@@ -2613,7 +2632,8 @@ mod tests {
             corrections,
             ..Default::default()
         };
-        let (zero, body) = encode_mode(
+        let zero = axis_zero_slots(version, level, sqrt2, x, mode, &prep, phases);
+        let body = encode_mode(
             level,
             sqrt2,
             x,
@@ -2627,6 +2647,7 @@ mod tests {
             &mut m,
             usize::MAX,
             version,
+            zero,
         )
         .unwrap();
         let mut out = mode.bytes();
@@ -3176,6 +3197,52 @@ mod tests {
             let ph = matches!(mode, 6 | 9).then_some(Phasing::Cc(&p));
             let y = decode_fresh(&bytes, &level, false, &coarse, version, None, ph).unwrap();
             assert_eq!(&y, if matches!(mode, 6 | 9) { &fine } else { &x });
+        }
+    }
+
+    /// Format 26 in the modes whose slots are a frame's (1 and 4): on a flat level (z = 0
+    /// everywhere) the normal part, slot 0, is all 0. The encoder finds that once it has
+    /// coded the level, codes it again without the slot and keeps that: smaller than
+    /// format 25, and exact.
+    #[test]
+    fn zero_slots_leave_out_a_flat_levels_normal_part() {
+        let (level, _) = grid_level(17);
+        let (nv, nd) = (level.nv, level.ne() + level.nf());
+        // A 9 x 9 lattice, rough details in x and y, z = 0.
+        let mut x: [Vec<i64>; 3] = [
+            (0..nv as i64).map(|i| 64 * (i % 9)).collect(),
+            (0..nv as i64).map(|i| 64 * (i / 9)).collect(),
+            vec![0; nv],
+        ];
+        x[0].extend(pseudo(11, nd, 5));
+        x[1].extend(pseudo(12, nd, 5));
+        x[2].resize(nv + nd, 0);
+        let coarse: [Vec<i64>; 3] = std::array::from_fn(|k| x[k][..nv].to_vec());
+        for mode in [1u8, 4] {
+            let mut sizes = Vec::new();
+            for version in [ZERO_VERSION - 1, ZERO_VERSION] {
+                let mut act = vec![UNKNOWN; nv];
+                let mut models = LevelModels::new(version);
+                models.only = Some(vec![mode].into_iter());
+                let bytes = encode(
+                    &level,
+                    false,
+                    &x,
+                    &coarse,
+                    &mut act,
+                    &mut models,
+                    None,
+                    None,
+                    usize::MAX,
+                )
+                .unwrap();
+                let flags = if version >= ZERO_VERSION { 0x10 } else { 0 };
+                assert_eq!(bytes[0], flags | mode, "mode {mode}, format {version}");
+                let y = decode_fresh(&bytes, &level, false, &coarse, version, None, None);
+                assert_eq!(y.unwrap(), x, "mode {mode}, format {version}");
+                sizes.push(bytes.len());
+            }
+            assert!(sizes[1] < sizes[0], "mode {mode}: {sizes:?}");
         }
     }
 
