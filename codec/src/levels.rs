@@ -1419,7 +1419,7 @@ pub fn encode(
     // Format 22: a plan's unbinned flag is followed; without a plan the level's best
     // mode is tried unbinned as well.
     let unbin_open = version >= UNBINNED_VERSION;
-    let plan_unbinned = only.map(|o| unbin_open && o & UNBINNED != 0);
+    let plan_unbinned = only.map(|o| unbinned(version, &[o]));
     let only = only.and_then(|o| mode_of(version, &[o]));
     let plain = |m: u8| matches!(m, 0 | 6);
     let open = |m: u8| only.is_none_or(|o| o == m || (plain(o) && plain(m)));
@@ -1507,10 +1507,10 @@ pub fn encode(
                 level, sqrt2, x, coarse, &prep, phases, &mut a, &mut mg, mode, unbinned, &mut m,
                 room, version, zero,
             )?;
-            let mut mode = bytes.clone();
-            mode[0] |= zero << ZERO_SHIFT;
+            let mut mode_bytes = bytes.clone();
+            mode_bytes[0] |= zero << ZERO_SHIFT;
             Some(Tried {
-                mode,
+                mode: mode_bytes,
                 body,
                 act: a,
                 mags: mg,
