@@ -680,7 +680,9 @@ fn ds_step3<T: Sample>(level: &Level, x: &[T], v: usize) -> T {
 /// two on the boundary (a regular boundary vertex; a corner turns);
 /// on an interior edge with two quads beside it, when `a` is interior with four edges,
 /// the other end of the one edge of `a` that is neither `e` nor beside `e` in those quads.
-/// Returns the vertex and the edge that leads to it from `a`.
+/// Returns the vertex and the edge that leads to it from `a`. ([`Interp4::new`] finds
+/// the same in one pass; this definition is its test's reference.)
+#[cfg(test)]
 fn beyond_vertex(level: &Level, e: usize, a: usize) -> Option<(usize, usize)> {
     let (nb, be) = level.boundary_edges(a);
     if level.is_boundary(e) {
@@ -716,6 +718,7 @@ fn beyond_vertex(level: &Level, e: usize, a: usize) -> Option<(usize, usize)> {
 /// The edge point beyond face `f`'s edge `e` (SPEC.md 9.11): the edge opposite `e` in the
 /// quad on `e`'s other side.
 /// Returns the edge and the quad it lies in.
+#[cfg(test)]
 fn beyond_edge(level: &Level, f: usize, e: u32) -> Option<(usize, usize)> {
     let [f1, f2] = level.edge_faces[e as usize];
     if f2 == NONE {
@@ -746,57 +749,215 @@ struct Interp4 {
 }
 
 impl Interp4 {
+    /// The stencils of `level`, in one pass over the faces: each quad face records, for
+    /// each of its edges, the edge beside it at each end and the edge's slot there, so
+    /// that no edge end searches its faces. The tables are those that `beyond_vertex`
+    /// and `beyond_edge` give at every edge end and face edge (the test's
+    /// `Interp4::reference`).
     fn new(level: &Level, six: bool) -> Interp4 {
-        let (ne, nf) = (level.ne(), level.nf());
-        let some = |v: Option<usize>| v.map_or(NONE, |v| v as u32);
-        // interp6 also keeps, per edge end, the edge that leads to its beyond vertex and,
-        // per quad edge, the quad its beyond edge lies in: the far vertex (edge) is the
-        // beyond vertex (edge) found there, already in the tables.
+        let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
+        // Per coarse vertex: its boundary edges' count (3 standing for more) and the
+        // first two of them in the order of `v_edges` ([`Level::boundary_edges`]).
+        let mut nb = vec![0u8; nv];
+        let mut be = vec![[NONE; 2]; nv];
+        for v in 0..nv {
+            let (n, b) = level.boundary_edges(v);
+            nb[v] = n.min(3) as u8;
+            be[v] = b;
+        }
+        // Per edge, per side k (edge_faces[e][k]) and end: the other edge of that quad
+        // at that end; and the edge's slot in that quad. NONE where the face is not a
+        // quad.
+        let mut side = vec![[[NONE; 2]; 2]; ne];
+        let mut slot = vec![[u8::MAX; 2]; ne];
+        for f in 0..nf {
+            let fe = level.f_edges(f);
+            if fe.len() != 4 {
+                continue;
+            }
+            let c = level.coarse.face(f);
+            for i in 0..4 {
+                let e = fe[i] as usize;
+                let k = (level.edge_faces[e][0] as usize != f) as usize;
+                // The edge runs from corner i to corner i + 1.
+                let end = (level.edges[e][0] != c[i]) as usize;
+                side[e][k][end] = fe[(i + 3) % 4];
+                side[e][k][1 - end] = fe[(i + 1) % 4];
+                slot[e][k] = i as u8;
+            }
+        }
         let mut edge = Vec::with_capacity(ne);
         let mut via = Vec::with_capacity(if six { ne } else { 0 });
         for e in 0..ne {
-            let found = level.edges[e].map(|a| beyond_vertex(level, e, a as usize));
-            edge.push(found.map(|b| some(b.map(|b| b.0))));
+            let boundary = level.is_boundary(e);
+            let mut found = [(NONE, NONE); 2];
+            for (end, &a) in level.edges[e].iter().enumerate() {
+                let a = a as usize;
+                let edges = level.v_edges(a);
+                found[end] = if boundary {
+                    if nb[a] != 2 || edges.len() != 3 {
+                        continue;
+                    }
+                    let other = if be[a][0] as usize == e {
+                        be[a][1]
+                    } else {
+                        be[a][0]
+                    };
+                    (level.other_end(other, a), other)
+                } else {
+                    let s = [side[e][0][end], side[e][1][end]];
+                    if nb[a] != 0 || edges.len() != 4 || s.contains(&NONE) {
+                        continue;
+                    }
+                    match edges
+                        .iter()
+                        .copied()
+                        .find(|&x| x as usize != e && !s.contains(&x))
+                    {
+                        Some(opp) => (level.other_end(opp, a), opp),
+                        None => continue,
+                    }
+                };
+            }
+            edge.push(found.map(|b| b.0));
             if six {
-                via.push(found.map(|b| some(b.map(|b| b.1))));
+                via.push(found.map(|b| b.1));
             }
         }
         let mut face = Vec::with_capacity(nf);
         let mut quad = Vec::with_capacity(if six { nf } else { 0 });
+        // interp6: the slot of each beyond edge in its quad.
+        let mut far_slot = Vec::with_capacity(if six { nf } else { 0 });
         for f in 0..nf {
             let fe = level.f_edges(f);
-            let found: [Option<(usize, usize)>; 4] = match fe.len() {
-                4 => std::array::from_fn(|i| beyond_edge(level, f, fe[i])),
-                _ => [None; 4],
-            };
-            face.push(found.map(|y| some(y.map(|y| y.0))));
+            let mut y = [NONE; 4];
+            let mut h = [NONE; 4];
+            let mut j = [0u8; 4];
+            if fe.len() == 4 {
+                for i in 0..4 {
+                    let e = fe[i] as usize;
+                    let [f1, f2] = level.edge_faces[e];
+                    if f2 == NONE {
+                        continue;
+                    }
+                    let k = (f1 as usize == f) as usize;
+                    let g = level.edge_faces[e][k];
+                    if slot[e][k] != u8::MAX {
+                        j[i] = (slot[e][k] + 2) % 4;
+                        y[i] = level.f_edges(g as usize)[j[i] as usize];
+                        h[i] = g;
+                    }
+                }
+            }
+            face.push(y);
             if six {
-                quad.push(found.map(|y| some(y.map(|y| y.1))));
+                quad.push(h);
+                far_slot.push(j);
             }
         }
         let (mut edge2, mut face2) = (Vec::new(), Vec::new());
         if six {
-            // Edge e's beyond vertex b at an end, reached by edge g: b's beyond vertex on g.
-            edge2 = (0..ne)
-                .map(|e| {
-                    std::array::from_fn(|end| {
-                        let (b, g) = (edge[e][end], via[e][end] as usize);
-                        let at = (b != NONE).then(|| level.edges[g].iter().position(|&v| v == b));
-                        at.flatten().map_or(NONE, |j| edge[g][j])
-                    })
-                })
-                .collect();
-            // Face f's beyond edge y of an edge, in quad h: the beyond edge of h's edge y.
-            face2 = (0..nf)
-                .map(|f| {
-                    std::array::from_fn(|i| {
-                        let (y, h) = (face[f][i], quad[f][i] as usize);
-                        let at = (y != NONE).then(|| level.f_edges(h).iter().position(|&x| x == y));
-                        at.flatten().map_or(NONE, |j| face[h][j])
-                    })
-                })
-                .collect();
+            // Edge e's beyond vertex b at an end, reached by edge g: b's beyond vertex on
+            // g (b is g's end other than e's).
+            edge2.reserve(ne);
+            for (e, b) in edge.iter().enumerate() {
+                edge2.push(std::array::from_fn(|end| match (b[end], via[e][end]) {
+                    (NONE, _) => NONE,
+                    (b, g) => edge[g as usize][(level.edges[g as usize][0] != b) as usize],
+                }));
+            }
+            // Face f's beyond edge y of an edge, in quad h at slot j: the beyond edge of
+            // h's edge y.
+            face2.reserve(nf);
+            for (f, y) in face.iter().enumerate() {
+                face2.push(std::array::from_fn(|i| match y[i] {
+                    NONE => NONE,
+                    _ => face[quad[f][i] as usize][far_slot[f][i] as usize],
+                }));
+            }
         }
+        Interp4 {
+            six,
+            edge,
+            face,
+            edge2,
+            face2,
+        }
+    }
+
+    /// interp6's far tables from the beyond tables, as SPEC.md 9.12 defines them: per
+    /// edge end, the beyond vertex's own beyond vertex on the edge `via` that leads to
+    /// it; per quad edge, the beyond edge's own beyond edge in the quad it lies in.
+    #[cfg(test)]
+    fn far(
+        level: &Level,
+        edge: &[[u32; 2]],
+        via: &[[u32; 2]],
+        face: &[[u32; 4]],
+        quad: &[[u32; 4]],
+    ) -> (Vec<[u32; 2]>, Vec<[u32; 4]>) {
+        // Edge e's beyond vertex b at an end, reached by edge g: b's beyond vertex on g.
+        let edge2 = (0..edge.len())
+            .map(|e| {
+                std::array::from_fn(|end| {
+                    let (b, g) = (edge[e][end], via[e][end] as usize);
+                    let at = (b != NONE).then(|| level.edges[g].iter().position(|&v| v == b));
+                    at.flatten().map_or(NONE, |j| edge[g][j])
+                })
+            })
+            .collect();
+        // Face f's beyond edge y of an edge, in quad h: the beyond edge of h's edge y.
+        let face2 = (0..face.len())
+            .map(|f| {
+                std::array::from_fn(|i| {
+                    let (y, h) = (face[f][i], quad[f][i] as usize);
+                    let at = (y != NONE).then(|| level.f_edges(h).iter().position(|&x| x == y));
+                    at.flatten().map_or(NONE, |j| face[h][j])
+                })
+            })
+            .collect();
+        (edge2, face2)
+    }
+
+    /// The stencils straight from their definitions, [`beyond_vertex`] at every edge end
+    /// and [`beyond_edge`] at every quad edge: what [`Interp4::new`] must equal.
+    #[cfg(test)]
+    fn reference(level: &Level, six: bool) -> Interp4 {
+        let some = |v: Option<usize>| v.map_or(NONE, |v| v as u32);
+        let (ne, nf) = (level.ne(), level.nf());
+        let found: Vec<[Option<(usize, usize)>; 2]> = (0..ne)
+            .map(|e| level.edges[e].map(|a| beyond_vertex(level, e, a as usize)))
+            .collect();
+        let edge: Vec<[u32; 2]> = found
+            .iter()
+            .map(|f| f.map(|b| some(b.map(|b| b.0))))
+            .collect();
+        let via: Vec<[u32; 2]> = found
+            .iter()
+            .map(|f| f.map(|b| some(b.map(|b| b.1))))
+            .collect();
+        let found: Vec<[Option<(usize, usize)>; 4]> = (0..nf)
+            .map(|f| {
+                let fe = level.f_edges(f);
+                match fe.len() {
+                    4 => std::array::from_fn(|i| beyond_edge(level, f, fe[i])),
+                    _ => [None; 4],
+                }
+            })
+            .collect();
+        let face: Vec<[u32; 4]> = found
+            .iter()
+            .map(|f| f.map(|y| some(y.map(|y| y.0))))
+            .collect();
+        let quad: Vec<[u32; 4]> = found
+            .iter()
+            .map(|f| f.map(|y| some(y.map(|y| y.1))))
+            .collect();
+        let (edge2, face2) = if six {
+            Self::far(level, &edge, &via, &face, &quad)
+        } else {
+            (Vec::new(), Vec::new())
+        };
         Interp4 {
             six,
             edge,
@@ -1284,6 +1445,80 @@ mod tests {
         }
         synthesise(&level, Wavelet::Interp4, &mut y);
         assert_eq!(y, x);
+    }
+
+    /// The faces of an OBJ file (1-based corners, texture and normal indices ignored).
+    fn obj_topology(text: &str) -> Topo {
+        let mut t = Topo::new(0);
+        for line in text.lines() {
+            if let Some(rest) = line.strip_prefix("f ") {
+                let c: Vec<u32> = rest
+                    .split_whitespace()
+                    .map(|w| w.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
+                    .collect();
+                t.nv = t.nv.max(c.iter().max().map_or(0, |&m| m as usize + 1));
+                t.push(&c);
+            }
+        }
+        t
+    }
+
+    #[test]
+    fn stencil_tables_equal_their_definitions() {
+        // Every level of corpus/'s hierarchies (quads, triangles and pentagons, open
+        // and closed, polar fans) and of ../shared/corpus when it is there, and the
+        // refined grids: the one-pass tables are the definitions' tables.
+        let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+        let mut files: Vec<std::path::PathBuf> = Vec::new();
+        for dir in ["corpus", "../shared/corpus"] {
+            let Ok(rd) = std::fs::read_dir(format!("{root}/{dir}")) else {
+                continue;
+            };
+            let mut more: Vec<_> = rd
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| {
+                    let name = p.to_string_lossy();
+                    name.ends_with(".obj") && !name.contains(".shuffled.")
+                })
+                .collect();
+            more.sort();
+            files.extend(more);
+        }
+        let mut levels: Vec<(String, Level)> = Vec::new();
+        for f in &files {
+            let topo = obj_topology(&std::fs::read_to_string(f).unwrap());
+            let name = f.display().to_string();
+            if let Some(rec) = crate::hierarchy::cc::recover(topo.nv, &topo, 16) {
+                let canon = crate::hierarchy::canonicalise(&rec, true).unwrap();
+                levels.extend(canon.levels.into_iter().map(|l| (name.clone(), l)));
+            }
+            if let Some(canon) = crate::hierarchy::polar::recover(topo.nv, &topo, 16) {
+                levels.extend(canon.levels.into_iter().map(|l| (name.clone(), l)));
+            }
+        }
+        let before = levels.len();
+        for n in [2, 5, 8] {
+            levels.push((format!("grid {n}"), refined_grid(n).0));
+        }
+        assert!(
+            before >= 10,
+            "only {before} levels found under {root}/corpus"
+        );
+        let mut sides = 0;
+        for (name, level) in &levels {
+            for six in [false, true] {
+                let (fast, want) = (Interp4::new(level, six), Interp4::reference(level, six));
+                assert!(fast.edge == want.edge, "{name}: beyond vertices ({six})");
+                assert!(fast.face == want.face, "{name}: beyond edges ({six})");
+                assert!(fast.edge2 == want.edge2, "{name}: far vertices ({six})");
+                assert!(fast.face2 == want.face2, "{name}: far edges ({six})");
+                sides += want.edge.iter().flatten().filter(|&&v| v != NONE).count();
+            }
+        }
+        assert!(
+            sides > 1000,
+            "the levels have few beyond vertices ({sides})"
+        );
     }
 
     #[test]
