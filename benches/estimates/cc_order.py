@@ -22,55 +22,19 @@ Cost: the order-0 entropy of each rounded residual component, in bytes; only int
 edges and quad faces count. The codec's adaptive contexts code both smaller; the ratio
 B / A is the estimate.
 """
-import collections, json, sys
+import collections, os, sys
 import numpy as np
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import finest
 
 args = [a for a in sys.argv[1:] if not a.startswith('--')]
 corpus, name = args[0], args[1]
 Q = int(args[2]) if len(args) > 2 else 16
 centroids = '--no-centroids' not in sys.argv
-man = {m['name']: m for m in json.load(open(f'{corpus}/manifest.json'))['meshes']}[name]
-V, F = [], []
-for line in open(f'{corpus}/{name}.obj'):
-    if line.startswith('v '):
-        V.append([float(t) for t in line.split()[1:4]])
-    elif line.startswith('f '):
-        F.append([int(t.split('/')[0]) - 1 for t in line.split()[1:]])
-V = np.array(V, dtype=np.float32)
-mn = V.min(0)
-step = np.float32((V.max(0) - mn).max() / np.float32(2 ** Q - 1))
-X = np.floor((V - mn) / step + np.float32(0.5)).astype(np.int64).astype(float)
-
-c = man['level_stats'][-2]
-nv, ne, nf = c['V'], c['E'], c['F']
-if man['vertex_order'] == 'vef':
-    ov, oe, of = 0, nv, nv + ne
-else:
-    of, oe, ov = 0, nf, nf + ne
-kind = lambda i: 'v' if ov <= i < ov + nv else ('e' if oe <= i < oe + ne else 'f')
-
-# Fine quads (old vertex, edge point, face point, edge point) give the coarse mesh.
-ends = collections.defaultdict(set)   # edge point -> its coarse ends
-efaces = collections.defaultdict(set)  # edge point -> its face points
-fedges = collections.defaultdict(set)  # face point -> its edge points
-succ = collections.defaultdict(dict)   # face point -> corner -> next corner
-quads = []
-for q in F:
-    j = [kind(i) for i in q].index('v')
-    q = q[j:] + q[:j]
-    quads.append(q)
-    v, e1, f, e2 = q
-    ends[e1].add(v); ends[e2].add(v)
-    efaces[e1].add(f); efaces[e2].add(f)
-    fedges[f].update([e1, e2])
-for v, e1, f, e2 in quads:
-    succ[f][v] = next(u for u in ends[e1] if u != v)
-corners = {}
-for f in range(of, of + nf):
-    s = succ[f]; start = min(s); cyc = [start]
-    while s[cyc[-1]] != start:
-        cyc.append(s[cyc[-1]])
-    corners[f] = cyc
+m = finest.load(corpus, name, Q)
+X = m.X.astype(float)
+ne, oe, of, nf = m.ne, m.oe, m.of, m.nf
+ends, efaces, fedges, corners = m.ends, m.efaces, m.fedges, m.corners
 edge_of = {frozenset(ends[e]): e for e in range(oe, oe + ne)}
 vedges = collections.defaultdict(list)
 for e in range(oe, oe + ne):

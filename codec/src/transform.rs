@@ -923,19 +923,21 @@ impl Interp4 {
     /// and [`beyond_edge`] at every quad edge: what [`Interp4::new`] must equal.
     #[cfg(test)]
     fn reference(level: &Level, six: bool) -> Interp4 {
-        let some = |v: Option<usize>| v.map_or(NONE, |v| v as u32);
+        // The found items' first and second parts as tables, NONE where none was found.
+        fn split<const N: usize>(found: &[[Option<(usize, usize)>; N]]) -> [Vec<[u32; N]>; 2] {
+            let some = |v: Option<usize>| v.map_or(NONE, |v| v as u32);
+            [0, 1].map(|part| {
+                found
+                    .iter()
+                    .map(|f| f.map(|b| some(b.map(|b| if part == 0 { b.0 } else { b.1 }))))
+                    .collect()
+            })
+        }
         let (ne, nf) = (level.ne(), level.nf());
         let found: Vec<[Option<(usize, usize)>; 2]> = (0..ne)
             .map(|e| level.edges[e].map(|a| beyond_vertex(level, e, a as usize)))
             .collect();
-        let edge: Vec<[u32; 2]> = found
-            .iter()
-            .map(|f| f.map(|b| some(b.map(|b| b.0))))
-            .collect();
-        let via: Vec<[u32; 2]> = found
-            .iter()
-            .map(|f| f.map(|b| some(b.map(|b| b.1))))
-            .collect();
+        let [edge, via] = split(&found);
         let found: Vec<[Option<(usize, usize)>; 4]> = (0..nf)
             .map(|f| {
                 let fe = level.f_edges(f);
@@ -945,14 +947,7 @@ impl Interp4 {
                 }
             })
             .collect();
-        let face: Vec<[u32; 4]> = found
-            .iter()
-            .map(|f| f.map(|y| some(y.map(|y| y.0))))
-            .collect();
-        let quad: Vec<[u32; 4]> = found
-            .iter()
-            .map(|f| f.map(|y| some(y.map(|y| y.1))))
-            .collect();
+        let [face, quad] = split(&found);
         let (edge2, face2) = if six {
             Self::far(level, &edge, &via, &face, &quad)
         } else {
