@@ -129,3 +129,12 @@ for k, v in rows.items():
 a = sum(rows['A edges']) + sum(rows['A faces'])
 b = sum(rows['B edges']) + sum(rows['B faces'])
 print(f'  A {a:.0f}  B {b:.0f}  B / A = {b / a:.3f}')
+
+# The fitting's tangential relaxation: how far an interior edge point lies along its edge
+# from its coarse edge's midpoint, and from the mean of its four fine neighbours (standard
+# deviations in grid steps).
+mid = ab / 2
+nbr4 = (ab + ff) / 4
+sd = lambda p: np.std(((yE - p) * t).sum(1))
+print(f'  along-edge residual (std, steps): from the midpoint {sd(mid):.1f}, '
+      f'from the four neighbours {sd(nbr4):.1f}')
