@@ -749,70 +749,75 @@ struct Interp4 {
 }
 
 impl Interp4 {
-    /// The stencils of `level`, in one pass over the faces: each quad face records, for
-    /// each of its edges, the edge beside it at each end and the edge's slot there, so
-    /// that no edge end searches its faces. The tables are those that `beyond_vertex`
-    /// and `beyond_edge` give at every edge end and face edge (the test's
-    /// `Interp4::reference`).
+    /// The stencils of `level`, from one pass over the faces that records each edge's
+    /// slot in the quads beside it, so that no edge end searches its faces. The tables
+    /// are those that `beyond_vertex` and `beyond_edge` give at every edge end and face
+    /// edge (the test's `Interp4::reference`).
     fn new(level: &Level, six: bool) -> Interp4 {
         let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
-        // Per coarse vertex: its boundary edges' count (3 standing for more) and the
-        // first two of them in the order of `v_edges` ([`Level::boundary_edges`]).
-        let mut nb = vec![0u8; nv];
-        let mut be = vec![[NONE; 2]; nv];
-        for v in 0..nv {
-            let (n, b) = level.boundary_edges(v);
-            nb[v] = n.min(3) as u8;
-            be[v] = b;
-        }
-        // Per edge, per side k (edge_faces[e][k]) and end: the other edge of that quad
-        // at that end; and the edge's slot in that quad. NONE where the face is not a
-        // quad.
-        let mut side = vec![[[NONE; 2]; 2]; ne];
+        // Per edge and side k (the face edge_faces[e][k]): the edge's slot in that face
+        // when it is a quad (the edge runs from corner slot to corner slot + 1).
         let mut slot = vec![[u8::MAX; 2]; ne];
         for f in 0..nf {
             let fe = level.f_edges(f);
-            if fe.len() != 4 {
-                continue;
-            }
-            let c = level.coarse.face(f);
-            for i in 0..4 {
-                let e = fe[i] as usize;
-                let k = (level.edge_faces[e][0] as usize != f) as usize;
-                // The edge runs from corner i to corner i + 1.
-                let end = (level.edges[e][0] != c[i]) as usize;
-                side[e][k][end] = fe[(i + 3) % 4];
-                side[e][k][1 - end] = fe[(i + 1) % 4];
-                slot[e][k] = i as u8;
+            if fe.len() == 4 {
+                for (i, &e) in fe.iter().enumerate() {
+                    let e = e as usize;
+                    slot[e][(level.edge_faces[e][0] as usize != f) as usize] = i as u8;
+                }
             }
         }
+        // The slot of edge e in the quad on its side k, and that quad.
+        let quad_slot = |e: usize, k: usize| {
+            let i = slot[e][k];
+            (i != u8::MAX).then(|| (level.edge_faces[e][k] as usize, i as usize))
+        };
+        let on_boundary: Vec<bool> = (0..nv)
+            .map(|v| {
+                level
+                    .v_edges(v)
+                    .iter()
+                    .any(|&e| level.is_boundary(e as usize))
+            })
+            .collect();
         let mut edge = Vec::with_capacity(ne);
         let mut via = Vec::with_capacity(if six { ne } else { 0 });
         for e in 0..ne {
             let boundary = level.is_boundary(e);
+            // An interior edge's other edge at each end in each quad beside it (NONE
+            // beside a face that is not a quad): at the corner the edge starts from in
+            // that quad the edge before it, at the other the edge after it.
+            let mut side = [[NONE; 2]; 2];
+            if !boundary {
+                for k in 0..2 {
+                    if let Some((g, i)) = quad_slot(e, k) {
+                        let fe = level.f_edges(g);
+                        let first = (level.edges[e][0] != level.coarse.face(g)[i]) as usize;
+                        side[first][k] = fe[(i + 3) % 4];
+                        side[1 - first][k] = fe[(i + 1) % 4];
+                    }
+                }
+            }
             let mut found = [(NONE, NONE); 2];
             for (end, &a) in level.edges[e].iter().enumerate() {
                 let a = a as usize;
                 let edges = level.v_edges(a);
                 found[end] = if boundary {
-                    if nb[a] != 2 || edges.len() != 3 {
+                    let (nb, be) = level.boundary_edges(a);
+                    if nb != 2 || edges.len() != 3 {
                         continue;
                     }
-                    let other = if be[a][0] as usize == e {
-                        be[a][1]
-                    } else {
-                        be[a][0]
-                    };
+                    let other = if be[0] as usize == e { be[1] } else { be[0] };
                     (level.other_end(other, a), other)
                 } else {
-                    let s = [side[e][0][end], side[e][1][end]];
-                    if nb[a] != 0 || edges.len() != 4 || s.contains(&NONE) {
+                    let side = side[end];
+                    if on_boundary[a] || edges.len() != 4 || side.contains(&NONE) {
                         continue;
                     }
                     match edges
                         .iter()
                         .copied()
-                        .find(|&x| x as usize != e && !s.contains(&x))
+                        .find(|&x| x as usize != e && !side.contains(&x))
                     {
                         Some(opp) => (level.other_end(opp, a), opp),
                         None => continue,
@@ -824,35 +829,31 @@ impl Interp4 {
                 via.push(found.map(|b| b.1));
             }
         }
+        // Quad f's edge i: the quad on its other side and the slot opposite it there.
+        let beyond = |f: usize, i: usize| {
+            let e = level.f_edges(f)[i] as usize;
+            let [f1, f2] = level.edge_faces[e];
+            if f2 == NONE {
+                return None;
+            }
+            quad_slot(e, (f1 as usize == f) as usize).map(|(g, j)| (g, (j + 2) % 4))
+        };
         let mut face = Vec::with_capacity(nf);
         let mut quad = Vec::with_capacity(if six { nf } else { 0 });
-        // interp6: the slot of each beyond edge in its quad.
-        let mut far_slot = Vec::with_capacity(if six { nf } else { 0 });
         for f in 0..nf {
-            let fe = level.f_edges(f);
             let mut y = [NONE; 4];
             let mut h = [NONE; 4];
-            let mut j = [0u8; 4];
-            if fe.len() == 4 {
+            if level.f_edges(f).len() == 4 {
                 for i in 0..4 {
-                    let e = fe[i] as usize;
-                    let [f1, f2] = level.edge_faces[e];
-                    if f2 == NONE {
-                        continue;
-                    }
-                    let k = (f1 as usize == f) as usize;
-                    let g = level.edge_faces[e][k];
-                    if slot[e][k] != u8::MAX {
-                        j[i] = (slot[e][k] + 2) % 4;
-                        y[i] = level.f_edges(g as usize)[j[i] as usize];
-                        h[i] = g;
+                    if let Some((g, j)) = beyond(f, i) {
+                        y[i] = level.f_edges(g)[j];
+                        h[i] = g as u32;
                     }
                 }
             }
             face.push(y);
             if six {
                 quad.push(h);
-                far_slot.push(j);
             }
         }
         let (mut edge2, mut face2) = (Vec::new(), Vec::new());
@@ -869,10 +870,10 @@ impl Interp4 {
             // Face f's beyond edge y of an edge, in quad h at slot j: the beyond edge of
             // h's edge y.
             face2.reserve(nf);
-            for (f, y) in face.iter().enumerate() {
-                face2.push(std::array::from_fn(|i| match y[i] {
+            for f in 0..nf {
+                face2.push(std::array::from_fn(|i| match face[f][i] {
                     NONE => NONE,
-                    _ => face[quad[f][i] as usize][far_slot[f][i] as usize],
+                    _ => beyond(f, i).map_or(NONE, |(h, j)| face[h][j]),
                 }));
             }
         }
