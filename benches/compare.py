@@ -5,7 +5,8 @@ zstd, xz) from a peers CSV written by ../shared/tools/peers/peers.py.
     python3 benches/compare.py ../shared/corpus --bits 16,12 \
         --peers ../shared/corpus/peers/peers-q16-q12.csv --out benches/results.md
 
-Runs `subwave verify --json` (in-memory encode/decode, exactness check) and, with
+Runs `subwave verify --json --threads 1` (in-memory encode/decode, exactness check;
+one thread, as issue 4's speed targets are measured) and, with
 --keep-order, `subwave compress --keep-order` for the cost of the stored order.
 """
 import argparse, csv, json, os, statistics, subprocess, sys, tempfile
@@ -66,7 +67,7 @@ def main():
             continue
         stem = os.path.basename(mesh).rsplit(".", 1)[0]
         for b in a.bits.split(","):
-            args = [exe, "-q", "verify", mesh, "--json"] + ([] if b == "exact" else ["--bits", b])
+            args = [exe, "-q", "verify", mesh, "--json", "--threads", "1"] + ([] if b == "exact" else ["--bits", b])
             r = subprocess.run(args, capture_output=True, text=True)
             if r.returncode != 0:
                 print(f"{stem} {b}: FAILED {r.stderr.strip()}", file=sys.stderr)

@@ -152,6 +152,8 @@ fn frozen_containers_still_decode() {
                         None
                     },
                     value_map: swv.contains(".vmap.").then_some(true),
+                    // On two threads: the container is the same for every count.
+                    threads: 2,
                     transform: if swv.contains(".interp4.") {
                         subwave::TransformChoice::Fixed(subwave::Wavelet::Interp4)
                     } else if swv.contains(".interp6.") {

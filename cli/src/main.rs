@@ -113,6 +113,10 @@ struct Coding {
     /// (map every axis) or off.
     #[arg(long, default_value = "auto", value_parser = parse_value_map)]
     value_map: ValueMapArg,
+    /// Threads the encoder may use to try transforms at once (0: one per core, at most
+    /// 4). The file is the same for any count; each thread holds a coding's memory.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    threads: usize,
 }
 
 impl Coding {
@@ -123,6 +127,10 @@ impl Coding {
             max_levels: self.levels,
             disc: self.polar_disc.0,
             value_map: self.value_map.0,
+            threads: match self.threads {
+                0 => std::thread::available_parallelism().map_or(1, |n| n.get().min(4)),
+                n => n,
+            },
             ..Default::default()
         }
     }

@@ -360,3 +360,28 @@ fn max_level_on_a_cut_file_and_info_reports_cc() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("truncated"));
 }
+
+#[test]
+fn thread_counts_write_the_same_file() {
+    // cube_cc4 has a Catmull-Clark and a sqrt(2) family; sphere_polar3 ranks its discs.
+    for mesh in ["cube_cc4.obj", "sphere_polar3.obj"] {
+        let input = corpus(mesh);
+        let files: Vec<Vec<u8>> = ["1", "3", "0"]
+            .iter()
+            .map(|t| {
+                let swv = compressed(&input, &format!("threads{t}.{mesh}.swv"), &["--threads", t]);
+                std::fs::read(swv).unwrap()
+            })
+            .collect();
+        assert!(files[1] == files[0], "{mesh}: --threads 3");
+        assert!(files[2] == files[0], "{mesh}: --threads 0");
+    }
+    let o = run(&[
+        "compress",
+        corpus("cube_cc4.obj").to_str().unwrap(),
+        "/dev/null",
+        "--threads",
+        "x",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "a bad --threads is bad usage");
+}

@@ -66,6 +66,10 @@ pub struct EncodeOptions {
     /// map and keeps the smaller container, `Some(true)` maps every axis, `Some(false)`
     /// none.
     pub value_map: Option<bool>,
+    /// How many threads the encoder may use (0 counts as 1): `auto` then codes its
+    /// candidate families and transforms at once. The container is the same for every
+    /// count; each thread holds a coding's working memory.
+    pub threads: usize,
 }
 
 impl Default for EncodeOptions {
@@ -77,6 +81,7 @@ impl Default for EncodeOptions {
             max_levels: 16,
             disc: None,
             value_map: None,
+            threads: 1,
         }
     }
 }
@@ -451,6 +456,181 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
     })
 }
 
+/// The best coding of one family's candidate hierarchies (SPEC.md 8: Catmull-Clark and
+/// polar, or sqrt(2)) and the hierarchy it codes: every candidate with the family's
+/// first transform, then, with `auto`, the family's `others` ranked on the best
+/// candidate, the ranking's winner coded in every mode, and a coding without the
+/// rotated modes. `threads` (at least 1) may code the ranking's transforms at once; the
+/// result is the same for every count.
+#[allow(clippy::too_many_arguments)]
+fn code_family(
+    mesh: &Mesh,
+    opts: &EncodeOptions,
+    flat_h: &Header,
+    canons: Vec<Canonical>,
+    auto_first: Wavelet,
+    others: &[Wavelet],
+    threads: usize,
+) -> Result<Option<(Payloads, Canonical)>> {
+    let first = match opts.transform {
+        TransformChoice::Auto | TransformChoice::Fit => auto_first,
+        TransformChoice::Fixed(w) => w,
+    };
+    let mut fam_best: Option<(Payloads, Canonical, [Vec<i64>; 3])> = None;
+    for canon in canons {
+        let pos = canonical_positions(mesh, &canon);
+        // code_hierarchy drops the disc transform of a hierarchy without poles.
+        let disc = opts.disc.unwrap_or(DiscTransform::None);
+        let order = if opts.keep_order {
+            let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
+            Some(order_section(&canon.order, faces, rotations))
+        } else {
+            None
+        };
+        // Wanted only if smaller than the best candidate so far.
+        let bound = fam_best.as_ref().map_or(UNBOUNDED, |b| {
+            let order_len = order.as_ref().map_or(0, Vec::len);
+            b.0.size().saturating_sub(order_len + 1)
+        });
+        if let Some(mut p) = code_hierarchy(&canon, &pos, first, disc, flat_h, true, None, bound) {
+            p.order = order;
+            if fam_best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
+                fam_best = Some((p, canon, pos));
+            }
+        }
+    }
+    let Some((mut p, canon, pos)) = fam_best else {
+        return Ok(None);
+    };
+    // Codings of one hierarchy share their ORDR section (the order depends on the
+    // hierarchy only), so they compare by `coded()`, and a coding stops as soon
+    // as it cannot be wanted (`code_hierarchy`'s bound).
+    //
+    // Codes the chosen hierarchy with (w, d) and keeps it if smaller.
+    let try_code = |p: &mut Payloads, w: Wavelet, d: DiscTransform, rotated: bool| {
+        let bound = p.coded().saturating_sub(1);
+        if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, flat_h, rotated, None, bound) {
+            q.order = p.order.clone();
+            if q.coded() < p.coded() {
+                *p = q;
+            }
+        }
+    };
+    // Other (transform, disc) pairs are ranked coding each level in the mode p
+    // chose for it (a fraction of the work of trying every mode); the best of
+    // them is then coded in every mode. Whichever coding is smallest is kept.
+    let rank_then_code = |p: &mut Payloads, pairs: &[(Wavelet, DiscTransform)]| {
+        let modes = p.modes();
+        let mut ranked: Option<(usize, Wavelet, DiscTransform)> = None;
+        // The largest ranking size that leads to coding in every mode.
+        let margin = (p.coded() * RANK_MARGIN).div_ceil(100).saturating_sub(1);
+        // On several threads every ranking coding runs at once, with the widest bound
+        // the loop below can give (before anything is ranked); the loop then takes
+        // each coding only where it fits its own bound, as coded alone it would have
+        // (a coding within a bound is the same coding under any wider one).
+        let code = |&(w, d): &(Wavelet, DiscTransform), bound: usize| {
+            code_hierarchy(&canon, &pos, w, d, flat_h, true, Some(modes.clone()), bound)
+        };
+        let widest = p.coded().saturating_sub(1).max(margin);
+        let mut ahead = if threads > 1 {
+            par_map(pairs, threads, |pair| code(pair, widest))
+        } else {
+            Vec::new()
+        };
+        for (i, pair) in pairs.iter().enumerate() {
+            let (w, d) = *pair;
+            // Wanted if smaller than p, or ranked first within the margin.
+            let rank = ranked.map_or(margin, |(s, ..)| s.saturating_sub(1).min(margin));
+            let bound = p.coded().saturating_sub(1).max(rank);
+            let coded = match ahead.get_mut(i) {
+                Some(q) => q.take().filter(|q| q.coded() <= bound),
+                None => code(pair, bound),
+            };
+            if let Some(mut q) = coded {
+                if ranked.is_none_or(|(s, ..)| q.coded() < s) {
+                    ranked = Some((q.coded(), w, d));
+                }
+                q.order = p.order.clone();
+                if q.coded() < p.coded() {
+                    *p = q;
+                }
+            }
+        }
+        if let Some((_, w, d)) = ranked.filter(|&(s, ..)| s <= margin) {
+            try_code(p, w, d, true);
+        }
+    };
+    let disc = p.header.disc;
+    if opts.transform == TransformChoice::Auto {
+        let pairs: Vec<_> = others
+            .iter()
+            .filter(|&&w| w != first)
+            .map(|&w| (w, disc))
+            .collect();
+        rank_then_code(&mut p, &pairs);
+    }
+    // A polar hierarchy: the other disc transforms, with the best transform.
+    if let (false, None, Transform::Wavelet(w)) =
+        (canon.poles.is_empty(), opts.disc, p.header.transform)
+    {
+        let d0 = p.header.disc;
+        let pairs: Vec<_> = DiscTransform::ALL
+            .into_iter()
+            .filter(|&d| d != d0)
+            .map(|d| (w, d))
+            .collect();
+        rank_then_code(&mut p, &pairs);
+    }
+    // Each level keeps its smallest mode, but a rotated level hands the next one
+    // models learnt in another frame: the best coding without the rotated modes
+    // can be smaller in all. (Without a rotated level it would be this coding
+    // again: the same modes win, the rotated ones coming last on ties.)
+    let rotated = p
+        .modes()
+        .iter()
+        .any(|&m| matches!(levels::mode_of(FORMAT_VERSION, &[m]), Some(4 | 5)));
+    if let (true, Transform::Wavelet(w)) = (rotated, p.header.transform) {
+        let d = p.header.disc;
+        try_code(&mut p, w, d, false);
+    }
+    Ok(Some((p, canon)))
+}
+
+/// `f` of every item, in order, on up to `threads` threads (this one among them), each
+/// taking the next item not yet taken.
+fn par_map<T: Sync, R: Send>(items: &[T], threads: usize, f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    let n = threads.min(items.len());
+    if n <= 1 {
+        return items.iter().map(f).collect();
+    }
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let work = || {
+        let mut done = Vec::new();
+        loop {
+            let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let Some(item) = items.get(i) else {
+                return done;
+            };
+            done.push((i, f(item)));
+        }
+    };
+    let mut out: Vec<Option<R>> = (0..items.len()).map(|_| None).collect();
+    std::thread::scope(|s| {
+        let others: Vec<_> = (1..n).map(|_| s.spawn(work)).collect();
+        let mine = work();
+        for (i, r) in others
+            .into_iter()
+            .flat_map(|h| h.join().expect("a coding thread panicked"))
+            .chain(mine)
+        {
+            out[i] = Some(r);
+        }
+    });
+    out.into_iter()
+        .map(|r| r.expect("every item was taken"))
+        .collect()
+}
+
 /// [`encode`] with a given value map (`mesh` holding the ranks on its mapped axes).
 fn encode_with(
     mesh: &Mesh,
@@ -520,116 +700,33 @@ fn encode_with(
                 .collect();
             families.push((canons, Wavelet::Sqrt2Lazy, &Wavelet::SQRT2));
         }
-        for (canons, auto_first, others) in families {
-            let first = match opts.transform {
-                TransformChoice::Auto | TransformChoice::Fit => auto_first,
-                TransformChoice::Fixed(w) => w,
-            };
-            let mut fam_best: Option<(Payloads, Canonical, [Vec<i64>; 3])> = None;
-            for canon in canons {
-                let pos = canonical_positions(mesh, &canon);
-                // code_hierarchy drops the disc transform of a hierarchy without poles.
-                let disc = opts.disc.unwrap_or(DiscTransform::None);
-                let order = if opts.keep_order {
-                    let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
-                    Some(order_section(&canon.order, faces, rotations))
-                } else {
-                    None
-                };
-                // Wanted only if smaller than the best candidate so far.
-                let bound = fam_best.as_ref().map_or(UNBOUNDED, |b| {
-                    let order_len = order.as_ref().map_or(0, Vec::len);
-                    b.0.size().saturating_sub(order_len + 1)
-                });
-                if let Some(mut p) =
-                    code_hierarchy(&canon, &pos, first, disc, &flat_h, true, None, bound)
-                {
-                    p.order = order;
-                    if fam_best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
-                        fam_best = Some((p, canon, pos));
-                    }
-                }
-            }
-            let Some((mut p, canon, pos)) = fam_best else {
+        // The families code apart; on several threads at once, each with its share.
+        families.retain(|(canons, ..)| !canons.is_empty());
+        let threads = opts.threads.max(1);
+        let share = (threads / families.len().max(1)).max(1);
+        let coded: Vec<Result<Option<(Payloads, Canonical)>>> = if threads > 1 {
+            // Each family is taken once, by the thread that codes it.
+            let jobs: Vec<_> = families
+                .into_iter()
+                .map(|f| std::sync::Mutex::new(Some(f)))
+                .collect();
+            par_map(&jobs, threads, |job| {
+                let taken = job.lock().map(|mut j| j.take()).ok().flatten();
+                let (canons, first, others) = taken.expect("each family is coded once");
+                code_family(mesh, opts, &flat_h, canons, first, others, share)
+            })
+        } else {
+            families
+                .into_iter()
+                .map(|(canons, first, others)| {
+                    code_family(mesh, opts, &flat_h, canons, first, others, 1)
+                })
+                .collect()
+        };
+        for family in coded {
+            let Some((p, canon)) = family? else {
                 continue;
             };
-            // Codings of one hierarchy share their ORDR section (the order depends on the
-            // hierarchy only), so they compare by `coded()`, and a coding stops as soon
-            // as it cannot be wanted (`code_hierarchy`'s bound).
-            //
-            // Codes the chosen hierarchy with (w, d) and keeps it if smaller.
-            let try_code = |p: &mut Payloads, w: Wavelet, d: DiscTransform, rotated: bool| {
-                let bound = p.coded().saturating_sub(1);
-                if let Some(mut q) =
-                    code_hierarchy(&canon, &pos, w, d, &flat_h, rotated, None, bound)
-                {
-                    q.order = p.order.clone();
-                    if q.coded() < p.coded() {
-                        *p = q;
-                    }
-                }
-            };
-            // Other (transform, disc) pairs are ranked coding each level in the mode p
-            // chose for it (a fraction of the work of trying every mode); the best of
-            // them is then coded in every mode. Whichever coding is smallest is kept.
-            let rank_then_code = |p: &mut Payloads, pairs: &[(Wavelet, DiscTransform)]| {
-                let modes = p.modes();
-                let mut ranked: Option<(usize, Wavelet, DiscTransform)> = None;
-                // The largest ranking size that leads to coding in every mode.
-                let margin = (p.coded() * RANK_MARGIN).div_ceil(100).saturating_sub(1);
-                for &(w, d) in pairs {
-                    let m = Some(modes.clone());
-                    // Wanted if smaller than p, or ranked first within the margin.
-                    let rank = ranked.map_or(margin, |(s, ..)| s.saturating_sub(1).min(margin));
-                    let bound = p.coded().saturating_sub(1).max(rank);
-                    if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, &flat_h, true, m, bound)
-                    {
-                        if ranked.is_none_or(|(s, ..)| q.coded() < s) {
-                            ranked = Some((q.coded(), w, d));
-                        }
-                        q.order = p.order.clone();
-                        if q.coded() < p.coded() {
-                            *p = q;
-                        }
-                    }
-                }
-                if let Some((_, w, d)) = ranked.filter(|&(s, ..)| s <= margin) {
-                    try_code(p, w, d, true);
-                }
-            };
-            let disc = p.header.disc;
-            if opts.transform == TransformChoice::Auto {
-                let pairs: Vec<_> = others
-                    .iter()
-                    .filter(|&&w| w != first)
-                    .map(|&w| (w, disc))
-                    .collect();
-                rank_then_code(&mut p, &pairs);
-            }
-            // A polar hierarchy: the other disc transforms, with the best transform.
-            if let (false, None, Transform::Wavelet(w)) =
-                (canon.poles.is_empty(), opts.disc, p.header.transform)
-            {
-                let d0 = p.header.disc;
-                let pairs: Vec<_> = DiscTransform::ALL
-                    .into_iter()
-                    .filter(|&d| d != d0)
-                    .map(|d| (w, d))
-                    .collect();
-                rank_then_code(&mut p, &pairs);
-            }
-            // Each level keeps its smallest mode, but a rotated level hands the next one
-            // models learnt in another frame: the best coding without the rotated modes
-            // can be smaller in all. (Without a rotated level it would be this coding
-            // again: the same modes win, the rotated ones coming last on ties.)
-            let rotated = p
-                .modes()
-                .iter()
-                .any(|&m| matches!(levels::mode_of(FORMAT_VERSION, &[m]), Some(4 | 5)));
-            if let (true, Transform::Wavelet(w)) = (rotated, p.header.transform) {
-                let d = p.header.disc;
-                try_code(&mut p, w, d, false);
-            }
             if best.as_ref().is_none_or(|b| p.size() < b.size()) {
                 best = Some(p);
                 chosen = Some(canon);
