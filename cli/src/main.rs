@@ -520,6 +520,7 @@ fn verify(
             "bytes": enc.bytes.len(),
             "bits_per_vertex": bpv(enc.bytes.len(), n),
             "encode_ms": encode_ms,
+            "encode_threads": opts.threads.max(1),
             "decode_ms": decode_ms,
             "exact": exact,
             "levels": enc.header.levels,
@@ -530,13 +531,14 @@ fn verify(
         println!("{v}");
     } else {
         println!(
-            "{}: {} vertices, {} faces -> {} bytes, {:.3} bits per vertex; encode {:.1} ms, decode {:.1} ms; {}",
+            "{}: {} vertices, {} faces -> {} bytes, {:.3} bits per vertex; encode {:.1} ms ({} threads), decode {:.1} ms; {}",
             Path::new(input).file_name().map_or(input.into(), |f| f.to_string_lossy()),
             n,
             loaded.mesh.face_count(),
             enc.bytes.len(),
             bpv(enc.bytes.len(), n),
             encode_ms,
+            opts.threads.max(1),
             decode_ms,
             if exact { "exact" } else { "MISMATCH" }
         );

@@ -144,6 +144,14 @@ fn info_and_verify_json_have_their_keys() {
         assert!(v.get(k).is_some(), "verify --json lacks {k}: {v}");
     }
     assert_eq!(v["exact"], true);
+    let o = run(&[
+        "verify",
+        input.to_str().unwrap(),
+        "--json",
+        "--threads",
+        "3",
+    ]);
+    assert_eq!(json(&o)["encode_threads"], 3);
     let o = run(&["info", swv.to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&o.stdout).contains("bits per vertex"));
 }
