@@ -704,25 +704,17 @@ fn encode_with(
         families.retain(|(canons, ..)| !canons.is_empty());
         let threads = opts.threads.max(1);
         let share = (threads / families.len().max(1)).max(1);
-        let coded: Vec<Result<Option<(Payloads, Canonical)>>> = if threads > 1 {
-            // Each family is taken once, by the thread that codes it.
-            let jobs: Vec<_> = families
-                .into_iter()
-                .map(|f| std::sync::Mutex::new(Some(f)))
-                .collect();
-            par_map(&jobs, threads, |job| {
-                let taken = job.lock().map(|mut j| j.take()).ok().flatten();
-                let (canons, first, others) = taken.expect("each family is coded once");
-                code_family(mesh, opts, &flat_h, canons, first, others, share)
-            })
-        } else {
-            families
-                .into_iter()
-                .map(|(canons, first, others)| {
-                    code_family(mesh, opts, &flat_h, canons, first, others, 1)
-                })
-                .collect()
-        };
+        // Each family is taken once, by the thread that codes it (on one thread, in
+        // order).
+        let jobs: Vec<_> = families
+            .into_iter()
+            .map(|f| std::sync::Mutex::new(Some(f)))
+            .collect();
+        let coded = par_map(&jobs, threads, |job| {
+            let taken = job.lock().map(|mut j| j.take()).ok().flatten();
+            let (canons, first, others) = taken.expect("each family is coded once");
+            code_family(mesh, opts, &flat_h, canons, first, others, share)
+        });
         for family in coded {
             let Some((p, canon)) = family? else {
                 continue;
