@@ -102,6 +102,23 @@ fn benches(c: &mut Criterion) {
             s
         })
     });
+    // The range decoder with the cheapest model there is (8 raw bits per symbol: a
+    // shift and a mask): what constriction's decoder costs per symbol by itself.
+    let mut e = Encoder::new();
+    for &v in &values {
+        e.bits((v + 20) as u64, 8);
+    }
+    let raw = e.finish();
+    g.bench_function("decode_1M_raw_symbols", |b| {
+        b.iter(|| {
+            let mut d = Decoder::new(&raw, "bench", subwave::FORMAT_VERSION).unwrap();
+            let mut s = 0u64;
+            for _ in 0..values.len() {
+                s += d.bits(8).unwrap();
+            }
+            s
+        })
+    });
     g.finish();
 
     // The whole codec.
