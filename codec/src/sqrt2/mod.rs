@@ -429,7 +429,7 @@ pub fn predictions_with(
         rings: &rings,
         topo: &level.coarse,
     };
-    let small = small_points(x, level.nv);
+    let small = small_values(x, level.nv);
     let nf = level.nf();
     let mut out: [Vec<i64>; 3] = std::array::from_fn(|_| Vec::with_capacity(nf));
     let mut ph: Option<Phases> = phases.then(|| Phases {
@@ -438,8 +438,8 @@ pub fn predictions_with(
     });
     for f in 0..nf {
         let (p, q) = match ph {
-            Some(_) => face_prediction::<true>(&level.coarse, &nb, f, x, small.as_deref()),
-            None => face_prediction::<false>(&level.coarse, &nb, f, x, small.as_deref()),
+            Some(_) => face_prediction::<true>(&level.coarse, &nb, f, x, small),
+            None => face_prediction::<false>(&level.coarse, &nb, f, x, small),
         };
         for (o, p) in out.iter_mut().zip(p) {
             o.push(p);
@@ -453,38 +453,34 @@ pub fn predictions_with(
     (out, ph)
 }
 
-/// The coarse points `(x[0][v], x[1][v], x[2][v])`, `v < nv`, side by side, if every
-/// value is below 2^40 in magnitude: then a face of at most eight corners sums its
-/// prediction (weights below 2^18 per corner) in 64 bits. `None` otherwise.
-fn small_points(x: &[Vec<i64>; 3], nv: usize) -> Option<Vec<[i64; 3]>> {
-    let small = x.iter().all(|xk| {
+/// Whether every coarse value `x[k][..nv]` is below 2^40 in magnitude: then a face of
+/// at most eight corners sums its prediction (weights below 2^18 per corner) in 64 bits.
+fn small_values(x: &[Vec<i64>; 3], nv: usize) -> bool {
+    x.iter().all(|xk| {
         xk[..nv.min(xk.len())]
             .iter()
             .all(|v| v.unsigned_abs() < 1 << 40)
-    });
-    (small && x.iter().all(|xk| xk.len() >= nv))
-        .then(|| (0..nv).map(|v| [x[0][v], x[1][v], x[2][v]]).collect())
+    })
 }
 
 /// `P_f` of face f on the three axes (SPEC.md 9.7, eq. 1), from the coarse values
 /// `x[k][..nv]`, and with `PHASES` their phases (10.6; else zeros); `small` from
-/// [`small_points`] of the same values (the same numbers in 64-bit sums).
+/// [`small_values`] of the same values (the same numbers in 64-bit sums).
 fn face_prediction<const PHASES: bool>(
     topo: &Topo,
     nb: &Neighbours<'_>,
     f: usize,
     x: &[Vec<i64>; 3],
-    small: Option<&[[i64; 3]]>,
+    small: bool,
 ) -> ([i64; 3], [u8; 3]) {
     let s = topo.starts[f] as usize;
     let k = topo.starts[f + 1] as usize - s;
     let d = k as i128 * ONE;
-    if let Some(pts) = small.filter(|_| k <= 8) {
+    if small && k <= 8 {
         let mut acc = [0i64; 3];
         corner_terms(topo, nb, s..s + k, |u, w| {
-            let p = pts[u];
-            for (a, xa) in acc.iter_mut().zip(p) {
-                *a += w as i64 * xa;
+            for (a, xa) in acc.iter_mut().zip(x) {
+                *a += w as i64 * xa[u];
             }
         });
         let p = acc.map(|a| crate::transform::round_div(a as i128, d));
@@ -698,9 +694,9 @@ pub fn ir2w_synthesise(level: &Level, x: &mut [Vec<i64>; 3]) {
         }
     }
     drop(acc);
-    let small = small_points(x, nv);
+    let small = small_values(x, nv);
     for f in 0..level.nf() {
-        let (p, _) = face_prediction::<false>(&level.coarse, &nb, f, x, small.as_deref());
+        let (p, _) = face_prediction::<false>(&level.coarse, &nb, f, x, small);
         for (xk, p) in x.iter_mut().zip(p) {
             xk[nv + f] = xk[nv + f].plus(p);
         }
@@ -784,7 +780,7 @@ mod prediction_tests {
             }
             let level = Level::new(&t).unwrap();
             let x = values(&level, bits, &mut s);
-            assert_eq!(small_points(&x, level.nv).is_some(), bits == 41);
+            assert_eq!(small_values(&x, level.nv), bits == 41);
             let p = predictions(&level, &x);
             let plan = Plan::new(&level, Wavelet::Sqrt2Lazy);
             for k in 0..3 {
