@@ -34,9 +34,20 @@ pub struct AdaptiveModel {
     total: u32,
     /// `cum[s]..cum[s + 1]` is symbol `s`'s quantised range; `cum[n] = 2^16`.
     cum: Vec<u32>,
+    /// `lut[b]`: the symbol whose range holds quantile `b << LUT_SHIFT`, so that a
+    /// quantile in bucket b belongs to a symbol from `lut[b]` to `lut[b + 1]` (the
+    /// decoder's search, not part of the format).
+    lut: [u16; LUT_LEN + 1],
+    /// Whether `lut` predates the table: the decoder refills it before its next search
+    /// (the encoder never reads it).
+    stale: bool,
     until_rebuild: u32,
     period: u32,
 }
+
+/// Buckets of the decoder's symbol search: the top 6 bits of a quantile.
+const LUT_LEN: usize = 64;
+const LUT_SHIFT: u32 = PRECISION as u32 - 6;
 
 impl AdaptiveModel {
     /// A model over `n` symbols (2 <= n <= 4096), all counts 1, as the current format
@@ -58,6 +69,8 @@ impl AdaptiveModel {
             counts: vec![1; n],
             total: n as u32,
             cum: vec![0; n + 1],
+            lut: [0; LUT_LEN + 1],
+            stale: true,
             until_rebuild: first,
             period: first,
         };
@@ -106,6 +119,25 @@ impl AdaptiveModel {
             *c += rest;
         }
         self.cum[self.counts.len()] = ONE;
+        self.stale = true;
+    }
+
+    /// Makes `lut` follow the table, if it does not yet.
+    #[inline]
+    fn refresh(&mut self) {
+        if !self.stale {
+            return;
+        }
+        let mut s = 0;
+        for (b, l) in self.lut[..LUT_LEN].iter_mut().enumerate() {
+            let q = (b as u32) << LUT_SHIFT;
+            while self.cum[s + 1] <= q {
+                s += 1;
+            }
+            *l = s as u16;
+        }
+        self.lut[LUT_LEN] = (self.counts.len() - 1) as u16;
+        self.stale = false;
     }
 
     /// Adds one occurrence of `s` to the counts (halving them past the bound) without
@@ -163,8 +195,17 @@ impl EncoderModel<PRECISION> for AdaptiveModel {
 impl DecoderModel<PRECISION> for AdaptiveModel {
     #[inline]
     fn quantile_function(&self, quantile: u32) -> (usize, u32, NonZeroU32) {
-        // cum[0] = 0 <= quantile < 2^16 = cum[n]; find the last s with cum[s] <= quantile.
-        let s = self.cum.partition_point(|&c| c <= quantile) - 1;
+        // cum[0] = 0 <= quantile < 2^16 = cum[n]; find the last s with cum[s] <= quantile,
+        // between the symbols of its bucket's start and of the next bucket's.
+        let b = ((quantile >> LUT_SHIFT) as usize).min(LUT_LEN - 1);
+        // (A stale search table, which [`Decoder::symbol`] never leaves, means the whole
+        // table.)
+        let (lo, hi) = if self.stale {
+            (0, self.counts.len() - 1)
+        } else {
+            (self.lut[b] as usize, self.lut[b + 1] as usize)
+        };
+        let s = lo + self.cum[lo + 1..=hi].partition_point(|&c| c <= quantile);
         let s = s.min(self.counts.len() - 1);
         let lo = self.cum[s];
         let p = self.cum[s + 1] - lo;
@@ -620,6 +661,7 @@ impl Decoder {
     /// Decodes a symbol with `m` and adapts `m`.
     #[inline]
     pub fn symbol(&mut self, m: &mut AdaptiveModel) -> Result<usize> {
+        m.refresh();
         let s = self.inner.decode_symbol(&*m).map_err(|_| self.bad())?;
         m.update(s);
         Ok(s)
@@ -726,6 +768,42 @@ mod tests {
             m.update((i * i) % 7);
             assert_eq!(m.cum[40], ONE);
             assert!(m.cum.windows(2).all(|w| w[1] > w[0]));
+        }
+    }
+
+    #[test]
+    fn bucketed_search_finds_every_quantile_symbol() {
+        // Every quantile of models small and large, flat and skewed, as they adapt:
+        // the symbol is the one whose range holds it (a linear scan of the table).
+        for (n, seed) in [(2usize, 1u64), (3, 2), (60, 3), (64, 4), (65, 5), (4096, 6)] {
+            let mut m = AdaptiveModel::new(n);
+            let mut r = seed;
+            for round in 0..12 {
+                // Before the decoder's refresh (a table just rebuilt), the whole table
+                // is searched; after it, the bucket's symbols.
+                for q in (0..ONE).step_by(7) {
+                    let (s, ..) = m.quantile_function(q);
+                    assert!(m.cum[s] <= q && q < m.cum[s + 1], "stale: n {n}, q {q}");
+                }
+                m.refresh();
+                assert!(!m.stale);
+                for q in 0..ONE {
+                    let (s, lo, p) = m.quantile_function(q);
+                    assert!(
+                        m.cum[s] <= q && q < m.cum[s + 1],
+                        "n {n}, round {round}, q {q}"
+                    );
+                    assert_eq!((lo, p.get()), (m.cum[s], m.cum[s + 1] - m.cum[s]));
+                }
+                // Skew the model towards a few symbols, then a few more.
+                for _ in 0..(700 << round.min(4)) {
+                    r = r
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
+                    let pick = ((r >> 33) as usize % (round + 2)).min(n - 1);
+                    m.update(if round % 2 == 0 { pick } else { n - 1 - pick });
+                }
+            }
         }
     }
 
