@@ -706,6 +706,7 @@ fn slot(level: &Level, act: &[u8], sqrt2: bool, i: usize) -> (usize, usize, usiz
 /// Detail `i`'s class, the neighbour bins of its three coded values (format 15 on: each
 /// its own, [`slot_bins`]; before: one for all, [`slot`]) and its detail number for
 /// [`frame`].
+#[inline(always)]
 fn contexts(
     level: &Level,
     act: &[u8],
