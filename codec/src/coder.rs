@@ -774,7 +774,7 @@ mod tests {
     #[test]
     fn bucketed_search_finds_every_quantile_symbol() {
         // Every quantile of models small and large, flat and skewed, as they adapt:
-        // the symbol is the one whose range holds it (a linear scan of the table).
+        // the symbol found is the one whose range holds the quantile.
         for (n, seed) in [(2usize, 1u64), (3, 2), (60, 3), (64, 4), (65, 5), (4096, 6)] {
             let mut m = AdaptiveModel::new(n);
             let mut r = seed;
