@@ -767,56 +767,26 @@ fn face_normal_64(level: &Level, coarse: &[Vec<i64>; 3], f: usize) -> Option<[i6
     let mut n = [0i64; 3];
     // |values| <= 2^52, so their sums and differences fit; the products may not.
     let term = |d: i64, s: i64, acc: i64| acc.checked_add(d.checked_mul(s)?);
-    for i in 0..k {
-        let (a, b) = (c[i] as usize, c[(i + 1) % k] as usize);
-        let (px, py, pz) = (coarse[0][a], coarse[1][a], coarse[2][a]);
-        let (qx, qy, qz) = (coarse[0][b], coarse[1][b], coarse[2][b]);
+    let [x, y, z] = coarse;
+    // Edges (c[k - 1], c[0]), (c[0], c[1]), ...: the same terms as in corner order.
+    let mut a = *c.get(k.wrapping_sub(1))? as usize;
+    for &b in c {
+        let b = b as usize;
+        let (px, py, pz) = (x[a], y[a], z[a]);
+        let (qx, qy, qz) = (x[b], y[b], z[b]);
         n[0] = term(py - qy, pz + qz, n[0])?;
         n[1] = term(pz - qz, px + qx, n[1])?;
         n[2] = term(px - qx, py + qy, n[2])?;
+        a = b;
     }
     Some(n)
 }
 
 /// Every coarse face's normal, once per level.
 fn face_normals(level: &Level, coarse: &[Vec<i64>; 3]) -> Vec<[i128; 3]> {
-    // Below 2^28 every term of a face of at most 32 corners is below 2^58 and the sums
-    // fit 64 bits without checks: the same numbers, found faster.
-    let nv = level.nv;
-    let small = coarse
-        .iter()
-        .all(|x| x.len() >= nv && x[..nv].iter().all(|v| v.unsigned_abs() < 1 << 28));
     (0..level.nf())
-        .map(|f| {
-            let c = level.coarse.face(f);
-            if small && c.len() <= 32 {
-                face_normal_small(c, coarse).map(|v| v as i128)
-            } else {
-                face_normal(level, coarse, f)
-            }
-        })
+        .map(|f| face_normal(level, coarse, f))
         .collect()
-}
-
-/// Newell's normal of face `c` in 64 bits, for values below 2^28 and at most 32 corners.
-#[inline]
-fn face_normal_small(c: &[u32], coarse: &[Vec<i64>; 3]) -> [i64; 3] {
-    let mut n = [0i64; 3];
-    let [x, y, z] = coarse;
-    let Some(&last) = c.last() else {
-        return n;
-    };
-    let mut a = last as usize;
-    for &b in c {
-        let b = b as usize;
-        let (px, py, pz) = (x[a], y[a], z[a]);
-        let (qx, qy, qz) = (x[b], y[b], z[b]);
-        n[0] += (py - qy) * (pz + qz);
-        n[1] += (pz - qz) * (px + qx);
-        n[2] += (px - qx) * (py + qy);
-        a = b;
-    }
-    n
 }
 
 /// The coding frame of a detail (SPEC.md 10.2): the axis where the coarse normal is
@@ -2193,7 +2163,7 @@ mod tests {
             let mut x: [Vec<i64>; 3] =
                 std::array::from_fn(|k| pseudo(seed + k as u64, level.nv, bits));
             if bits == 29 {
-                // Values at the 64-bit shortcut's bound: 2^28 - 1 may take it, -2^28 not.
+                // Values near 2^28 in magnitude, of both signs.
                 x[0][0] = (1 << 28) - 1;
                 x[1][1] = -(1 << 28) + 1;
             }
