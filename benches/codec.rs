@@ -93,7 +93,7 @@ fn benches(c: &mut Criterion) {
     let stream = e.finish();
     g.bench_function("decode_1M_ints", |b| {
         b.iter(|| {
-            let mut d = Decoder::new(&stream, "bench", subwave::FORMAT_VERSION).unwrap();
+            let mut d = Decoder::new(&stream, "bench").unwrap();
             let mut m = IntModel::new();
             let mut s = 0i64;
             for _ in 0..values.len() {
@@ -111,7 +111,7 @@ fn benches(c: &mut Criterion) {
     let raw = e.finish();
     g.bench_function("decode_1M_raw_symbols", |b| {
         b.iter(|| {
-            let mut d = Decoder::new(&raw, "bench", subwave::FORMAT_VERSION).unwrap();
+            let mut d = Decoder::new(&raw, "bench").unwrap();
             let mut s = 0u64;
             for _ in 0..values.len() {
                 s += d.bits(8).unwrap();

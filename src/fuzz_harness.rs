@@ -3,14 +3,11 @@
 //! panics only when a property is violated: a hostile input that is merely refused is
 //! fine, a panic inside the library is a bug.
 
-use subwave_codec::coder::{AdaptiveModel, Decoder, Encoder, IntModel, TIGHT_VERSION};
+use subwave_codec::coder::{AdaptiveModel, Decoder, Encoder, IntModel};
 use subwave_codec::hierarchy::{Level, Topo};
 use subwave_codec::transform::{analyse, synthesise};
 
-use crate::{
-    DecodeOptions, EncodeOptions, Limits, Mesh, Quantization, TransformChoice, Wavelet,
-    FORMAT_VERSION,
-};
+use crate::{DecodeOptions, EncodeOptions, Limits, Mesh, Quantization, TransformChoice, Wavelet};
 
 /// Reads bytes as a little stream of small numbers, zeros after the end.
 struct Bytes<'a> {
@@ -222,31 +219,27 @@ pub fn coder_roundtrip(data: &[u8]) {
             }
         });
     }
-    // Both ways of storing a stream: constriction's sealed little-endian words (formats
-    // 1 to 22) and the tight big-endian tail (SPEC.md 4.1).
-    for version in [TIGHT_VERSION - 1, FORMAT_VERSION] {
-        let mut e = Encoder::new();
-        let mut models: Vec<AdaptiveModel> = sizes.iter().map(|&n| AdaptiveModel::new(n)).collect();
-        let mut im = IntModel::new();
-        for op in &ops {
-            match *op {
-                Op::Sym(m, s) => e.symbol(&mut models[m], s),
-                Op::Int(v) => e.int(&mut im, v),
-                Op::Uni(v, n) => e.uniform(v, n),
-            }
+    let mut e = Encoder::new();
+    let mut models: Vec<AdaptiveModel> = sizes.iter().map(|&n| AdaptiveModel::new(n)).collect();
+    let mut im = IntModel::new();
+    for op in &ops {
+        match *op {
+            Op::Sym(m, s) => e.symbol(&mut models[m], s),
+            Op::Int(v) => e.int(&mut im, v),
+            Op::Uni(v, n) => e.uniform(v, n),
         }
-        let bytes = e.finish_for(version);
-        let mut d = Decoder::new(&bytes, "fuzz", version).expect("own stream");
-        let mut models: Vec<AdaptiveModel> = sizes.iter().map(|&n| AdaptiveModel::new(n)).collect();
-        let mut im = IntModel::new();
-        for op in &ops {
-            let got = match *op {
-                Op::Sym(m, _) => Op::Sym(m, d.symbol(&mut models[m]).expect("symbol")),
-                Op::Int(_) => Op::Int(d.int(&mut im).expect("int")),
-                Op::Uni(_, n) => Op::Uni(d.uniform(n).expect("uniform"), n),
-            };
-            assert_eq!(&got, op);
-        }
+    }
+    let bytes = e.finish();
+    let mut d = Decoder::new(&bytes, "fuzz").expect("own stream");
+    let mut models: Vec<AdaptiveModel> = sizes.iter().map(|&n| AdaptiveModel::new(n)).collect();
+    let mut im = IntModel::new();
+    for op in &ops {
+        let got = match *op {
+            Op::Sym(m, _) => Op::Sym(m, d.symbol(&mut models[m]).expect("symbol")),
+            Op::Int(_) => Op::Int(d.int(&mut im).expect("int")),
+            Op::Uni(_, n) => Op::Uni(d.uniform(n).expect("uniform"), n),
+        };
+        assert_eq!(&got, op);
     }
 }
 

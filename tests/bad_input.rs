@@ -49,6 +49,25 @@ fn newer_format_version() {
     ));
 }
 
+/// Before the first release only the current format is read: a container of an older
+/// development format (a current container with its version field set to an older one)
+/// is refused with an error that names its version, not misread.
+#[test]
+fn older_format_versions_are_refused_by_name() {
+    for old in [1u16, 18, 25] {
+        let mut b = sample();
+        b[8..10].copy_from_slice(&old.to_le_bytes());
+        let e = subwave::decode_slice(&b).unwrap_err();
+        let text = e.to_string();
+        assert!(
+            text.contains(&format!("format version {old} "))
+                && text.contains(&format!("format {} only", subwave::FORMAT_VERSION)),
+            "{text}"
+        );
+        assert!(subwave::inspect(&b, &Limits::default()).is_err());
+    }
+}
+
 #[test]
 fn every_truncation_is_rejected() {
     let b = sample();
@@ -340,8 +359,7 @@ fn every_truncation_of_a_hierarchy_is_rejected_or_a_correct_coarser_level() {
 /// checksum valid.
 fn with_level(bytes: &[u8], level: usize, edit: impl FnOnce(&mut Vec<u8>)) -> Vec<u8> {
     let c = subwave_container::Container::parse(bytes, &Limits::default()).unwrap();
-    // Under the container's own version: its streams are read by that version's rules.
-    let mut w = ContainerWriter::for_version(c.version);
+    let mut w = ContainerWriter::new();
     let mut edit = Some(edit);
     let mut n = 0;
     for s in &c.sections {
@@ -456,36 +474,25 @@ fn frozen_terrain_q10(file: &str) -> (Vec<u8>, subwave::Loaded) {
     (b, subwave::load(&obj, Some(10)).unwrap())
 }
 
-/// A container's sections written again under format `version` (checksums valid).
-fn under_version(bytes: &[u8], version: u16) -> Vec<u8> {
-    let c = subwave_container::Container::parse(bytes, &Limits::default()).unwrap();
-    let mut w = ContainerWriter::for_version(version);
-    for s in c.sections.iter().filter(|s| s.kind != SectionKind::END) {
-        w.section(s.kind, s.payload);
-    }
-    w.finish()
-}
-
 /// The frozen terrain at 10 bits (interp6) has a level in mode 9 with joint rounding
-/// (SPEC.md 10.9, format 25): it decodes exactly; its flag cleared (rounding apart) gives
-/// an error or another mesh, never this one; the mask's top bit, or the flag on mode 8 or
-/// in a format 24 container, is corrupt.
+/// (SPEC.md 10.9): it decodes exactly; its flag cleared (rounding apart) gives an error or
+/// another mesh, never this one; the mask's top bit, or the flag on mode 8, is corrupt.
 #[test]
 fn joint_rounding_levels_need_their_flag() {
-    let (b, m) = frozen_terrain_q10("terrain_grid33.interp6.q10.v25.swv");
+    let (b, m) = frozen_terrain_q10("terrain_grid33.interp6.q10.swv");
     let info = subwave::inspect(&b, &Limits::default()).unwrap();
     assert!(info.sections.iter().any(|s| s.mode == Some(9) && s.joint));
     assert!(subwave::decode_slice(&b).unwrap().mesh == m.mesh);
     let level = level_payloads(&b)
         .iter()
-        .position(|p| p[0] & 0x7f == 9 && p[1] & 0x40 != 0)
+        .position(|p| p[0] & 0x0f == 9 && p[1] & 0x40 != 0)
         .unwrap();
     let apart = with_level(&b, level, |p| p[1] &= !0x40);
     if let Ok(d) = subwave::decode_slice(&apart) {
         assert!(d.mesh != m.mesh, "read with its corrections rounded apart");
     }
     for edit in [(|p: &mut Vec<u8>| p[1] |= 0x80) as fn(&mut Vec<u8>), |p| {
-        p[0] = p[0] & 0x80 | 8
+        p[0] = p[0] & 0xf0 | 8
     }] {
         match subwave::decode_slice(&with_level(&b, level, edit)) {
             Err(Error::CorruptStream { what, .. }) => {
@@ -494,21 +501,15 @@ fn joint_rounding_levels_need_their_flag() {
             other => panic!("expected bad weights, got {other:?}"),
         }
     }
-    // The same sections under format 24, which has no joint flag.
-    match subwave::decode_slice(&under_version(&b, 24)) {
-        Err(Error::CorruptStream { what, .. }) => assert!(what.contains("bad correction weights")),
-        other => panic!("expected bad weights, got {other:?}"),
-    }
 }
 
-/// Format 26's zero slots (SPEC.md 10.1): the frozen terrain container's levels leave x
-/// and y out. Read with a level's flags cleared, that level's stream is read as if it
-/// held them: an error or another mesh, never this one. With a flag cleared but another
-/// added (z left out instead of y), the same. The flags in a format 25 container are an
-/// unknown mode.
+/// Zero slots (SPEC.md 10.1): the frozen terrain container's levels leave x and y out.
+/// Read with a level's flags cleared, that level's stream is read as if it held them: an
+/// error or another mesh, never this one. With a flag cleared but another added (z left
+/// out instead of y), the same.
 #[test]
 fn zero_slots_are_left_out_only_with_their_flags() {
-    let (b, m) = frozen_terrain_q10("terrain_grid33.interp6.q10.v26.swv");
+    let (b, m) = frozen_terrain_q10("terrain_grid33.interp6.q10.swv");
     let info = subwave::inspect(&b, &Limits::default()).unwrap();
     let levels: Vec<_> = info.sections.iter().filter(|s| s.kind == "LEVL").collect();
     assert!(!levels.is_empty());
@@ -527,34 +528,27 @@ fn zero_slots_are_left_out_only_with_their_flags() {
             }
         }
     }
-    // The same sections under format 25, whose mode byte has no zero-slot flags.
-    match subwave::decode_slice(&under_version(&b, 25)) {
-        Err(Error::CorruptStream { what, .. }) => {
-            assert!(what.contains("unknown level mode"), "{what}")
-        }
-        other => panic!("expected an unknown mode, got {other:?}"),
-    }
 }
 
 #[test]
 fn every_bit_flip_inside_a_phased_level_is_an_error_or_a_valid_mesh() {
-    // The frozen containers with a level in mode 6 (Catmull-Clark, interp4), mode 7
-    // (sqrt(2)), mode 8 (its weights included), mode 9, mode 9 unbinned (format 22),
-    // mode 6 unbinned on interp6 (format 24), mode 9 with joint rounding (format 25) and
-    // the same with slots 0 and 1 left out (format 26):
+    // The frozen containers with a level in mode 6 (Catmull-Clark), mode 7 (sqrt(2)),
+    // mode 8 (its weights included) unbinned and with slots 0 and 1 left out, mode 8
+    // unbinned, mode 9 unbinned, mode 6 unbinned on interp6, mode 9 with slots 0 and 1
+    // left out, and with joint rounding:
     // every bit of those levels' payloads flipped, checksums made valid, so the phases,
     // shifts, corrections and their bounds meet hostile values.
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/golden/");
     let mut tried = 0;
     for (file, mode) in [
-        ("open_cc2.v18.swv", 6u8),
-        ("prism_sqrt2_5.v18.swv", 7),
-        ("terrain_grid33.interp4.v20.swv", 8),
-        ("terrain_grid33.lazy.q16.v21.swv", 9),
-        ("subdivided_open_cc3.lazy.q12.v22.swv", 0x89),
-        ("subdivided_open_cc3.interp6.q12.v24.swv", 0x86),
-        ("terrain_grid33.interp6.q10.v25.swv", 0x89),
-        ("terrain_grid33.interp6.q10.v26.swv", 0xb9),
+        ("open_cc2.swv", 6u8),
+        ("prism_sqrt2_5.swv", 7),
+        ("terrain_grid33.interp4.swv", 0xb8),
+        ("cube_cc4.bicubic.swv", 0x88),
+        ("subdivided_open_cc3.lazy.q12.swv", 0x89),
+        ("subdivided_open_cc3.interp6.q12.swv", 0x86),
+        ("terrain_grid33.lazy.q16.swv", 0xb9),
+        ("terrain_grid33.interp6.q10.swv", 0xb9),
     ] {
         let b = std::fs::read(format!("{dir}{file}")).unwrap();
         let payloads = level_payloads(&b);
@@ -636,31 +630,13 @@ fn polar_headers_that_do_not_fit_their_base_mesh_are_refused() {
     let c = subwave_container::Container::parse(&bytes, &Limits::default()).unwrap();
     let mut head = c.sections[0].payload.to_vec();
     *head.last_mut().unwrap() = 9;
-    match subwave::Header::read(&head, 0, &Limits::default(), 8) {
+    match subwave::Header::read(&head, 0, &Limits::default()) {
         Err(Error::Unsupported(what)) => assert!(what.contains("disc transform code 9"), "{what}"),
         other => panic!("expected unsupported, got {other:?}"),
     }
-    // The lifted polar wavelet (codes 3 and 4) from version 10 on.
+    // The lifted polar wavelet (codes 3 and 4).
     for code in [3u8, 4] {
         *head.last_mut().unwrap() = code;
-        assert!(subwave::Header::read(&head, 0, &Limits::default(), 10).is_ok());
-        match subwave::Header::read(&head, 0, &Limits::default(), 9) {
-            Err(Error::Unsupported(what)) => {
-                assert!(
-                    what.contains(&format!("disc transform code {code}")),
-                    "{what}"
-                )
-            }
-            other => panic!("expected unsupported, got {other:?}"),
-        }
-    }
-    // Before version 8 family 3 was reserved: the same header read as version 7.
-    let bytes = polar_with_header(|_| {});
-    let c = subwave_container::Container::parse(&bytes, &Limits::default()).unwrap();
-    let head = c.sections[0].payload;
-    assert!(subwave::Header::read(head, 0, &Limits::default(), 8).is_ok());
-    match subwave::Header::read(head, 0, &Limits::default(), 7) {
-        Err(Error::Unsupported(what)) => assert!(what.contains("family code 3"), "{what}"),
-        other => panic!("expected unsupported, got {other:?}"),
+        assert!(subwave::Header::read(&head, 0, &Limits::default()).is_ok());
     }
 }

@@ -1,7 +1,8 @@
 //! Golden vectors: the encoder is deterministic, so the hash of every encoded corpus mesh
-//! is committed (`corpus/golden/hashes.txt`), and frozen containers must keep decoding to
-//! the same mesh. A bitstream change updates them deliberately, with SPEC.md and the
-//! format version: run `SUBWAVE_BLESS=1 cargo test --test golden` and commit the result.
+//! is committed (`corpus/golden/hashes.txt`), and frozen containers (one per family,
+//! transform and level mode, [`FROZEN`]) must decode to their mesh. A bitstream change
+//! updates them deliberately, with SPEC.md and the format version: run
+//! `SUBWAVE_BLESS=1 cargo test --test golden` and commit the result.
 
 mod common;
 
@@ -62,113 +63,101 @@ fn encoded_bytes_match_the_golden_hashes() {
     assert_eq!(committed.lines().count(), now.lines().count());
 }
 
+/// The frozen containers: one per family and transform, and one per level mode and flag
+/// the other tests read (`tests/bad_input.rs`, `cli/tests/cli.rs`). A name's parts say how
+/// it was coded: a transform's name (`bicubic`, `sqrt2-sym`, ...) fixes the transform,
+/// `flat` codes without levels, `disc` (`lifted`) codes the pole discs with the lazy
+/// (lifted) polar wavelet, `vmap` codes every axis's value map, `q16` (`q12`, `q10`)
+/// holds the mesh on Draco's 16-bit (12-bit, 10-bit) grid; the first part names the
+/// corpus mesh it decodes to. Before the first release the decoder reads the current
+/// format only, so a format change blesses them anew (`SUBWAVE_BLESS=1`), deliberately.
+const FROZEN: [&str; 27] = [
+    "cube_cc4.swv",
+    "cube_cc4.flat.swv",
+    "cube_cc4.lazy.swv",
+    "cube_cc4.bilinear.swv",
+    "cube_cc4.bicubic.swv",
+    "cube_cc4.biquintic.swv",
+    "cube_cc4.dyadic-sym.swv",
+    "cube_cc4.interp4.swv",
+    "cube_cc4.interp6.swv",
+    "mixed_cc2.swv",
+    "open_cc2.swv",
+    "two_components_cc2.swv",
+    "unstructured.swv",
+    "prism_sqrt2_5.swv",
+    "prism_sqrt2_5.sqrt2-lazy.swv",
+    "prism_sqrt2_5.ir2w.swv",
+    "prism_sqrt2_5.sqrt2-sym.swv",
+    "sphere_polar3.swv",
+    "sphere_polar3.disc.swv",
+    "sphere_polar3.lifted.swv",
+    "subdivided_cc3.swv",
+    "terrain_grid33.vmap.swv",
+    "terrain_grid33.interp4.swv",
+    "terrain_grid33.lazy.q16.swv",
+    "terrain_grid33.interp6.q10.swv",
+    "subdivided_open_cc3.lazy.q12.swv",
+    "subdivided_open_cc3.interp6.q12.swv",
+];
+
+/// Codes a frozen container as its name says (see [`FROZEN`]).
+fn freeze(swv: &str, m: &subwave::Loaded) -> Vec<u8> {
+    let parts: Vec<&str> = swv.split('.').collect();
+    let has = |p: &str| parts.contains(&p);
+    let transform = parts
+        .iter()
+        .find_map(|p| subwave::Wavelet::from_name(p))
+        .map_or(Default::default(), subwave::TransformChoice::Fixed);
+    let enc = subwave::encode_to_vec(
+        &m.mesh,
+        &m.quantization,
+        &EncodeOptions {
+            keep_order: true,
+            source: m.source(),
+            max_levels: if has("flat") { 0 } else { 16 },
+            disc: if has("disc") {
+                Some(subwave::DiscTransform::LazyRadialFirst)
+            } else if has("lifted") {
+                Some(subwave::DiscTransform::LiftedCircularFirst)
+            } else {
+                None
+            },
+            value_map: has("vmap").then_some(true),
+            // On two threads: the container is the same for every count.
+            threads: 2,
+            transform,
+        },
+    )
+    .unwrap();
+    enc.bytes
+}
+
 #[test]
 fn frozen_containers_still_decode() {
-    // (container, the mesh file it must decode to, written as OBJ)
-    let frozen = [
-        ("mixed_cc2.v1.swv", "mixed_cc2.obj"),
-        ("terrain_grid33.v1.swv", "terrain_grid33.obj"),
-        ("cube_cc4.v2.swv", "cube_cc4.obj"),
-        ("unstructured.v2.swv", "unstructured.obj"),
-        ("cube_cc4.v3.swv", "cube_cc4.obj"),
-        ("terrain_grid33.v3.swv", "terrain_grid33.obj"),
-        ("cube_cc4.v4.swv", "cube_cc4.obj"),
-        ("two_components_cc2.v4.swv", "two_components_cc2.obj"),
-        ("unstructured.v5.swv", "unstructured.obj"),
-        ("cube_cc4.flat.v5.swv", "cube_cc4.obj"),
-        ("prism_sqrt2_5.v6.swv", "prism_sqrt2_5.obj"),
-        ("prism_sqrt2_5.v7.swv", "prism_sqrt2_5.obj"),
-        ("sphere_polar3.v8.swv", "sphere_polar3.obj"),
-        ("sphere_polar3.disc.v8.swv", "sphere_polar3.obj"),
-        ("subdivided_cc3.v9.swv", "subdivided_cc3.obj"),
-        ("sphere_polar3.lifted.v10.swv", "sphere_polar3.obj"),
-        ("terrain_grid33.vmap.v11.swv", "terrain_grid33.obj"),
-        ("cube_cc4.v12.swv", "cube_cc4.obj"),
-        ("terrain_grid33.vmap.v12.swv", "terrain_grid33.obj"),
-        ("cube_cc4.interp4.v13.swv", "cube_cc4.obj"),
-        ("terrain_grid33.interp4.v13.swv", "terrain_grid33.obj"),
-        ("cube_cc4.v14.swv", "cube_cc4.obj"),
-        ("unstructured.v14.swv", "unstructured.obj"),
-        ("sphere_polar3.v14.swv", "sphere_polar3.obj"),
-        ("cube_cc4.v15.swv", "cube_cc4.obj"),
-        ("prism_sqrt2_5.v15.swv", "prism_sqrt2_5.obj"),
-        ("terrain_grid33.interp4.v15.swv", "terrain_grid33.obj"),
-        ("cube_cc4.v16.swv", "cube_cc4.obj"),
-        ("sphere_polar3.v16.swv", "sphere_polar3.obj"),
-        ("prism_sqrt2_5.v16.swv", "prism_sqrt2_5.obj"),
-        ("cube_cc4.v17.swv", "cube_cc4.obj"),
-        ("sphere_polar3.v17.swv", "sphere_polar3.obj"),
-        ("mixed_cc2.v17.swv", "mixed_cc2.obj"),
-        ("prism_sqrt2_5.v18.swv", "prism_sqrt2_5.obj"),
-        ("open_cc2.v18.swv", "open_cc2.obj"),
-        ("cube_cc4.v19.swv", "cube_cc4.obj"),
-        ("terrain_grid33.vmap.v19.swv", "terrain_grid33.obj"),
-        ("terrain_grid33.interp4.v20.swv", "terrain_grid33.obj"),
-        ("terrain_grid33.lazy.q16.v21.swv", "terrain_grid33.obj"),
-        (
-            "subdivided_open_cc3.lazy.q12.v22.swv",
-            "subdivided_open_cc3.obj",
-        ),
-        ("terrain_grid33.q16.v23.swv", "terrain_grid33.obj"),
-        (
-            "subdivided_open_cc3.interp6.q12.v24.swv",
-            "subdivided_open_cc3.obj",
-        ),
-        ("terrain_grid33.interp6.q10.v25.swv", "terrain_grid33.obj"),
-        ("terrain_grid33.interp6.q10.v26.swv", "terrain_grid33.obj"),
-    ];
-    for (swv, obj) in frozen {
+    let bless = std::env::var_os("SUBWAVE_BLESS").is_some();
+    for swv in FROZEN {
+        let obj = format!("{}.obj", swv.split('.').next().unwrap());
         let path = golden_dir().join(swv);
         let source = std::fs::read(
             Path::new(env!("CARGO_MANIFEST_DIR"))
                 .join("corpus")
-                .join(obj),
+                .join(&obj),
         )
         .unwrap();
-        // A ".q16." (".q12.", ".q10.") container holds the mesh on Draco's 16-bit
-        // (12-bit, 10-bit) grid: it decodes to that.
         let bits = swv
             .split('.')
             .find_map(|p| p.strip_prefix('q')?.parse::<u8>().ok());
         let m = subwave::load(&source, bits).unwrap();
-        if !path.exists() && std::env::var_os("SUBWAVE_BLESS").is_some() {
-            // A ".flat." container is coded without levels (the flat path), a ".disc."
-            // one with the lazy polar wavelet in its discs (radial first), a ".lifted."
-            // one with the lifted polar wavelet (circular first), a ".vmap." one with
-            // every axis's value map, an ".interp4." (".interp6.") one with the interp4
-            // (interp6) transform, a ".lazy." one with the lazy transform.
-            let enc = subwave::encode_to_vec(
-                &m.mesh,
-                &m.quantization,
-                &EncodeOptions {
-                    keep_order: true,
-                    source: m.source(),
-                    max_levels: if swv.contains(".flat.") { 0 } else { 16 },
-                    disc: if swv.contains(".disc.") {
-                        Some(subwave::DiscTransform::LazyRadialFirst)
-                    } else if swv.contains(".lifted.") {
-                        Some(subwave::DiscTransform::LiftedCircularFirst)
-                    } else {
-                        None
-                    },
-                    value_map: swv.contains(".vmap.").then_some(true),
-                    // On two threads: the container is the same for every count.
-                    threads: 2,
-                    transform: if swv.contains(".interp4.") {
-                        subwave::TransformChoice::Fixed(subwave::Wavelet::Interp4)
-                    } else if swv.contains(".interp6.") {
-                        subwave::TransformChoice::Fixed(subwave::Wavelet::Interp6)
-                    } else if swv.contains(".lazy.") {
-                        subwave::TransformChoice::Fixed(subwave::Wavelet::Lazy)
-                    } else {
-                        Default::default()
-                    },
-                },
-            )
-            .unwrap();
-            std::fs::write(&path, enc.bytes).unwrap();
+        if bless {
+            std::fs::write(&path, freeze(swv, &m)).unwrap();
         }
         let bytes = std::fs::read(&path).unwrap_or_else(|_| panic!("missing frozen {swv}"));
+        // Frozen, and still what the encoder writes: a change of either is deliberate.
+        assert!(
+            bytes == freeze(swv, &m),
+            "{swv}: the encoder writes other bytes now"
+        );
         let dec = subwave::decode_slice(&bytes).unwrap();
         let mut out = Vec::new();
         subwave::write_mesh(&mut out, &dec.mesh, &dec.quantization, Format::Obj).unwrap();
@@ -181,5 +170,18 @@ fn frozen_containers_still_decode() {
             }
         };
         assert!(out == want, "{swv} no longer decodes to {obj}");
+    }
+}
+
+/// Every file in `corpus/golden/` is a frozen container of [`FROZEN`] or the hashes: none
+/// left behind by an older format.
+#[test]
+fn no_stale_frozen_containers() {
+    for entry in std::fs::read_dir(golden_dir()).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().to_string();
+        assert!(
+            name == "hashes.txt" || FROZEN.contains(&name.as_str()),
+            "{name} is not a frozen container of this format"
+        );
     }
 }

@@ -232,12 +232,12 @@ fn bicubic_coarse_levels_are_rescaled_to_the_geometry() {
 
 /// A smooth height field `height(x, y)` over a 4 x 4 open grid refined `levels` times,
 /// coded with `better` and with `worse`: both decode exactly, `better` is smaller, and its
-/// transform code (`code`) is refused as unsupported before format `since`.
-fn codes_smaller_and_is_new_in(
+/// header names it by its transform code `code`.
+fn codes_smaller(
     levels: u32,
     height: impl Fn(f64, f64) -> f64,
     (better, worse): (Wavelet, Wavelet),
-    (code, since): (u8, u16),
+    code: u8,
 ) {
     let mut p = subwave_corpus::open_grid(4, 4).refined(levels);
     for v in &mut p.positions {
@@ -272,36 +272,32 @@ fn codes_smaller_and_is_new_in(
     );
     let head = b.header.write();
     let limits = subwave::Limits::default();
-    assert!(subwave::Header::read(&head, 0, &limits, since).is_ok());
-    match subwave::Header::read(&head, 0, &limits, since - 1) {
-        Err(subwave::Error::Unsupported(what)) => {
-            assert!(what.contains(&format!("transform code {code}")), "{what}")
-        }
-        other => panic!("expected unsupported, got {other:?}"),
-    }
+    let read = subwave::Header::read(&head, 0, &limits).unwrap();
+    assert_eq!(read.transform, subwave::Transform::Wavelet(better));
+    assert_eq!(better.code(), code);
 }
 
 #[test]
-fn interp4_codes_smooth_open_grids_smaller_than_lazy_and_is_new_in_version_13() {
+fn interp4_codes_smooth_open_grids_smaller_than_lazy() {
     // A cubic height field: the 4-point rule's details are zero wherever its stencil is
     // complete, so interp4 codes it smaller than the lazy transform.
-    codes_smaller_and_is_new_in(
+    codes_smaller(
         3,
         |x, y| x * x * x - 2.0 * x * y * y + 0.5 * y,
         (Wavelet::Interp4, Wavelet::Lazy),
-        (10, 13),
+        10,
     );
 }
 
 #[test]
-fn interp6_codes_smooth_open_grids_smaller_than_interp4_and_is_new_in_version_24() {
+fn interp6_codes_smooth_open_grids_smaller_than_interp4() {
     // A quintic height field: the 6-point rule's details are zero wherever its stencil
     // is complete, so interp6 codes it smaller than interp4.
-    codes_smaller_and_is_new_in(
+    codes_smaller(
         4,
         |x, y| x.powi(5) - 2.0 * x * x * y.powi(3) + 0.5 * y.powi(4) - x,
         (Wavelet::Interp6, Wavelet::Interp4),
-        (11, 24),
+        11,
     );
 }
 

@@ -174,7 +174,7 @@ fn small_containers_stay_within_64_mib_and_one_second() {
     // The BASE section's length, a two-byte varint (200), becomes 2^32 - 1.
     let at = subwave_container::PREAMBLE_LEN
         + head.len()
-        + subwave_container::section_overhead(subwave::FORMAT_VERSION, head.len())
+        + subwave_container::section_overhead(head.len())
         + 1;
     assert_eq!(long[at..at + 2], [0xc8, 0x01]);
     long.splice(at..at + 2, [0xff, 0xff, 0xff, 0xff, 0x0f]);

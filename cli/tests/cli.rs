@@ -156,11 +156,11 @@ fn info_and_verify_json_have_their_keys() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("bits per vertex"));
 }
 
-/// A level in mode 9 with joint rounding (format 25) is named so by `info`, in text and
+/// A level in mode 9 with joint rounding is named so by `info`, in text and
 /// in JSON; other level sections say `"joint": false`.
 #[test]
 fn info_names_joint_rounding() {
-    let swv = corpus("golden/terrain_grid33.interp6.q10.v25.swv");
+    let swv = corpus("golden/terrain_grid33.interp6.q10.swv");
     let (levels, text) = info_levels(&swv);
     let joint: Vec<_> = levels.iter().filter(|s| s["joint"] == true).collect();
     assert_eq!(joint.len(), 1, "{levels:?}");
@@ -169,15 +169,18 @@ fn info_names_joint_rounding() {
         levels.iter().all(|s| s.get("joint").is_some()),
         "{levels:?}"
     );
-    assert!(text.contains("(mode 9 joint, unbinned)"), "{text}");
+    assert!(
+        text.contains("(mode 9 joint, unbinned, zero slots 0 1)"),
+        "{text}"
+    );
 }
 
-/// Format 26's zero slots: `info` lists a level's left-out slots, in text and in JSON
-/// (`"zero_slots": []` where none are, as in a format 25 container).
+/// Zero slots: `info` lists a level's left-out slots, in text and in JSON
+/// (`"zero_slots": []` where none are).
 #[test]
 fn info_lists_zero_slots() {
     let sections = |file: &str| info_levels(&corpus(file));
-    let (levels, text) = sections("golden/terrain_grid33.interp6.q10.v26.swv");
+    let (levels, text) = sections("golden/terrain_grid33.interp6.q10.swv");
     assert!(!levels.is_empty());
     for s in &levels {
         assert_eq!(s["zero_slots"], serde_json::json!([0, 1]), "{s}");
@@ -186,7 +189,7 @@ fn info_lists_zero_slots() {
         text.contains("(mode 9 joint, unbinned, zero slots 0 1)"),
         "{text}"
     );
-    let (levels, text) = sections("golden/terrain_grid33.interp6.q10.v25.swv");
+    let (levels, text) = sections("golden/cube_cc4.swv");
     for s in &levels {
         assert_eq!(s["zero_slots"], serde_json::json!([]), "{s}");
     }

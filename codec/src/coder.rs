@@ -19,13 +19,10 @@ const ONE: u32 = 1 << PRECISION;
 const INCREMENT: u32 = 24;
 /// Counts are halved when their sum passes this.
 const MAX_TOTAL: u32 = 1 << 16;
-/// Format 12 on: the quantised table is rebuilt after 1, 2, 4, ... symbols, then every
-/// 512; formats 1 to 11 start at 8 (SPEC.md 4.2).
+/// The quantised table is rebuilt after 1, 2, 4, ... symbols, then every 512 (SPEC.md
+/// 4.2).
 const FIRST_PERIOD: u32 = 1;
-const LEGACY_FIRST_PERIOD: u32 = 8;
 const MAX_PERIOD: u32 = 512;
-/// First format whose models start with [`FIRST_PERIOD`].
-pub const FAST_START_VERSION: u16 = 12;
 
 /// An adaptive distribution over `0..n` (SPEC.md 4.2).
 #[derive(Debug, Clone)]
@@ -50,21 +47,11 @@ const LUT_LEN: usize = 64;
 const LUT_SHIFT: u32 = PRECISION as u32 - 6;
 
 impl AdaptiveModel {
-    /// A model over `n` symbols (2 <= n <= 4096), all counts 1, as the current format
-    /// defines it.
+    /// A model over `n` symbols (2 <= n <= 4096), all counts 1; its first rebuild comes
+    /// after one symbol.
     pub fn new(n: usize) -> Self {
-        Self::for_version(n, FAST_START_VERSION)
-    }
-
-    /// A model over `n` symbols as format `version` defines it: the first rebuild comes
-    /// after one symbol from format 12 on, after eight before.
-    pub fn for_version(n: usize, version: u16) -> Self {
         assert!((2..=4096).contains(&n), "alphabet size {n} out of range");
-        let first = if version >= FAST_START_VERSION {
-            FIRST_PERIOD
-        } else {
-            LEGACY_FIRST_PERIOD
-        };
+        let first = FIRST_PERIOD;
         let mut m = AdaptiveModel {
             counts: vec![1; n],
             total: n as u32,
@@ -78,8 +65,8 @@ impl AdaptiveModel {
         m
     }
 
-    /// Keeps what the model has learnt as the prior of a new stretch of data (format 12
-    /// on, SPEC.md 4.2): counts are halved (rounding up) until their sum is at most
+    /// Keeps what the model has learnt as the prior of a new stretch of data (SPEC.md
+    /// 4.2): counts are halved (rounding up) until their sum is at most
     /// `max_total`, the table is rebuilt and the rebuild period starts again at 1.
     pub fn reseed(&mut self, max_total: u32) {
         while self.total > max_total {
@@ -279,23 +266,13 @@ impl DecoderModel<PRECISION> for Uniform {
 /// up to 2^62, plus class 0 for zero.
 pub const INT_CLASSES: usize = 64;
 
-/// Codes signed integers (SPEC.md 4.4). Format 4 on: one adaptive symbol for the
-/// magnitude class, sign and the bit below the leading one together, then the remaining
-/// bits raw. Formats 1 to 3: the class, the sign and that bit as three adaptive symbols.
+/// Codes signed integers (SPEC.md 4.4): one adaptive symbol for the magnitude class,
+/// sign and the bit below the leading one together, then the remaining bits raw; classes
+/// above [`JOINT_MAX_CLASS`] escape to a model of the class.
 #[derive(Debug, Clone)]
-pub struct IntModel(IntKind);
-
-#[derive(Debug, Clone)]
-enum IntKind {
-    Split {
-        class: AdaptiveModel,
-        sign: AdaptiveModel,
-        top: Vec<AdaptiveModel>,
-    },
-    Joint {
-        sym: AdaptiveModel,
-        big: AdaptiveModel,
-    },
+pub struct IntModel {
+    sym: AdaptiveModel,
+    big: AdaptiveModel,
 }
 
 /// Largest class the joint symbol holds; larger ones escape.
@@ -312,55 +289,29 @@ impl Default for IntModel {
 }
 
 impl IntModel {
-    /// A fresh model of the current format.
+    /// A fresh model.
     pub fn new() -> Self {
-        Self::for_version(FAST_START_VERSION)
-    }
-
-    /// A fresh model as format `version` defines it.
-    pub fn for_version(version: u16) -> Self {
-        if version >= 4 {
-            IntModel(IntKind::Joint {
-                sym: AdaptiveModel::for_version(JOINT_SYMBOLS, version),
-                big: AdaptiveModel::for_version(INT_CLASSES, version),
-            })
-        } else {
-            IntModel(IntKind::Split {
-                class: AdaptiveModel::for_version(INT_CLASSES, version),
-                sign: AdaptiveModel::for_version(2, version),
-                top: (0..INT_CLASSES)
-                    .map(|_| AdaptiveModel::for_version(2, version))
-                    .collect(),
-            })
+        IntModel {
+            sym: AdaptiveModel::new(JOINT_SYMBOLS),
+            big: AdaptiveModel::new(INT_CLASSES),
         }
     }
 
-    /// Counts `v` as if it had been coded with the model (joint models only; the escaped
-    /// class model counts the class), without rebuilding the tables: for a model read
-    /// only through [`IntModel::reseed`] (format 16's shared models, SPEC.md 10.1).
+    /// Counts `v` as if it had been coded with the model (the escaped class model counts
+    /// the class), without rebuilding the tables: for a model read only through
+    /// [`IntModel::reseed`] (the shared models, SPEC.md 10.1).
     pub fn observe(&mut self, v: i64) {
-        if let IntKind::Joint { sym, big } = &mut self.0 {
-            let (s, c) = joint_symbol(v);
-            sym.count(s);
-            if s == ESCAPE_SYMBOL {
-                big.count(c);
-            }
+        let (s, c) = joint_symbol(v);
+        self.sym.count(s);
+        if s == ESCAPE_SYMBOL {
+            self.big.count(c);
         }
     }
 
     /// [`AdaptiveModel::reseed`] on every model inside.
     pub fn reseed(&mut self, max_total: u32) {
-        match &mut self.0 {
-            IntKind::Joint { sym, big } => {
-                sym.reseed(max_total);
-                big.reseed(max_total);
-            }
-            IntKind::Split { class, sign, top } => {
-                class.reseed(max_total);
-                sign.reseed(max_total);
-                top.iter_mut().for_each(|t| t.reseed(max_total));
-            }
-        }
+        self.sym.reseed(max_total);
+        self.big.reseed(max_total);
     }
 }
 
@@ -489,28 +440,14 @@ impl Encoder {
         let c = class_of(v);
         let neg = (v < 0) as usize;
         let a = v.unsigned_abs();
-        match &mut m.0 {
-            IntKind::Joint { sym, big } => {
-                let (s, _) = joint_symbol(v);
-                self.symbol(sym, s);
-                if s == ESCAPE_SYMBOL {
-                    // Class, sign, then every bit below the leading one raw.
-                    self.symbol(big, c);
-                    self.bits(neg as u64, 1);
-                    self.bits(a, c as u32 - 1);
-                    return;
-                }
-            }
-            IntKind::Split { class, sign, top } => {
-                self.symbol(class, c);
-                if c == 0 {
-                    return;
-                }
-                self.symbol(sign, neg);
-                if c >= 2 {
-                    self.symbol(&mut top[c], ((a >> (c - 2)) & 1) as usize);
-                }
-            }
+        let (s, _) = joint_symbol(v);
+        self.symbol(&mut m.sym, s);
+        if s == ESCAPE_SYMBOL {
+            // Class, sign, then every bit below the leading one raw.
+            self.symbol(&mut m.big, c);
+            self.bits(neg as u64, 1);
+            self.bits(a, c as u32 - 1);
+            return;
         }
         if c >= 3 {
             self.bits(a, c as u32 - 2);
@@ -523,21 +460,11 @@ impl Encoder {
         self.inner.bulk().len() * 4
     }
 
-    /// Finishes the stream as the current format writes it ([`Encoder::finish_for`]).
+    /// Finishes the stream (SPEC.md 4.1): big-endian words, ended by the fewest bytes
+    /// that pin the final range: the top bytes of the multiple of the largest power 2^t
+    /// (t = 64, 56, 48, 40, 32) in `lower..lower + range`, the bytes after them (zeros)
+    /// left out.
     pub fn finish(self) -> Vec<u8> {
-        self.finish_for(subwave_container::FORMAT_VERSION)
-    }
-
-    /// Finishes the stream as format `version` stores it (SPEC.md 4.1). Before
-    /// [`TIGHT_VERSION`]: little-endian 32-bit words, constriction's sealing words last.
-    /// From it: big-endian words, ended by the fewest bytes that pin the final range: the
-    /// top bytes of the multiple of the largest power 2^t (t = 64, 56, 48, 40, 32) in
-    /// `lower..lower + range`, the bytes after them (zeros) left out.
-    pub fn finish_for(self, version: u16) -> Vec<u8> {
-        if version < TIGHT_VERSION {
-            let words = self.inner.into_compressed().unwrap_or_default();
-            return words.iter().flat_map(|w| w.to_le_bytes()).collect();
-        }
         let (bulk, state, situation) = self.inner.into_raw_parts();
         let mut out: Vec<u8> = bulk.iter().flat_map(|w| w.to_be_bytes()).collect();
         let (lower, range) = (state.lower() as u128, state.range().get() as u128);
@@ -568,10 +495,6 @@ impl Encoder {
         out
     }
 }
-
-/// First format whose streams are big-endian words and may end inside a word, the
-/// missing low bytes reading as zeros (SPEC.md 4.1).
-pub const TIGHT_VERSION: u16 = 23;
 
 /// A decoder may read at most this many words past the end of a stream: it reads two
 /// words to start and one per renormalisation, the encoder writes one per
@@ -618,30 +541,17 @@ pub struct Decoder {
 }
 
 impl Decoder {
-    /// Reads a stream from a section payload of format `version` (SPEC.md 4.1).
-    pub fn new(bytes: &[u8], section: &'static str, version: u16) -> Result<Self> {
-        let words: Vec<u32> = if version >= TIGHT_VERSION {
-            // Big-endian words; a last partial word's missing low bytes are zeros.
-            bytes
-                .chunks(4)
-                .map(|c| {
-                    let mut w = [0u8; 4];
-                    w[..c.len()].copy_from_slice(c);
-                    u32::from_be_bytes(w)
-                })
-                .collect()
-        } else {
-            if bytes.len() % 4 != 0 {
-                return Err(Error::corrupt(
-                    section,
-                    "stream length is not a multiple of 4",
-                ));
-            }
-            bytes
-                .chunks_exact(4)
-                .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-                .collect()
-        };
+    /// Reads a stream from a section payload (SPEC.md 4.1): big-endian words; a last
+    /// partial word's missing low bytes are zeros.
+    pub fn new(bytes: &[u8], section: &'static str) -> Result<Self> {
+        let words: Vec<u32> = bytes
+            .chunks(4)
+            .map(|c| {
+                let mut w = [0u8; 4];
+                w[..c.len()].copy_from_slice(c);
+                u32::from_be_bytes(w)
+            })
+            .collect();
         let inner = RangeDecoder::with_backend(Words {
             words,
             pos: 0,
@@ -714,40 +624,22 @@ impl Decoder {
 
     /// Decodes what [`Encoder::int`] wrote.
     pub fn int(&mut self, m: &mut IntModel) -> Result<i64> {
-        let (c, neg, top) = match &mut m.0 {
-            IntKind::Joint { sym, big } => {
-                let s = self.symbol(sym)?;
-                match s {
-                    0 => return Ok(0),
-                    1 | 2 => return Ok(if s == 2 { -1 } else { 1 }),
-                    ESCAPE_SYMBOL => {
-                        let c = self.symbol(big)?;
-                        if c <= JOINT_MAX_CLASS || c > 62 {
-                            return Err(Error::corrupt(self.section, "bad escaped integer class"));
-                        }
-                        let neg = self.bits(1)? == 1;
-                        let v = ((1u64 << (c - 1)) | self.bits(c as u32 - 1)?) as i64;
-                        return Ok(if neg { -v } else { v });
-                    }
-                    _ => {
-                        let t = s - 3;
-                        (t / 4 + 2, t & 2 != 0, (t & 1) as u64)
-                    }
+        let s = self.symbol(&mut m.sym)?;
+        let (c, neg, top) = match s {
+            0 => return Ok(0),
+            1 | 2 => return Ok(if s == 2 { -1 } else { 1 }),
+            ESCAPE_SYMBOL => {
+                let c = self.symbol(&mut m.big)?;
+                if c <= JOINT_MAX_CLASS || c > 62 {
+                    return Err(Error::corrupt(self.section, "bad escaped integer class"));
                 }
+                let neg = self.bits(1)? == 1;
+                let v = ((1u64 << (c - 1)) | self.bits(c as u32 - 1)?) as i64;
+                return Ok(if neg { -v } else { v });
             }
-            IntKind::Split { class, sign, top } => {
-                let c = self.symbol(class)?;
-                if c == 0 {
-                    return Ok(0);
-                }
-                if c > 62 {
-                    return Err(Error::corrupt(self.section, "integer too large"));
-                }
-                let neg = self.symbol(sign)? == 1;
-                if c == 1 {
-                    return Ok(if neg { -1 } else { 1 });
-                }
-                (c, neg, self.symbol(&mut top[c])? as u64)
+            _ => {
+                let t = s - 3;
+                (t / 4 + 2, t & 2 != 0, (t & 1) as u64)
             }
         };
         let a = ((2 | top) << (c - 2)) | self.bits(c as u32 - 2)?;
@@ -812,20 +704,12 @@ mod tests {
     }
 
     #[test]
-    fn format_12_models_learn_from_the_first_symbol() {
-        let mut fast = AdaptiveModel::for_version(10, 12);
-        let mut slow = AdaptiveModel::for_version(10, 11);
-        let uniform = width(&fast, 3);
-        assert_eq!(uniform, width(&slow, 3));
-        fast.update(3);
-        slow.update(3);
-        // One symbol: the format-12 table has learnt it, the format-11 one not yet.
-        assert!(width(&fast, 3) > 4 * uniform, "{}", width(&fast, 3));
-        assert_eq!(width(&slow, 3), uniform);
-        for _ in 0..7 {
-            slow.update(3);
-        }
-        assert!(width(&slow, 3) > 4 * uniform);
+    fn models_learn_from_the_first_symbol() {
+        let mut m = AdaptiveModel::new(10);
+        let uniform = width(&m, 3);
+        m.update(3);
+        // One symbol: the table has been rebuilt and has learnt it.
+        assert!(width(&m, 3) > 4 * uniform, "{}", width(&m, 3));
     }
 
     #[test]
@@ -875,8 +759,8 @@ mod tests {
 
     #[test]
     fn tight_tails_save_bytes() {
-        // 400 streams of 0 to 399 symbols from a pseudo-random source: the format 23
-        // tail saves on average between 1 and 4 bytes of constriction's sealing words.
+        // 400 streams of 0 to 399 symbols from a pseudo-random source: the tight tail
+        // saves on average between 1 and 4 bytes of constriction's sealing words.
         let (mut legacy, mut tight) = (0, 0);
         let stream = |n: u64| {
             let (mut e, mut m, mut x) = (Encoder::new(), AdaptiveModel::new(20), n);
@@ -889,8 +773,8 @@ mod tests {
             e
         };
         for n in 0..400 {
-            let saved = stream(n).finish_for(TIGHT_VERSION - 1).len();
-            let ours = stream(n).finish_for(TIGHT_VERSION);
+            let saved = 4 * stream(n).inner.into_compressed().unwrap_or_default().len();
+            let ours = stream(n).finish();
             assert!(ours.len() <= saved, "{n} symbols: {} > {saved}", ours.len());
             legacy += saved;
             tight += ours.len();
@@ -907,38 +791,26 @@ mod tests {
             small in proptest::collection::vec(-40i64..40, 0..300),
             unis in proptest::collection::vec((1u64..=1 << 32, proptest::num::u64::ANY), 0..50),
         ) {
-            // Both stream layouts: little-endian whole words, and the tight big-endian tail.
-            let mut sizes = Vec::new();
-            for version in [TIGHT_VERSION - 1, TIGHT_VERSION] {
-                let mut e = Encoder::new();
-                let mut m = AdaptiveModel::new(37);
-                let mut im = IntModel::new();
-                let mut legacy = IntModel::for_version(3);
-                for &v in &small { e.int(&mut legacy, v); }
-                for &s in &syms { e.symbol(&mut m, s); }
-                for &v in ints.iter().chain(&small) { e.int(&mut im, v); }
-                for &(n, r) in &unis { e.uniform(r % n, n); }
-                let bytes = e.finish_for(version);
-                sizes.push(bytes.len());
-                let mut d = Decoder::new(&bytes, "test", version).unwrap();
-                let mut m = AdaptiveModel::new(37);
-                let mut im = IntModel::new();
-                let mut legacy = IntModel::for_version(3);
-                for &v in &small { prop_assert_eq!(d.int(&mut legacy).unwrap(), v); }
-                for &s in &syms { prop_assert_eq!(d.symbol(&mut m).unwrap(), s); }
-                for &v in ints.iter().chain(&small) { prop_assert_eq!(d.int(&mut im).unwrap(), v); }
-                for &(n, r) in &unis { prop_assert_eq!(d.uniform(n).unwrap(), r % n); }
-            }
-            // The tight tail is never longer.
-            prop_assert!(sizes[1] <= sizes[0], "{sizes:?}");
+            let mut e = Encoder::new();
+            let mut m = AdaptiveModel::new(37);
+            let mut im = IntModel::new();
+            for &s in &syms { e.symbol(&mut m, s); }
+            for &v in ints.iter().chain(&small) { e.int(&mut im, v); }
+            for &(n, r) in &unis { e.uniform(r % n, n); }
+            let bytes = e.finish();
+            let mut d = Decoder::new(&bytes, "test").unwrap();
+            let mut m = AdaptiveModel::new(37);
+            let mut im = IntModel::new();
+            for &s in &syms { prop_assert_eq!(d.symbol(&mut m).unwrap(), s); }
+            for &v in ints.iter().chain(&small) { prop_assert_eq!(d.int(&mut im).unwrap(), v); }
+            for &(n, r) in &unis { prop_assert_eq!(d.uniform(n).unwrap(), r % n); }
         }
 
         #[test]
         fn garbage_never_panics(
             bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..160),
-            version in 22u16..=23,
         ) {
-            if let Ok(mut d) = Decoder::new(&bytes, "test", version) {
+            if let Ok(mut d) = Decoder::new(&bytes, "test") {
                 let mut m = AdaptiveModel::new(5);
                 let mut im = IntModel::new();
                 for _ in 0..200 {

@@ -329,16 +329,9 @@ fn predict(p: i64, bits: u8) -> (i64, i64, usize) {
 
 /// Codes the finest values `fine` against the integer subdivision `pred` (both per
 /// axis, `bits` extra bits in `pred`): the section of SPEC.md 10.4.
-pub fn encode_residuals(
-    pred: &[Vec<i64>; 3],
-    fine: &[Vec<i64>; 3],
-    bits: u8,
-    version: u16,
-) -> Vec<u8> {
+pub fn encode_residuals(pred: &[Vec<i64>; 3], fine: &[Vec<i64>; 3], bits: u8) -> Vec<u8> {
     let mut enc = Encoder::new();
-    let mut models: Vec<IntModel> = (0..3 * BUCKETS)
-        .map(|_| IntModel::for_version(version))
-        .collect();
+    let mut models: Vec<IntModel> = (0..3 * BUCKETS).map(|_| IntModel::new()).collect();
     for i in 0..fine[0].len() {
         for k in 0..3 {
             let (q, sign, class) = predict(pred[k][i], bits);
@@ -346,19 +339,13 @@ pub fn encode_residuals(
         }
     }
     let mut out = vec![RESIDUAL_MODE];
-    out.extend(enc.finish_for(version));
+    out.extend(enc.finish());
     out
 }
 
 /// Decodes what [`encode_residuals`] wrote: `x` holds the subdivision at `bits` extra
 /// bits and gets the finest values, each checked against `bound`.
-pub fn decode_residuals(
-    payload: &[u8],
-    x: &mut [Vec<i64>; 3],
-    bits: u8,
-    bound: i64,
-    version: u16,
-) -> Result<()> {
+pub fn decode_residuals(payload: &[u8], x: &mut [Vec<i64>; 3], bits: u8, bound: i64) -> Result<()> {
     let n = x[0].len();
     // Density bound (SPEC.md 10.4): a vertex's three residuals cost over 1/2053 byte.
     if n as u64 > 2560 * (payload.len() as u64 + 8) {
@@ -381,10 +368,8 @@ pub fn decode_residuals(
         }
         None => return Err(Error::corrupt("LEVL", "empty residual section")),
     };
-    let mut dec = Decoder::new(payload, "LEVL", version)?;
-    let mut models: Vec<IntModel> = (0..3 * BUCKETS)
-        .map(|_| IntModel::for_version(version))
-        .collect();
+    let mut dec = Decoder::new(payload, "LEVL")?;
+    let mut models: Vec<IntModel> = (0..3 * BUCKETS).map(|_| IntModel::new()).collect();
     for i in 0..n {
         for k in 0..3 {
             let (q, sign, class) = predict(x[k][i], bits);
@@ -575,9 +560,9 @@ mod tests {
                 .map(|(&p, n)| ((p + 128) >> 8) + n % 5)
                 .collect()
         });
-        let bytes = encode_residuals(&pred, &fine, 8, 12);
+        let bytes = encode_residuals(&pred, &fine, 8);
         let mut x = pred.clone();
-        decode_residuals(&bytes, &mut x, 8, 1 << 44, 12).unwrap();
+        decode_residuals(&bytes, &mut x, 8, 1 << 44).unwrap();
         assert_eq!(x, fine);
     }
 }

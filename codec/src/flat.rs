@@ -169,17 +169,17 @@ struct ConnModels {
 }
 
 impl ConnModels {
-    fn new(version: u16) -> Self {
+    fn new() -> Self {
         ConnModels {
             degree: (0..DEGREE_SYMBOLS)
-                .map(|_| AdaptiveModel::for_version(DEGREE_SYMBOLS, version))
+                .map(|_| AdaptiveModel::new(DEGREE_SYMBOLS))
                 .collect(),
-            big_degree: IntModel::for_version(version),
+            big_degree: IntModel::new(),
             corner: [
-                AdaptiveModel::for_version(CORNER_SYMBOLS, version),
-                AdaptiveModel::for_version(CORNER_SYMBOLS, version),
+                AdaptiveModel::new(CORNER_SYMBOLS),
+                AdaptiveModel::new(CORNER_SYMBOLS),
             ],
-            distance: IntModel::for_version(version),
+            distance: IntModel::new(),
         }
     }
 }
@@ -192,11 +192,9 @@ struct PosModels {
 }
 
 impl PosModels {
-    fn new(version: u16) -> Self {
+    fn new() -> Self {
         PosModels {
-            res: (0..KINDS * 3 * 3)
-                .map(|_| IntModel::for_version(version))
-                .collect(),
+            res: (0..KINDS * 3 * 3).map(|_| IntModel::new()).collect(),
         }
     }
 
@@ -277,7 +275,7 @@ fn predict(
     v: usize,
     first: (u32, u32),
     tri: &HashMap<(u32, u32), [u32; 2]>,
-    all: Option<&HashMap<(u32, u32), [u32; 2]>>,
+    all: &HashMap<(u32, u32), [u32; 2]>,
 ) -> (usize, [i64; 3]) {
     let fallback = if v > 0 { pos[v - 1] } else { [0; 3] };
     if first.0 == u32::MAX {
@@ -296,7 +294,7 @@ fn predict(
         );
         return (0, [0, 1, 2].map(|k| a[k] + b[k] - o[k]));
     }
-    if let (4, Some(all)) = (n, all) {
+    if n == 4 {
         let p = if known(at(1)) && known(at(2)) && !known(at(3)) {
             strip(mesh, pos, v, first.0, at(1), at(2), all)
         } else if known(at(3)) && known(at(2)) && !known(at(1)) {
@@ -340,43 +338,21 @@ fn predict(
     (3, fallback)
 }
 
-/// Codes a mesh already in canonical order (see [`canonical_order`]) as format
-/// `version` defines it.
-pub fn encode(mesh: &Mesh, version: u16) -> Vec<u8> {
+/// Codes a mesh already in canonical order (see [`canonical_order`]).
+pub fn encode(mesh: &Mesh) -> Vec<u8> {
     let mut e = Encoder::new();
-    if version >= GATES_VERSION {
-        encode_gated(&mut e, mesh, version);
-    } else {
-        let mut m = ConnModels::new(version);
-        let mut mru = Mru::new();
-        let mut next_new = 0u32;
-        let mut prev_deg = 0usize;
-        for face in mesh.iter_faces() {
-            let d = face.len();
-            let sym = degree_symbol(d);
-            e.symbol(&mut m.degree[prev_deg], sym);
-            if sym == DEGREE_SYMBOLS - 1 {
-                e.int(&mut m.big_degree, (d - 3 - (DEGREE_SYMBOLS - 1)) as i64);
-            }
-            prev_deg = sym;
-            for (c, &v) in face.iter().enumerate() {
-                let at = mru.find(v);
-                put_named(&mut e, &mut m, (c > 0) as usize, v, at, &mut next_new);
-                mru.touch(v, at);
-            }
-        }
-    }
-    encode_positions(&mut e, mesh, version);
-    e.finish_for(version)
+    encode_gated(&mut e, mesh);
+    encode_positions(&mut e, mesh);
+    e.finish()
 }
 
-fn encode_positions(e: &mut Encoder, mesh: &Mesh, version: u16) {
+fn encode_positions(e: &mut Encoder, mesh: &Mesh) {
     let first = first_uses(mesh);
     let tri = edge_table(mesh, true);
-    let all = (version >= 5).then(|| edge_table(mesh, false));
-    let mut m = PosModels::new(version);
+    let all = edge_table(mesh, false);
+    let mut m = PosModels::new();
     for v in 0..mesh.vertex_count() {
-        let (kind, p) = predict(mesh, &mesh.positions, v, first[v], &tri, all.as_ref());
+        let (kind, p) = predict(mesh, &mesh.positions, v, first[v], &tri, &all);
         let mut prev_class = 0;
         for k in 0..3 {
             let r = mesh.positions[v][k] - p[k];
@@ -395,16 +371,10 @@ pub fn decode(
     faces: u64,
     corners: u64,
     max_abs: i64,
-    version: u16,
 ) -> Result<Mesh> {
     // Density bounds (SPEC.md 2.6): no conforming stream carries more per byte.
     let room = payload.len() as u64 + 8;
-    // Gated faces (format 14 on) can cost less than named ones (SPEC.md 2.6).
-    let (per_face, per_corner) = if version >= GATES_VERSION {
-        (32768, 131072)
-    } else {
-        (4096, 16384)
-    };
+    let (per_face, per_corner) = (32768, 131072);
     if vertices > 2048 * room || faces > per_face * room || corners > per_corner * room {
         return Err(Error::corrupt(
             SECTION,
@@ -414,26 +384,20 @@ pub fn decode(
             ),
         ));
     }
-    let mut d = Decoder::new(payload, SECTION, version)?;
-    let mut mesh = decode_faces(&mut d, vertices, faces, corners, version)?;
-    mesh.positions = decode_positions(&mut d, &mesh, vertices as usize, max_abs, version)?;
+    let mut d = Decoder::new(payload, SECTION)?;
+    let mut mesh = decode_faces(&mut d, vertices, faces, corners)?;
+    mesh.positions = decode_positions(&mut d, &mesh, vertices as usize, max_abs)?;
     Ok(mesh)
 }
 
-fn decode_positions(
-    d: &mut Decoder,
-    topo: &Mesh,
-    n: usize,
-    max_abs: i64,
-    version: u16,
-) -> Result<Vec<[i64; 3]>> {
+fn decode_positions(d: &mut Decoder, topo: &Mesh, n: usize, max_abs: i64) -> Result<Vec<[i64; 3]>> {
     let first = first_uses_n(topo, n);
     let tri = edge_table(topo, true);
-    let all = (version >= 5).then(|| edge_table(topo, false));
-    let mut m = PosModels::new(version);
+    let all = edge_table(topo, false);
+    let mut m = PosModels::new();
     let mut pos: Vec<[i64; 3]> = Vec::with_capacity(n.min(1 << 16));
     for v in 0..n {
-        let (kind, p) = predict(topo, &pos, v, first[v], &tri, all.as_ref());
+        let (kind, p) = predict(topo, &pos, v, first[v], &tri, &all);
         let mut q = [0i64; 3];
         let mut prev_class = 0;
         for k in 0..3 {
@@ -463,10 +427,9 @@ fn first_uses_n(topo: &Mesh, n: usize) -> Vec<(u32, u32)> {
     first
 }
 
-/// Format 14 on: connectivity by gates (SPEC.md 6.2). Faces attach to an open half-edge
-/// of the faces decoded so far, taken first in, first out; their further corners are
-/// mostly a new vertex or a vertex of the border next to them.
-pub const GATES_VERSION: u16 = 14;
+// Connectivity by gates (SPEC.md 6.2): faces attach to an open half-edge of the faces
+// decoded so far, taken first in, first out; their further corners are mostly a new
+// vertex or a vertex of the border next to them.
 /// Border vertices a gated corner can name (SPEC.md 6.2).
 const CANDIDATES: usize = 4;
 /// Gated corner symbols: 0 = next new vertex, 1..=4 = candidate, 5 = named as a fresh corner.
@@ -693,20 +656,18 @@ struct GatedModels {
 }
 
 impl GatedModels {
-    fn new(version: u16) -> Self {
+    fn new() -> Self {
         GatedModels {
-            op: AdaptiveModel::for_version(3, version),
+            op: AdaptiveModel::new(3),
             degree: (0..DEGREE_SYMBOLS)
-                .map(|_| AdaptiveModel::for_version(DEGREE_SYMBOLS, version))
+                .map(|_| AdaptiveModel::new(DEGREE_SYMBOLS))
                 .collect(),
-            corner: (0..6)
-                .map(|_| AdaptiveModel::for_version(GATED_SYMBOLS, version))
-                .collect(),
+            corner: (0..6).map(|_| AdaptiveModel::new(GATED_SYMBOLS)).collect(),
         }
     }
 }
 
-/// A corner named as in formats 1 to 13: the next new vertex, a recently used one, or
+/// A corner named outright (SPEC.md 6.2): the next new vertex, a recently used one, or
 /// a distance back from the next new one.
 fn put_named(
     e: &mut Encoder,
@@ -728,9 +689,9 @@ fn put_named(
     }
 }
 
-fn encode_gated(e: &mut Encoder, mesh: &Mesh, version: u16) {
-    let mut m = ConnModels::new(version);
-    let mut g = GatedModels::new(version);
+fn encode_gated(e: &mut Encoder, mesh: &Mesh) {
+    let mut m = ConnModels::new();
+    let mut g = GatedModels::new();
     let mut all = PairMap::with_capacity(mesh.corner_count());
     for face in mesh.iter_faces() {
         let k = face.len();
@@ -794,7 +755,7 @@ fn encode_gated(e: &mut Encoder, mesh: &Mesh, version: u16) {
     }
 }
 
-/// Reads a corner named as in formats 1 to 13 (see [`put_named`]); returns the vertex and
+/// Reads a corner named outright (see [`put_named`]); returns the vertex and
 /// its place in the recent list.
 fn get_named(
     d: &mut Decoder,
@@ -838,46 +799,33 @@ fn new_vertex(next_new: &mut u64, vertices: u64) -> Result<(u32, Option<usize>)>
 
 /// Decodes the connectivity (SPEC.md 6.2) of `faces` faces with `corners` corners over
 /// `vertices` vertices.
-fn decode_faces(
-    d: &mut Decoder,
-    vertices: u64,
-    faces: u64,
-    corners: u64,
-    version: u16,
-) -> Result<Mesh> {
-    let mut m = ConnModels::new(version);
-    let mut g = (version >= GATES_VERSION).then(|| (GatedModels::new(version), Gates::new()));
+fn decode_faces(d: &mut Decoder, vertices: u64, faces: u64, corners: u64) -> Result<Mesh> {
+    let mut m = ConnModels::new();
+    let (mut gm, mut gates) = (GatedModels::new(), Gates::new());
     let mut mru = Mru::new();
     let mut next_new = 0u64;
     let mut prev_deg = 0usize;
     let mut mesh = Mesh::new();
-    // Grow with what is decoded rather than trusting the counts up front.
-    if g.is_none() {
-        mesh.face_starts.reserve(faces.min(1 << 16) as usize);
-        mesh.faces.reserve(corners.min(1 << 18) as usize);
-    }
     let mut face: Vec<u32> = Vec::new();
     // Corners decoded so far, face by face.
     let mut total = 0u64;
     for _ in 0..faces {
         let mut gated = None;
-        if let Some((gm, gates)) = g.as_mut() {
-            while let Some((u, v, gd)) = gates.gate() {
-                match d.symbol(&mut gm.op)? {
-                    OP_ATTACH => {
-                        gated = Some((u, v, gd));
-                        break;
-                    }
-                    OP_DROP => {
-                        gates.pop();
-                    }
-                    _ => break,
+        while let Some((u, v, gd)) = gates.gate() {
+            match d.symbol(&mut gm.op)? {
+                OP_ATTACH => {
+                    gated = Some((u, v, gd));
+                    break;
                 }
+                OP_DROP => {
+                    gates.pop();
+                }
+                _ => break,
             }
         }
-        let sym = match (gated, g.as_mut()) {
-            (Some((_, _, gd)), Some((gm, _))) => d.symbol(&mut gm.degree[gd as usize])?,
-            _ => d.symbol(&mut m.degree[prev_deg])?,
+        let sym = match gated {
+            Some((_, _, gd)) => d.symbol(&mut gm.degree[gd as usize])?,
+            None => d.symbol(&mut m.degree[prev_deg])?,
         };
         let mut deg = sym as u64 + 3;
         if sym == DEGREE_SYMBOLS - 1 {
@@ -897,12 +845,12 @@ fn decode_faces(
         }
         face.clear();
         for c in 0..deg as usize {
-            let (v, at) = match (gated, g.as_mut()) {
-                (Some((u, v, _)), Some(_)) if c < 2 => {
+            let (v, at) = match gated {
+                Some((u, v, _)) if c < 2 => {
                     let x = if c == 0 { v } else { u };
                     (x, mru.find(x))
                 }
-                (Some(_), Some((gm, gates))) => {
+                Some(_) => {
                     let last = c as u64 == deg - 1;
                     let (cands, n) = gates.candidates(face[c - 1], face[0], last);
                     let ctx = last as usize * 3 + n.min(2);
@@ -923,19 +871,11 @@ fn decode_faces(
             mru.touch(v, at);
             face.push(v);
         }
-        // With gates the faces are kept in the gates' record (taken over below).
-        match g.as_mut() {
-            Some((_, gates)) => gates.add(&face),
-            None => {
-                mesh.faces.extend_from_slice(&face);
-                mesh.face_starts.push(mesh.faces.len() as u32);
-            }
-        }
+        // The faces are kept in the gates' record (taken over below).
+        gates.add(&face);
     }
-    if let Some((_, gates)) = g {
-        mesh.faces = gates.corners;
-        mesh.face_starts = gates.starts;
-    }
+    mesh.faces = gates.corners;
+    mesh.face_starts = gates.starts;
     if mesh.faces.len() as u64 != corners {
         return Err(Error::corrupt(
             SECTION,
@@ -981,39 +921,38 @@ mod tests {
         permute(&by_faces, &order)
     }
 
-    fn round_trip(mesh: &Mesh, version: u16) -> usize {
-        let bytes = encode(mesh, version);
+    fn round_trip(mesh: &Mesh) -> usize {
+        let bytes = encode(mesh);
         let back = decode(
             &bytes,
             mesh.vertex_count() as u64,
             mesh.face_count() as u64,
             mesh.corner_count() as u64,
             1 << 40,
-            version,
         )
         .expect("own output decodes");
-        assert_eq!(&back, mesh, "version {version} round trip differs");
+        assert_eq!(&back, mesh, "round trip differs");
         bytes.len()
     }
 
     #[test]
     fn gates_code_a_regular_mesh_in_a_fraction_of_the_bytes() {
-        for mixed in [false, true] {
+        // At most bits per face, quads and mixed (outright named corners cost over three
+        // times as much: measured before the format kept only gates).
+        for (mixed, most) in [(false, 2.0), (true, 4.5)] {
             let mesh = grid(24, mixed);
             let (forder, rot) = gate_order(&mesh.face_starts, &mesh.faces);
             let gated = prepared(&mesh, &forder, &rot);
             // Connectivity alone: the same faces with every position zero.
             let mut topo = gated.clone();
             topo.positions.iter_mut().for_each(|p| *p = [0; 3]);
-            let named = round_trip(&topo, GATES_VERSION - 1);
-            let with_gates = round_trip(&topo, GATES_VERSION);
-            assert!(
-                with_gates * 3 < named,
-                "mixed {mixed}: gates {with_gates} B, named corners {named} B"
-            );
-            // Positions too, both ways.
-            round_trip(&gated, GATES_VERSION);
-            round_trip(&gated, GATES_VERSION - 1);
+            let with_gates = round_trip(&topo);
+            // Every face after the first attaches to a gate and names its other corners
+            // among the border's: a few bits per face.
+            let bits_per_face = with_gates as f64 * 8.0 / topo.face_count() as f64;
+            assert!(bits_per_face < most, "mixed {mixed}: {bits_per_face}");
+            // Positions too.
+            round_trip(&gated);
         }
     }
 
@@ -1031,27 +970,24 @@ mod tests {
         mesh.push_face(&[0, 1, 8, 7]);
         let order = canonical_order(&mesh);
         let mesh = permute(&mesh, &order);
-        round_trip(&mesh, GATES_VERSION);
+        round_trip(&mesh);
         // And in the gates' own order.
         let (forder, rot) = gate_order(&mesh.face_starts, &mesh.faces);
-        round_trip(&prepared(&mesh, &forder, &rot), GATES_VERSION);
+        round_trip(&prepared(&mesh, &forder, &rot));
     }
 
-    /// Gated faces can cost less than named ones, so format 14 admits more faces per
-    /// byte before refusing a section as too dense (SPEC.md 2.6).
+    /// Gated faces can cost very little, so the density bound admits up to 32768 faces
+    /// per byte (n + 8) before refusing a section as too dense (SPEC.md 2.6).
     #[test]
-    fn density_bounds_follow_the_version() {
+    fn density_bounds_admit_gated_faces_only() {
         let payload = [0u8; 8];
-        let faces = 4096 * 16 + 1; // over 4096 (n + 8), under 32768 (n + 8)
-        let decode_as = |version| {
-            decode(&payload, 3, faces, 3 * faces, 1 << 40, version)
-                .expect_err("no mesh in 8 zero bytes")
-                .to_string()
-        };
-        assert!(decode_as(13).contains("cannot hold"), "{}", decode_as(13));
-        assert!(!decode_as(14).contains("cannot hold"), "{}", decode_as(14));
+        let faces = 4096 * 16 + 1;
+        let e = decode(&payload, 3, faces, 3 * faces, 1 << 40)
+            .expect_err("no mesh in 8 zero bytes")
+            .to_string();
+        assert!(!e.contains("cannot hold"), "{e}");
         let too_many = 32768 * 16 + 1;
-        assert!(decode(&payload, 3, too_many, 3 * too_many, 1 << 40, 14)
+        assert!(decode(&payload, 3, too_many, 3 * too_many, 1 << 40)
             .expect_err("too dense")
             .to_string()
             .contains("cannot hold"));

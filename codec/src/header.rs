@@ -139,7 +139,7 @@ pub struct Header {
     pub source: Source,
     /// Whether an ORDR section restores the input vertex order.
     pub has_order: bool,
-    /// A `VMAP` section follows the header (SPEC.md 3.1, version 11 on).
+    /// A `VMAP` section follows the header (SPEC.md 3.1).
     pub has_value_map: bool,
     /// Polar hierarchies (family 3): the base mesh's poles, increasing (SPEC.md 8.6);
     /// empty for every other family.
@@ -151,7 +151,7 @@ pub struct Header {
 
 const FLAG_ORDER: u64 = 1;
 const FLAG_VALUE_MAP: u64 = 2;
-/// The transform code of the subdivision fit (format 9 on).
+/// The transform code of the subdivision fit.
 const FIT_CODE: u8 = 9;
 
 impl Header {
@@ -219,7 +219,7 @@ impl Header {
     }
 
     /// Parses and validates a header against `limits` (SPEC.md 5).
-    pub fn read(payload: &[u8], offset: u64, limits: &Limits, version: u16) -> Result<Header> {
+    pub fn read(payload: &[u8], offset: u64, limits: &Limits) -> Result<Header> {
         let mut r = ByteReader::new(payload, offset);
         let mut count = |what: &'static str, limit: u64| -> Result<u64> {
             let v = r.varint(what)?;
@@ -248,18 +248,12 @@ impl Header {
             }
             .into());
         }
-        if version < 2 && levels > 0 {
-            return Err(malformed(
-                offset,
-                "format version 1 has no refinement levels",
-            ));
-        }
         let at = r.offset();
         let family = match r.u8("family")? {
             0 => Family::None,
             1 => Family::Cc,
             2 => Family::Sqrt2,
-            3 if version >= 8 => Family::Polar,
+            3 => Family::Polar,
             f => {
                 return Err(Error::Unsupported(format!(
                     "subdivision family code {f} (byte {at})"
@@ -269,7 +263,7 @@ impl Header {
         let at = r.offset();
         let transform = match r.u8("transform")? {
             0 => Transform::None,
-            FIT_CODE if version >= 9 => {
+            FIT_CODE => {
                 let at = r.offset();
                 let bits = r.u8("fit precision")?;
                 if bits > crate::fit::MAX_EXTRA_BITS {
@@ -281,8 +275,7 @@ impl Header {
                 Transform::Fit { bits }
             }
             t => match Wavelet::from_code(t) {
-                // Each transform from the format version that introduced it.
-                Some(w) if version >= w.since_version() => Transform::Wavelet(w),
+                Some(w) => Transform::Wavelet(w),
                 _ => {
                     return Err(Error::Unsupported(format!(
                         "transform code {t} (byte {at})"
@@ -338,17 +331,13 @@ impl Header {
         let source = Source::from_code(r.u8("source format")?);
         let at = r.offset();
         let flags = r.varint("flags")?;
-        let known = if version >= 11 {
-            FLAG_ORDER | FLAG_VALUE_MAP
-        } else {
-            FLAG_ORDER
-        };
+        let known = FLAG_ORDER | FLAG_VALUE_MAP;
         if flags & !known != 0 {
             return Err(Error::Unsupported(format!(
                 "header flags {flags:#x} (byte {at})"
             )));
         }
-        // Polar hierarchies (version 8 on): the poles, as gaps (SPEC.md 5).
+        // Polar hierarchies: the poles, as gaps (SPEC.md 5).
         let mut poles = Vec::new();
         let mut disc = DiscTransform::None;
         if family == Family::Polar && levels > 0 {
@@ -373,11 +362,9 @@ impl Header {
             }
             let at = r.offset();
             let code = r.u8("disc transform")?;
-            disc = DiscTransform::from_code(code)
-                .filter(|d| version >= d.since_version())
-                .ok_or_else(|| {
-                    Error::Unsupported(format!("disc transform code {code} (byte {at})"))
-                })?;
+            disc = DiscTransform::from_code(code).ok_or_else(|| {
+                Error::Unsupported(format!("disc transform code {code} (byte {at})"))
+            })?;
         }
         r.finish("the header")?;
         let h = Header {

@@ -9,23 +9,8 @@ use crate::hierarchy::Level;
 /// Largest magnitude of a lifted value or detail (SPEC.md 9.3).
 pub const MAX_LIFTED: i64 = (1 << 52) - 1;
 
-/// Activity of a vertex with no detail (base vertices).
+/// Magnitude of a vertex with no detail (base vertices).
 pub const UNKNOWN: u8 = 255;
-
-const NBR_BINS: usize = 6;
-
-fn nbr_bin(sum: u32, n: u32, unknown: bool) -> usize {
-    if unknown || n == 0 {
-        return 5;
-    }
-    match (sum + n / 2) / n {
-        0 => 0,
-        1..=2 => 1,
-        3..=5 => 2,
-        6..=9 => 3,
-        _ => 4,
-    }
-}
 
 fn prev_bin(c: usize) -> usize {
     match c {
@@ -38,22 +23,17 @@ fn prev_bin(c: usize) -> usize {
 #[derive(Clone)]
 struct Models {
     m: Vec<IntModel>,
-    bins: usize,
-    /// Format 16: per class and slot, a model of every value coded there; a context
-    /// model starts from it (reseeded) at its first use.
+    /// Per class and slot, a model of every value coded there; a context model starts
+    /// from it (reseeded) at its first use.
     parents: Vec<IntModel>,
     used: Vec<bool>,
-    /// Format 18: mode 6's models, [`PHASE_BINS`] per context of `m` (`None` until
+    /// Mode 6's models, [`PHASE_BINS`] per context of `m` (`None` until
     /// first used), and their shared models (per class, slot and phase bin); empty until a
     /// level is coded in mode 6, when the shared ones start from `parents` (SPEC.md
     /// 10.6).
     ph: Vec<Option<IntModel>>,
     ph_parents: Vec<IntModel>,
 }
-
-/// From format 18 a sqrt2-lazy level may code its details in mode 6: plain axes, each
-/// value signed and modelled by its prediction's phase (SPEC.md 10.6).
-pub const PHASE_VERSION: u16 = 18;
 
 /// Phase bins: the size of a prediction's remainder in sixths of its divisor, 0..=2.
 const PHASE_BINS: usize = 3;
@@ -82,19 +62,16 @@ fn fracs_at(p: &Phases, i: usize) -> [i16; 3] {
 /// A prediction's fraction (SPEC.md 10.9) is in 512ths.
 pub const FRAC_DIV: i128 = 512;
 
-/// From format 25 mode 9 may round each correction together with the prediction's
-/// fraction, and phase the value by that sum's remainder (SPEC.md 10.9), flagged in its
-/// weights' mask.
-pub const JOINT_VERSION: u16 = 25;
-/// Mode 9's mask bit for joint rounding (format 25 on).
+/// Mode 9's mask bit for joint rounding: each correction rounded together with the
+/// prediction's fraction, the value phased by that sum's remainder (SPEC.md 10.9).
 const JOINT: u8 = 0x40;
 
 /// How mode 9 rounds its corrections (SPEC.md 10.9).
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 enum Rounding {
-    /// Apart from the prediction, the value phased by the prediction's phase (format 21).
+    /// Apart from the prediction, the value phased by the prediction's phase.
     Apart,
-    /// With the prediction's fraction, the value phased by their sum's phase (format 25).
+    /// With the prediction's fraction, the value phased by their sum's phase.
     Joint,
 }
 
@@ -108,62 +85,39 @@ pub fn phase(r: i128, d: i128) -> u8 {
     ((r < 0) as u8) << 2 | bin
 }
 
-/// From format 20 a Catmull-Clark level may code its details in mode 8: plain axes,
-/// each value less a weighted sum of the level's earlier details nearby (SPEC.md 10.8).
-pub const CORRECTED_VERSION: u16 = 20;
-
-/// From format 21 a level open to modes 6 and 8 may code its details in mode 9: mode 8's
-/// corrected values, phased as mode 6's (SPEC.md 10.9).
-pub const CORRECTED_PHASED_VERSION: u16 = 21;
-
-/// From format 22 a level's mode byte may have its top bit set: the level is *unbinned*,
-/// every value coded with the shared model of its class and slot (or phase bin) rather
-/// than a model of its neighbour bin (SPEC.md 10.1), for levels whose details hardly
-/// depend on their neighbours' sizes.
-pub const UNBINNED_VERSION: u16 = 22;
-/// The mode byte's unbinned flag (format 22 on).
+/// The mode byte's unbinned flag: every value of the level is coded with the shared
+/// model of its class and slot (or phase bin) rather than a model of its neighbour bin
+/// (SPEC.md 10.1), for levels whose details hardly depend on their neighbours' sizes.
 const UNBINNED: u8 = 0x80;
 
-/// From format 26 the mode byte's bits 4 to 6 flag the slots whose coded values are
-/// all 0 at the level and left out of its stream (SPEC.md 10.1): a terrain grid's x and
-/// y, a flat mesh's z.
-pub const ZERO_VERSION: u16 = 26;
-/// The mode byte's zero-slot flags (format 26 on), slot s at bit `ZERO_SHIFT + s`.
+/// The mode byte's zero-slot flags, slot s at bit `ZERO_SHIFT + s`: the slots whose
+/// coded values are all 0 at the level and left out of its stream (SPEC.md 10.1), as a
+/// terrain grid's x and y, a flat mesh's z.
 const ZERO_SLOTS: u8 = 0x70;
 const ZERO_SHIFT: u32 = 4;
 
-/// A LEVL payload's mode (SPEC.md 10.1): its first byte, without format 22's unbinned
-/// flag and format 26's zero-slot flags; `None` for an empty payload or before format 3.
-pub fn mode_of(version: u16, payload: &[u8]) -> Option<u8> {
-    let &b = payload.first().filter(|_| version >= 3)?;
-    Some(if version >= ZERO_VERSION {
-        b & !(UNBINNED | ZERO_SLOTS)
-    } else if version >= UNBINNED_VERSION {
-        b & !UNBINNED
-    } else {
-        b
-    })
+/// A LEVL payload's mode (SPEC.md 10.1): its first byte, without the unbinned flag and
+/// the zero-slot flags; `None` for an empty payload.
+pub fn mode_of(payload: &[u8]) -> Option<u8> {
+    payload.first().map(|b| b & !(UNBINNED | ZERO_SLOTS))
 }
 
-/// A LEVL payload's zero-slot flags (format 26 on, SPEC.md 10.1): bit s set when slot
-/// s's values are all 0 and not coded.
-pub fn zero_slots(version: u16, payload: &[u8]) -> u8 {
-    match payload.first() {
-        Some(&b) if version >= ZERO_VERSION => (b & ZERO_SLOTS) >> ZERO_SHIFT,
-        _ => 0,
-    }
+/// A LEVL payload's zero-slot flags (SPEC.md 10.1): bit s set when slot s's values are
+/// all 0 and not coded.
+pub fn zero_slots(payload: &[u8]) -> u8 {
+    payload
+        .first()
+        .map_or(0, |&b| (b & ZERO_SLOTS) >> ZERO_SHIFT)
 }
 
-/// Whether a LEVL payload is unbinned (format 22 on, SPEC.md 10.1).
-pub fn unbinned(version: u16, payload: &[u8]) -> bool {
-    version >= UNBINNED_VERSION && payload.first().is_some_and(|b| b & UNBINNED != 0)
+/// Whether a LEVL payload is unbinned (SPEC.md 10.1).
+pub fn unbinned(payload: &[u8]) -> bool {
+    payload.first().is_some_and(|b| b & UNBINNED != 0)
 }
 
-/// Whether a LEVL payload is in mode 9 with joint rounding (format 25 on, SPEC.md 10.9).
-pub fn joint(version: u16, payload: &[u8]) -> bool {
-    version >= JOINT_VERSION
-        && mode_of(version, payload) == Some(9)
-        && payload.get(1).is_some_and(|m| m & JOINT != 0)
+/// Whether a LEVL payload is in mode 9 with joint rounding (SPEC.md 10.9).
+pub fn joint(payload: &[u8]) -> bool {
+    mode_of(payload) == Some(9) && payload.get(1).is_some_and(|m| m & JOINT != 0)
 }
 
 /// Mode 8's weights are in 32nds, at most 2 in magnitude.
@@ -255,7 +209,7 @@ fn correction(n: [i128; 3]) -> Option<[i64; 3]> {
     Some(c)
 }
 
-/// Mode 9's correction from format 25 (SPEC.md 10.9), from mode 8's numerators `n` and
+/// Mode 9's joint correction (SPEC.md 10.9), from mode 8's numerators `n` and
 /// the predictions' fractions: per axis `[(frac + 16 n) / 512]` and the phase of its
 /// remainder; `None` beyond the bound of a detail.
 fn joint_correction(n: [i128; 3], frac: [i16; 3]) -> Option<([i64; 3], [u8; 3])> {
@@ -296,7 +250,7 @@ struct Prepared {
 }
 
 /// Modes 8 and 9's weights after the mode byte (SPEC.md 10.8), whether the mask's joint
-/// flag is set (format 25's mode 9, 10.9: open where `joint_open`), and the stream after
+/// flag is set (mode 9 only, 10.9: open where `joint_open`), and the stream after
 /// them.
 fn read_weights(rest: &[u8], joint_open: bool) -> Result<(Weights, Rounding, &[u8])> {
     let bad = || Error::corrupt("LEVL", "bad correction weights");
@@ -387,30 +341,27 @@ fn solve(mut a: [[f64; NFEAT]; NFEAT], mut b: [f64; NFEAT]) -> Option<[f64; NFEA
     w.iter().all(|v| v.is_finite()).then_some(w)
 }
 
-/// Format 16 on: context models start from their class and slot's shared model.
-pub const SHARED_START_VERSION: u16 = 16;
+/// Context models start from their class and slot's shared model, counts halved until
+/// they sum to at most this (SPEC.md 10.1).
 const SHARED_SEED: u32 = 256;
 
-/// From format 15 every component has its own neighbour context: the magnitudes of the
-/// same component at the coarse neighbours and at the level's earlier details
-/// (SPEC.md 10.1).
-pub const SLOT_CONTEXT_VERSION: u16 = 15;
-/// Neighbour bins of format 15: 15 magnitude bins and one for no neighbour.
+/// Every component has its own neighbour context: the magnitudes of the same component
+/// at the coarse neighbours and at the level's earlier details (SPEC.md 10.1), in six
+/// bins and one for no neighbour.
 const SLOT_BINS: usize = 7;
 
-/// From format 12 a level's models start from the previous level's, counts halved
-/// until they sum to at most this (SPEC.md 10.1).
+/// A level's models start from the previous level's, counts halved until they sum to at
+/// most this (SPEC.md 10.1).
 const SEED_TOTAL: u32 = 1024;
 
-/// The detail models carried from level to level (SPEC.md 10.1): formats 1 to 11 start
-/// every level afresh, format 12 on starts each from what the previous level learnt.
+/// The detail models carried from level to level (SPEC.md 10.1): each level starts from
+/// what the previous level learnt.
 pub struct LevelModels {
-    version: u16,
     last: Option<Models>,
-    /// Format 15: per vertex, the magnitude classes of its coded components (base
-    /// vertices `UNKNOWN`).
+    /// Per vertex, the magnitude classes of its coded components (base vertices
+    /// `UNKNOWN`).
     mags: Vec<[u8; 3]>,
-    /// Whether the encoder tries format 17's rotated modes (not part of the format).
+    /// Whether the encoder tries the rotated modes (not part of the format).
     pub rotated: bool,
     /// The encoder's mode for each coming level (not part of the format): where given,
     /// a level is coded in that mode only (mode 5 with its own weights; every open mode
@@ -418,16 +369,15 @@ pub struct LevelModels {
     pub only: Option<std::vec::IntoIter<u8>>,
     /// The mode the encoder chose for the previous level (not part of the format).
     prev_mode: Option<u8>,
-    /// Whether the previous level was coded in a phased mode (6, 7 or 9): from format
-    /// 22 only such a level hands its phased models on (SPEC.md 10.6).
+    /// Whether the previous level was coded in a phased mode (6, 7 or 9): only such a
+    /// level hands its phased models on (SPEC.md 10.6).
     last_phased: bool,
 }
 
 impl LevelModels {
-    /// Models for a hierarchy's first level, as format `version` defines them.
-    pub fn new(version: u16) -> Self {
+    /// Models for a hierarchy's first level.
+    pub fn new() -> Self {
         LevelModels {
-            version,
             last: None,
             mags: Vec::new(),
             rotated: true,
@@ -437,11 +387,11 @@ impl LevelModels {
         }
     }
 
-    /// From format 22 a phased level after one that was not starts its phased models
-    /// afresh, from the shared models as they are then (SPEC.md 10.6): `start`, the
-    /// models from [`Self::start`], made ready for a level in `mode`.
+    /// A phased level after one that was not starts its phased models afresh, from the
+    /// shared models as they are then (SPEC.md 10.6): `start`, the models from
+    /// [`Self::start`], made ready for a level in `mode`.
     fn ready(&self, mut start: Models, mode: Mode<'_>) -> Models {
-        if self.version >= UNBINNED_VERSION && mode.phased() && !self.last_phased {
+        if mode.phased() && !self.last_phased {
             start.ph.clear();
             start.ph_parents.clear();
         }
@@ -450,7 +400,7 @@ impl LevelModels {
 
     fn start(&self) -> Models {
         match &self.last {
-            Some(m) if self.version >= crate::coder::FAST_START_VERSION => {
+            Some(m) => {
                 let mut m = m.clone();
                 for im in
                     m.m.iter_mut()
@@ -462,30 +412,24 @@ impl LevelModels {
                 }
                 m
             }
-            _ => Models::new(self.version),
+            None => Models::new(),
         }
     }
 }
 
+impl Default for LevelModels {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl Models {
-    fn new(version: u16) -> Self {
-        let bins = if version >= SLOT_CONTEXT_VERSION {
-            SLOT_BINS
-        } else {
-            NBR_BINS
-        };
-        let shared = version >= SHARED_START_VERSION;
+    fn new() -> Self {
+        let n = 2 * 3 * 3 * SLOT_BINS;
         Models {
-            m: (0..2 * 3 * 3 * bins)
-                .map(|_| IntModel::for_version(version))
-                .collect(),
-            bins,
-            parents: if shared {
-                (0..6).map(|_| IntModel::for_version(version)).collect()
-            } else {
-                Vec::new()
-            },
-            used: vec![!shared; 2 * 3 * 3 * bins],
+            m: (0..n).map(|_| IntModel::new()).collect(),
+            parents: (0..6).map(|_| IntModel::new()).collect(),
+            used: vec![false; n],
             ph: Vec::new(),
             ph_parents: Vec::new(),
         }
@@ -519,7 +463,7 @@ impl Models {
         (class * 3 + slot) * PHASE_BINS + bin
     }
 
-    /// Format 18: the shared model of `class`, `slot` and phase bin `bin` learns `v`.
+    /// The shared model of `class`, `slot` and phase bin `bin` learns `v`.
     fn observe_phased(&mut self, class: usize, slot: usize, bin: usize, v: i64) {
         if let Some(p) = self
             .ph_parents
@@ -533,7 +477,7 @@ impl Models {
     /// class `prev`, with neighbour bin `nbr`.
     fn context(&self, class: usize, slot: usize, prev: usize, nbr: usize) -> usize {
         let p = if slot == 0 { 0 } else { prev_bin(prev) };
-        ((class * 3 + slot) * 3 + p) * self.bins + nbr
+        ((class * 3 + slot) * 3 + p) * SLOT_BINS + nbr
     }
 
     fn get(&mut self, class: usize, axis: usize, prev: usize, nbr: usize) -> &mut IntModel {
@@ -572,7 +516,7 @@ impl Models {
         }
     }
 
-    /// Format 16: the shared model of `class` and `slot` learns `v`.
+    /// The shared model of `class` and `slot` learns `v`.
     fn observe(&mut self, class: usize, slot: usize, v: i64) {
         if let Some(p) = self.parents.get_mut(class * 3 + slot) {
             p.observe(v);
@@ -581,7 +525,7 @@ impl Models {
 }
 
 /// A coded value's context: class, slot, the previous value's class, neighbour bin,
-/// phase bin (modes 6, 7 and 9) and whether its level is unbinned (format 22).
+/// phase bin (modes 6, 7 and 9) and whether its level is unbinned.
 #[derive(Clone, Copy)]
 struct Ctx {
     class: usize,
@@ -592,45 +536,14 @@ struct Ctx {
     unbinned: bool,
 }
 
-/// A context model's start from its shared model (format 16 on, SPEC.md 10.1): a copy,
-/// reseeded.
+/// A context model's start from its shared model (SPEC.md 10.1): a copy, reseeded.
 fn seeded(shared: &IntModel) -> IntModel {
     let mut m = shared.clone();
     m.reseed(SHARED_SEED);
     m
 }
 
-fn e_context(level: &Level, act: &[u8], e: usize) -> usize {
-    let [a, b] = level.edges[e];
-    let (x, y) = (act[a as usize], act[b as usize]);
-    nbr_bin(x as u32 + y as u32, 2, x == UNKNOWN || y == UNKNOWN)
-}
-
-fn f_context(level: &Level, act: &[u8], f: usize) -> usize {
-    let mut s = 0u32;
-    let mut n = 0u32;
-    for &e in level.f_edges(f) {
-        s += act[level.nv + e as usize] as u32;
-        n += 1;
-    }
-    nbr_bin(s, n, false)
-}
-
-/// sqrt(2) face point: the mean activity of the coarse face's corners.
-fn corner_context(level: &Level, act: &[u8], f: usize) -> usize {
-    let mut s = 0u32;
-    let mut n = 0u32;
-    let mut unknown = false;
-    for &v in level.coarse.face(f) {
-        let a = act[v as usize];
-        unknown |= a == UNKNOWN;
-        s += a as u32;
-        n += 1;
-    }
-    nbr_bin(s, n, unknown)
-}
-
-/// Format 15: the neighbour bin of each component of detail `i` (SPEC.md 10.1) from the
+/// The neighbour bin of each component of detail `i` (SPEC.md 10.1) from the
 /// per-component magnitudes `mags`: the coarse neighbours (an edge's ends, a face's
 /// edge points, a sqrt(2) face's corners) count twice, an edge's earlier edges at its
 /// ends once; the bin is the weighted mean magnitude, doubled and rounded, at most 14,
@@ -691,45 +604,16 @@ fn details(level: &Level, sqrt2: bool) -> usize {
     }
 }
 
-/// Detail `i`'s class, neighbour context and detail number for [`frame`].
-fn slot(level: &Level, act: &[u8], sqrt2: bool, i: usize) -> (usize, usize, usize) {
-    let ne = level.ne();
-    if sqrt2 {
-        (1, corner_context(level, act, i), ne + i)
-    } else if i < ne {
-        (0, e_context(level, act, i), i)
-    } else {
-        (1, f_context(level, act, i - ne), i)
-    }
-}
-
-/// Detail `i`'s class, the neighbour bins of its three coded values (format 15 on: each
-/// its own, [`slot_bins`]; before: one for all, [`slot`]) and its detail number for
-/// [`frame`].
+/// Detail `i`'s class, the neighbour bins of its three coded values ([`slot_bins`]) and
+/// its detail number for [`frame`].
 #[inline(always)]
-fn contexts(
-    level: &Level,
-    act: &[u8],
-    mags: &[[u8; 3]],
-    sqrt2: bool,
-    bins: usize,
-    i: usize,
-) -> (usize, [usize; 3], usize) {
-    if bins == SLOT_BINS {
-        let ne = level.ne();
-        let (class, fd) = match (sqrt2, i < ne) {
-            (true, _) => (1, ne + i),
-            (false, edge) => (!edge as usize, i),
-        };
-        (class, slot_bins(level, mags, sqrt2, i), fd)
-    } else {
-        let (class, nbr, fd) = slot(level, act, sqrt2, i);
-        (class, [nbr; 3], fd)
-    }
-}
-
-fn activity(d: [i64; 3]) -> u8 {
-    d.iter().map(|&v| class_of(v)).max().unwrap_or(0) as u8
+fn contexts(level: &Level, mags: &[[u8; 3]], sqrt2: bool, i: usize) -> (usize, [usize; 3], usize) {
+    let ne = level.ne();
+    let (class, fd) = match (sqrt2, i < ne) {
+        (true, _) => (1, ne + i),
+        (false, edge) => (!edge as usize, i),
+    };
+    (class, slot_bins(level, mags, sqrt2, i), fd)
 }
 
 /// Newell's normal of coarse face `f`, in 128-bit integers (computed in 64 bits when
@@ -850,10 +734,9 @@ fn predict(dk: i64, n: [i64; 3], k: usize, j: usize) -> i64 {
     crate::transform::round_div(num, den)
 }
 
-/// From format 17 a level may code its details in an orthonormal frame: the coarse
-/// normal, a tangent along the detail's coarse edge (or face diagonal) and their cross
-/// product, reached by exact integer rotations (SPEC.md 10.5).
-pub const ROTATED_VERSION: u16 = 17;
+// A level may code its details in an orthonormal frame: the coarse normal, a tangent
+// along the detail's coarse edge (or face diagonal) and their cross product, reached by
+// exact integer rotations (SPEC.md 10.5).
 
 /// Fixed-point bits of the rotations' lifting factors.
 const ROT_BITS: u32 = 30;
@@ -1115,7 +998,7 @@ fn rot_frames(
         .collect()
 }
 
-/// The encoder's choice of format 17's shift weights for a level (not normative): for
+/// The encoder's choice of mode 5's shift weights for a level (not normative): for
 /// each tangential value the eighth in 0..=8 whose residuals have the fewest bits.
 fn shift_weights(level: &Level, x: &[Vec<i64>; 3], frames: &[Option<RotFrame>]) -> (u8, u8) {
     let mut cost = [[0u64; 9]; 2];
@@ -1286,7 +1169,7 @@ fn put(
         if q.is_some_and(|q| q & 4 != 0) {
             v = -v;
         }
-        // A zero slot's values are left out (format 26): all 0, else not this coding.
+        // A zero slot's values are left out: all 0, else not this coding.
         if zero >> slot & 1 == 1 {
             if v != 0 {
                 return None;
@@ -1347,7 +1230,7 @@ fn get(
             bin: q.map(|(_, q)| (q & 3) as usize),
             unbinned,
         };
-        // A zero slot's values are not in the stream (format 26), and no model learns
+        // A zero slot's values are not in the stream, and no model learns
         // them.
         let v = if zero >> slot & 1 == 1 {
             0
@@ -1373,86 +1256,54 @@ fn get(
 }
 
 /// Codes the details `x[k][nv..]` of one level (a sqrt(2) step when `sqrt2`). `coarse`
-/// holds the level's coarse values (what the decoder has when it reads this level);
-/// `act` holds the coarse vertices' activity and is extended to the fine vertices.
-/// From format version 3 the payload starts with a mode byte, and the encoder keeps the
-/// mode that codes smallest (SPEC.md 10.2, 10.5). `None` (`act` and `models` then
-/// unusable) when the payload would take more than `limit` bytes in every mode: a caller
-/// that only wants a smaller coding than one it has stops early.
+/// holds the level's coarse values (what the decoder has when it reads this level).
+/// The payload starts with a mode byte, and the encoder keeps the mode that codes
+/// smallest (SPEC.md 10.2, 10.5). `None` (`models` then unusable) when the payload would
+/// take more than `limit` bytes in every mode: a caller that only wants a smaller coding
+/// than one it has stops early.
 #[allow(clippy::too_many_arguments)]
 pub fn encode(
     level: &Level,
     sqrt2: bool,
     x: &[Vec<i64>; 3],
     coarse: &[Vec<i64>; 3],
-    act: &mut Vec<u8>,
     models: &mut LevelModels,
     targets: Option<&[[i64; 3]]>,
     phases: Option<&Phases>,
     limit: usize,
 ) -> Option<Vec<u8>> {
-    let version = models.version;
-    if version < 3 {
-        let mut m = models.start();
-        let mut mags = std::mem::take(&mut models.mags);
-        let body = encode_mode(
-            level,
-            sqrt2,
-            x,
-            coarse,
-            &Prepared::default(),
-            None,
-            act,
-            &mut mags,
-            Mode::Plain,
-            false,
-            &mut m,
-            usize::MAX,
-            version,
-            0,
-        )
-        .expect("plain details are in range");
-        models.mags = mags;
-        models.last = Some(m);
-        return Some(body);
-    }
     // The mode asked for this level, if any. Plain axes with or without phases (modes 0
     // and 6) count as one: a plan made with a transform without phases leaves a
     // transform with them free to use them, and the other way round. (Modes 2 and 7 are
     // open to the same levels: a plan names the one to use.)
     let only = models.only.as_mut().and_then(Iterator::next);
-    // Format 22: a plan's unbinned flag is followed; without a plan the level's best
-    // mode is tried unbinned as well.
-    let unbin_open = version >= UNBINNED_VERSION;
-    let plan_unbinned = only.map(|o| unbinned(version, &[o]));
-    let only = only.and_then(|o| mode_of(version, &[o]));
+    // A plan's unbinned flag is followed; without a plan the level's best mode is tried
+    // unbinned as well.
+    let plan_unbinned = only.map(|o| unbinned(&[o]));
+    let only = only.and_then(|o| mode_of(&[o]));
     let plain = |m: u8| matches!(m, 0 | 6);
     let open = |m: u8| only.is_none_or(|o| o == m || (plain(o) && plain(m)));
     let mut modes = vec![Mode::Plain, Mode::Framed];
-    if let Some(t) = targets.filter(|_| version >= 7) {
+    if let Some(t) = targets {
         modes.push(Mode::Tangent(t));
-        if version >= PHASE_VERSION {
-            modes.push(Mode::TangentPhased(t));
-        }
+        modes.push(Mode::TangentPhased(t));
     }
-    if phases.is_some() && version >= PHASE_VERSION {
+    if phases.is_some() {
         modes.push(Mode::Phased);
     }
     let mut prep = Prepared::default();
-    if !sqrt2 && version >= CORRECTED_VERSION && (open(8) || open(9)) {
+    if !sqrt2 && (open(8) || open(9)) {
         let made = corr_weights(level, x).and_then(|w| Some((w, corrections(level, x, &w)?)));
         if let Some((w, c)) = made {
             modes.push(Mode::Corrected(w));
-            if phases.is_some() && version >= CORRECTED_PHASED_VERSION {
+            if phases.is_some() {
                 modes.push(Mode::CorrectedPhased(w, Rounding::Apart));
-                if version >= JOINT_VERSION {
-                    modes.push(Mode::CorrectedPhased(w, Rounding::Joint));
-                }
+                modes.push(Mode::CorrectedPhased(w, Rounding::Joint));
             }
             prep.corrections = c;
         }
     }
-    let rotated = version >= ROTATED_VERSION && models.rotated && (open(4) || open(5));
+    let rotated = models.rotated && (open(4) || open(5));
     if rotated {
         modes.push(Mode::Rotated);
         prep.normals = face_normals(level, coarse);
@@ -1470,11 +1321,10 @@ pub fn encode(
         prep.normals = face_normals(level, coarse);
     }
     let start = models.start();
-    // The smallest mode's payload, with the activities, magnitudes and models it leaves.
+    // The smallest mode's payload, with the magnitudes and models it leaves.
     struct Tried {
         mode: Vec<u8>,
         body: Vec<u8>,
-        act: Vec<u8>,
         mags: Vec<[u8; 3]>,
         models: Models,
     }
@@ -1503,33 +1353,28 @@ pub fn encode(
             .as_ref()
             .map_or(cap, |(_, b)| (b.body.len() + b.mode.len()).min(cap))
             .saturating_sub(head);
-        // Codes the level in this mode with zero slots `zero` (format 26).
+        // Codes the level in this mode with zero slots `zero`.
         let code = |zero: u8| {
-            let mut a = act.clone();
             let mut mg = models.mags.clone();
             let mut m = models.ready(start.clone(), mode);
             let body = encode_mode(
-                level, sqrt2, x, coarse, &prep, phases, &mut a, &mut mg, mode, unbinned, &mut m,
-                room, version, zero,
+                level, sqrt2, x, coarse, &prep, phases, &mut mg, mode, unbinned, &mut m, room, zero,
             )?;
             let mut mode_bytes = bytes.clone();
             mode_bytes[0] |= zero << ZERO_SHIFT;
             Some(Tried {
                 mode: mode_bytes,
                 body,
-                act: a,
                 mags: mg,
                 models: m,
             })
         };
-        let Some(mut tried) = code(axis_zero_slots(
-            version, level, sqrt2, x, mode, &prep, phases,
-        )) else {
+        let Some(mut tried) = code(axis_zero_slots(level, sqrt2, x, mode, &prep, phases)) else {
             return;
         };
         // A mode whose slots are not the axes (a frame's) shows its zero slots once coded,
         // as a flat mesh's normal part: coded again without them, kept if smaller.
-        if version >= ZERO_VERSION && mode.framed() {
+        if mode.framed() {
             let fine = &tried.mags[level.nv..];
             let zero = (0..3)
                 .filter(|&s| fine.iter().all(|g| g[s] == 0))
@@ -1551,7 +1396,7 @@ pub fn encode(
     // Without a plan, the open modes binned, then the best of them unbinned (kept only
     // if strictly smaller). While that trial is to come, the binned ones are not cut at
     // the limit: their best is the mode tried unbinned, which may fit where they do not.
-    let unbinned_trial = unbin_open && plan_unbinned.is_none();
+    let unbinned_trial = plan_unbinned.is_none();
     let cap = if unbinned_trial { usize::MAX } else { limit };
     let mut best: Option<(usize, Tried)> = None;
     for i in order {
@@ -1568,14 +1413,12 @@ pub fn encode(
     let Tried {
         mode,
         body,
-        act: a,
         mags,
         models: m,
     } = best?;
     if mode.len() + body.len() > limit {
         return None;
     }
-    *act = a;
     models.mags = mags;
     models.last = Some(m);
     let mut out = Vec::with_capacity(body.len() + 2);
@@ -1594,22 +1437,21 @@ enum Mode<'a> {
     /// In the normal's frame, less each detail's target's tangential part.
     Tangent(&'a [[i64; 3]]),
     /// Rotated into the orthonormal frame of the normal and the coarse edge or face
-    /// diagonal (format 17 on).
+    /// diagonal.
     Rotated,
     /// Rotated, and an interior edge point's tangential values less eighths `(a, b)` of
-    /// its faces' offset (format 17 on).
+    /// its faces' offset.
     Shifted(u8, u8),
-    /// x, y, z signed and modelled by their predictions' phases (format 18 on).
+    /// x, y, z signed and modelled by their predictions' phases.
     Phased,
     /// Mode 2 with the values after the first shifted by their expected parts and
-    /// phased (format 18 on).
+    /// phased.
     TangentPhased(&'a [[i64; 3]]),
-    /// x, y, z less weighted sums of the level's earlier details nearby (format 20 on,
-    /// Catmull-Clark levels).
+    /// x, y, z less weighted sums of the level's earlier details nearby (Catmull-Clark
+    /// levels).
     Corrected(Weights),
-    /// Mode 8's values, phased as mode 6's (format 21 on); with format 25's joint
-    /// flag, each correction rounded with the prediction's fraction and the value phased
-    /// by their sum.
+    /// Mode 8's values, phased as mode 6's; with the joint flag, each correction
+    /// rounded with the prediction's fraction and the value phased by their sum.
     CorrectedPhased(Weights, Rounding),
 }
 
@@ -1640,7 +1482,8 @@ pub enum Phasing<'a> {
 }
 
 impl Mode<'_> {
-    /// The level's mode bytes: the mode, and format 17's shift weights.
+    /// The level's mode bytes: the mode, and mode 5's shift weights or mode 8 and 9's
+    /// weights.
     fn bytes(self) -> Vec<u8> {
         match self {
             Mode::Shifted(a, b) => vec![5, a << 4 | b],
@@ -1705,13 +1548,11 @@ fn encode_mode(
     coarse: &[Vec<i64>; 3],
     prep: &Prepared,
     phases: Option<&Phases>,
-    act: &mut Vec<u8>,
     mags: &mut Vec<[u8; 3]>,
     mode: Mode<'_>,
     unbinned: bool,
     m: &mut Models,
     limit: usize,
-    version: u16,
     zero: u8,
 ) -> Option<Vec<u8>> {
     let mut enc = Encoder::new();
@@ -1732,16 +1573,15 @@ fn encode_mode(
     if phased && !phases.is_some_and(|p| p.codes.iter().all(|p| p.len() == nd)) {
         return None;
     }
-    // Format 25's mode 9 rounds each correction with the prediction's fraction.
+    // Mode 9 with joint rounding rounds each correction with the prediction's fraction.
     let joint = matches!(mode, Mode::CorrectedPhased(_, Rounding::Joint));
     if joint && !phases.is_some_and(|p| p.fracs.iter().all(|p| p.len() == nd)) {
         return None;
     }
-    act.resize(nv + nd, 0);
     mags.resize(nv, [UNKNOWN; 3]);
     mags.resize(nv + nd, [0; 3]);
     for i in 0..nd {
-        let (class, bins, fd) = contexts(level, act, mags, sqrt2, m.bins, i);
+        let (class, bins, fd) = contexts(level, mags, sqrt2, i);
         let mut d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
         let fr = if framed {
             frame(level, &prep.normals, fd)
@@ -1789,21 +1629,19 @@ fn encode_mode(
             _ => Phased::No,
         };
         mags[nv + i] = put(&mut enc, m, class, bins, d, fr, ph, unbinned, zero)?;
-        act[nv + i] = activity(d);
         if i % 64 == 63 && enc.written() > limit {
             return None;
         }
     }
-    let body = enc.finish_for(version);
+    let body = enc.finish();
     (body.len() <= limit).then_some(body)
 }
 
-/// Format 26's zero slots of a mode that codes the axes themselves (0, 6, 8 or 9): the
-/// axes whose details `x[k][nv..nv + nd]` are all 0 and stay 0 once corrected (modes 8
-/// and 9; with joint rounding a prediction's fraction alone can make a correction). 0
-/// for the other modes, before format 26 and on a level without details.
+/// The zero slots of a mode that codes the axes themselves (0, 6, 8 or 9): the axes
+/// whose details `x[k][nv..nv + nd]` are all 0 and stay 0 once corrected (modes 8 and 9;
+/// with joint rounding a prediction's fraction alone can make a correction). 0 for the
+/// other modes and on a level without details.
 fn axis_zero_slots(
-    version: u16,
     level: &Level,
     sqrt2: bool,
     x: &[Vec<i64>; 3],
@@ -1812,7 +1650,7 @@ fn axis_zero_slots(
     phases: Option<&Phases>,
 ) -> u8 {
     let (nv, nd) = (level.nv, details(level, sqrt2));
-    if version < ZERO_VERSION || mode.framed() || nd == 0 {
+    if mode.framed() || nd == 0 {
         return 0;
     }
     let corrected = matches!(mode, Mode::Corrected(_) | Mode::CorrectedPhased(..));
@@ -1860,12 +1698,10 @@ pub fn decode(
     level: &Level,
     sqrt2: bool,
     x: &mut [Vec<i64>; 3],
-    act: &mut Vec<u8>,
     models: &mut LevelModels,
     targets: Option<&[[i64; 3]]>,
     phasing: Option<Phasing<'_>>,
 ) -> Result<()> {
-    let version = models.version;
     let (nv, nd) = (level.nv, details(level, sqrt2));
     // Density bound (SPEC.md 2.6), checked before the level's arrays are sized.
     if nd as u64 > 2048 * (payload.len() as u64 + 8) {
@@ -1876,59 +1712,51 @@ pub fn decode(
     }
     let no_targets = || Error::corrupt("LEVL", "tangent mode on a level without tangent targets");
     let no_phases = || Error::corrupt("LEVL", "phase mode on a level without prediction phases");
-    // Format 22: the mode byte's top bit makes the level unbinned.
-    let unbinned = unbinned(version, payload);
-    // Format 26: the slots left out of the stream.
-    let zero = zero_slots(version, payload);
-    let first = mode_of(version, payload);
-    let (mode, payload) = if version >= 3 {
-        match first.zip(payload.get(1..)) {
-            Some((0, rest)) => (Mode::Plain, rest),
-            Some((1, rest)) => (Mode::Framed, rest),
-            Some((2, rest)) if version >= 7 => match targets {
-                Some(t) if t.len() == nd => (Mode::Tangent(t), rest),
-                _ => return Err(no_targets()),
-            },
-            Some((7, rest)) if version >= PHASE_VERSION => match targets {
-                Some(t) if t.len() == nd => (Mode::TangentPhased(t), rest),
-                _ => return Err(no_targets()),
-            },
-            Some((4, rest)) if version >= ROTATED_VERSION => (Mode::Rotated, rest),
-            Some((6, rest)) if version >= PHASE_VERSION => match &phasing {
-                Some(Phasing::Ready(p)) if p.codes.iter().all(|p| p.len() == nd) => {
-                    (Mode::Phased, rest)
-                }
-                Some(Phasing::Cc(_)) if !sqrt2 => (Mode::Phased, rest),
-                _ => return Err(no_phases()),
-            },
-            Some((5, rest)) if version >= ROTATED_VERSION => match rest.split_first() {
-                Some((&w, rest)) if w >> 4 <= 8 && w & 15 <= 8 => {
-                    (Mode::Shifted(w >> 4, w & 15), rest)
-                }
-                _ => return Err(Error::corrupt("LEVL", "bad shift weights")),
-            },
-            Some((8, rest)) if version >= CORRECTED_VERSION && !sqrt2 => {
-                let (w, _, rest) = read_weights(rest, false)?;
-                (Mode::Corrected(w), rest)
+    // The mode byte's top bit makes the level unbinned; bits 4 to 6 are the slots left
+    // out of the stream.
+    let unbinned = unbinned(payload);
+    let zero = zero_slots(payload);
+    let (mode, payload) = match mode_of(payload).zip(payload.get(1..)) {
+        Some((0, rest)) => (Mode::Plain, rest),
+        Some((1, rest)) => (Mode::Framed, rest),
+        Some((2, rest)) => match targets {
+            Some(t) if t.len() == nd => (Mode::Tangent(t), rest),
+            _ => return Err(no_targets()),
+        },
+        Some((7, rest)) => match targets {
+            Some(t) if t.len() == nd => (Mode::TangentPhased(t), rest),
+            _ => return Err(no_targets()),
+        },
+        Some((4, rest)) => (Mode::Rotated, rest),
+        Some((6, rest)) => match &phasing {
+            Some(Phasing::Ready(p)) if p.codes.iter().all(|p| p.len() == nd) => {
+                (Mode::Phased, rest)
             }
-            Some((9, rest)) if version >= CORRECTED_PHASED_VERSION && !sqrt2 => match &phasing {
-                Some(Phasing::Cc(_)) => {
-                    let (w, r, rest) = read_weights(rest, version >= JOINT_VERSION)?;
-                    (Mode::CorrectedPhased(w, r), rest)
-                }
-                _ => return Err(no_phases()),
-            },
-            Some((m, _)) => return Err(Error::corrupt("LEVL", format!("unknown level mode {m}"))),
-            None => return Err(Error::corrupt("LEVL", "empty level section")),
+            Some(Phasing::Cc(_)) if !sqrt2 => (Mode::Phased, rest),
+            _ => return Err(no_phases()),
+        },
+        Some((5, rest)) => match rest.split_first() {
+            Some((&w, rest)) if w >> 4 <= 8 && w & 15 <= 8 => (Mode::Shifted(w >> 4, w & 15), rest),
+            _ => return Err(Error::corrupt("LEVL", "bad shift weights")),
+        },
+        Some((8, rest)) if !sqrt2 => {
+            let (w, _, rest) = read_weights(rest, false)?;
+            (Mode::Corrected(w), rest)
         }
-    } else {
-        (Mode::Plain, payload)
+        Some((9, rest)) if !sqrt2 => match &phasing {
+            Some(Phasing::Cc(_)) => {
+                let (w, r, rest) = read_weights(rest, true)?;
+                (Mode::CorrectedPhased(w, r), rest)
+            }
+            _ => return Err(no_phases()),
+        },
+        Some((m, _)) => return Err(Error::corrupt("LEVL", format!("unknown level mode {m}"))),
+        None => return Err(Error::corrupt("LEVL", "empty level section")),
     };
     let framed = mode.framed();
-    let mut dec = Decoder::new(payload, "LEVL", version)?;
+    let mut dec = Decoder::new(payload, "LEVL")?;
     let mut m = models.ready(models.start(), mode);
     models.last_phased = mode.phased();
-    act.resize(nv + nd, 0);
     let mags = &mut models.mags;
     mags.resize(nv, [UNKNOWN; 3]);
     mags.resize(nv + nd, [0; 3]);
@@ -1953,7 +1781,7 @@ pub fn decode(
     // points' once the edge points are read), and its phase.
     let mut preds: [Vec<i64>; 3] = Default::default();
     let mut cc_phases = Phases::default();
-    // Format 25's mode 9 also reads the predictions' fractions.
+    // Mode 9 with joint rounding also reads the predictions' fractions.
     let joint = matches!(mode, Mode::CorrectedPhased(_, Rounding::Joint));
     // Mode 9: detail `i`'s prediction, phase and (joint rounding) fraction on one axis.
     let keep =
@@ -2005,7 +1833,7 @@ pub fn decode(
             Some(Phasing::Cc(p)) if i == ne => synthesise_edges(p, level, x),
             _ => {}
         }
-        let (class, bins, fd) = contexts(level, act, mags, sqrt2, m.bins, i);
+        let (class, bins, fd) = contexts(level, mags, sqrt2, i);
         let fr = if framed {
             frame(level, &normals, fd)
         } else {
@@ -2073,7 +1901,6 @@ pub fn decode(
         for k in 0..3 {
             x[k][nv + i] = d[k].wrapping_add(fine[k]);
         }
-        act[nv + i] = activity(r);
     }
     match &phasing {
         Some(Phasing::Cc(_)) if corr_phased => {
@@ -2114,36 +1941,24 @@ mod tests {
         level: &Level,
         x: &[Vec<i64>; 3],
         coarse: &[Vec<i64>; 3],
-        act: &mut Vec<u8>,
         models: &mut LevelModels,
     ) -> Vec<u8> {
-        encode(level, false, x, coarse, act, models, None, None, usize::MAX).unwrap()
+        encode(level, false, x, coarse, models, None, None, usize::MAX).unwrap()
     }
 
-    /// [`super::decode`] of one level from fresh format `version` models and activities:
-    /// the coarse values with the level read into them.
+    /// [`super::decode`] of one level from fresh models: the coarse values with the level
+    /// read into them.
     fn decode_fresh(
         bytes: &[u8],
         level: &Level,
         sqrt2: bool,
         coarse: &[Vec<i64>; 3],
-        version: u16,
         targets: Option<&[[i64; 3]]>,
         phasing: Option<Phasing<'_>>,
     ) -> Result<[Vec<i64>; 3]> {
         let mut y = coarse.clone();
-        let mut act = vec![UNKNOWN; level.nv];
-        let mut models = LevelModels::new(version);
-        decode(
-            bytes,
-            level,
-            sqrt2,
-            &mut y,
-            &mut act,
-            &mut models,
-            targets,
-            phasing,
-        )?;
+        let mut models = LevelModels::new();
+        decode(bytes, level, sqrt2, &mut y, &mut models, targets, phasing)?;
         Ok(y)
     }
 
@@ -2235,14 +2050,14 @@ mod tests {
         assert_eq!(slot_bins(&level, &mags, false, ne), [2; 3]);
     }
 
-    /// Format 16: a context model's first use starts from what its class and component
-    /// learnt in other contexts; format 15's starts uniform.
+    /// A context model's first use starts from what its class and component learnt in
+    /// other contexts, which costs a fraction of starting each uniform.
     #[test]
     fn unused_contexts_start_from_their_shared_model() {
         // Bytes to code two values of 3 in every context of class 0 after the class's
         // three components saw 200 values of 3 each.
-        let cost = |version: u16| {
-            let mut m = Models::new(version);
+        let cost = |shared: bool| {
+            let mut m = Models::new();
             for slot in 0..3 {
                 for _ in 0..200 {
                     m.observe(0, slot, 3);
@@ -2252,8 +2067,13 @@ mod tests {
             for slot in 0..3 {
                 for prev in [0, 3, 7] {
                     for nbr in 0..SLOT_BINS {
+                        let mut uniform = IntModel::new();
                         for _ in 0..2 {
-                            enc.int(m.get(0, slot, prev, nbr), 3);
+                            let model = match shared {
+                                true => m.get(0, slot, prev, nbr),
+                                false => &mut uniform,
+                            };
+                            enc.int(model, 3);
                             m.observe(0, slot, 3);
                         }
                     }
@@ -2261,19 +2081,19 @@ mod tests {
             }
             enc.finish().len()
         };
-        let (shared, fresh) = (cost(16), cost(15));
+        let (shared, fresh) = (cost(true), cost(false));
         assert!(
             shared * 4 < fresh,
-            "format 16 {shared} B, format 15 {fresh} B"
+            "shared start {shared} B, uniform {fresh} B"
         );
         // Other classes and components learn nothing from it.
-        let mut m = Models::new(16);
+        let mut m = Models::new();
         for _ in 0..200 {
             m.observe(0, 0, 3);
         }
         let mut a = Encoder::new();
         let mut b = Encoder::new();
-        let mut fresh = Models::new(16);
+        let mut fresh = Models::new();
         for _ in 0..50 {
             a.int(m.get(1, 2, 0, 3), 3);
             b.int(fresh.get(1, 2, 0, 3), 3);
@@ -2282,8 +2102,8 @@ mod tests {
     }
 
     /// Details whose large component changes from one half of the level to the other:
-    /// per-component neighbourhoods (format 15) tell the halves apart, one activity per
-    /// detail (format 14) does not.
+    /// per-component neighbourhoods tell the halves apart, a level coded without neighbour
+    /// bins (unbinned) does not.
     #[test]
     fn per_slot_contexts_follow_which_component_is_large() {
         let level = refined(3);
@@ -2308,17 +2128,18 @@ mod tests {
         }
         let coarse: [Vec<i64>; 3] = std::array::from_fn(|k| x[k][..nv].to_vec());
         let mut sizes = Vec::new();
-        for version in [14u16, 15] {
-            let mut act = vec![UNKNOWN; nv];
-            let mut models = LevelModels::new(version);
-            let bytes = encode_fresh(&level, &x, &coarse, &mut act, &mut models);
-            let y = decode_fresh(&bytes, &level, false, &coarse, version, None, None).unwrap();
-            assert_eq!(y, x, "version {version} round trip");
+        for plan in [UNBINNED, 0] {
+            let mut models = LevelModels::new();
+            models.only = Some(vec![plan].into_iter());
+            let bytes = encode_fresh(&level, &x, &coarse, &mut models);
+            assert_eq!(bytes[0], plan);
+            let y = decode_fresh(&bytes, &level, false, &coarse, None, None).unwrap();
+            assert_eq!(y, x, "plan {plan:#x} round trip");
             sizes.push(bytes.len());
         }
         assert!(
             sizes[1] * 100 < sizes[0] * 97,
-            "format 15 {} B, format 14 {} B",
+            "per-slot bins {} B, unbinned {} B",
             sizes[1],
             sizes[0]
         );
@@ -2444,23 +2265,10 @@ mod tests {
             normals,
             ..Default::default()
         };
-        let mut m = Models::new(ROTATED_VERSION);
-        let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
+        let mut m = Models::new();
+        let mut mags = Vec::new();
         encode_mode(
-            level,
-            false,
-            x,
-            coarse,
-            &prep,
-            None,
-            &mut act,
-            &mut mags,
-            mode,
-            false,
-            &mut m,
-            limit,
-            ROTATED_VERSION,
-            0,
+            level, false, x, coarse, &prep, None, &mut mags, mode, false, &mut m, limit, 0,
         )
     }
 
@@ -2475,7 +2283,7 @@ mod tests {
         let body = body_in_mode(level, coarse, x, mode).expect("in range");
         let mut payload = mode.bytes();
         payload.extend_from_slice(&body);
-        let y = decode_fresh(&payload, level, false, coarse, ROTATED_VERSION, None, None);
+        let y = decode_fresh(&payload, level, false, coarse, None, None);
         assert_eq!(&y.unwrap(), x, "round trip");
         payload.len()
     }
@@ -2538,7 +2346,6 @@ mod tests {
     #[test]
     fn shifted_mode_predicts_edge_points_that_follow_their_faces() {
         let (level, coarse, mut x) = rotated_fixture(4);
-        let nv = level.nv;
         follow_faces(&level, &coarse, &mut x);
         let frames = rot_frames(&level, &coarse, &face_normals(&level, &coarse), false);
         assert_eq!(shift_weights(&level, &x, &frames), (4, 4));
@@ -2549,10 +2356,9 @@ mod tests {
             "shifted {shifted} B, rotated {plain} B"
         );
         // The encoder picks it.
-        let mut act = vec![UNKNOWN; nv];
-        let mut models = LevelModels::new(ROTATED_VERSION);
-        let bytes = encode_fresh(&level, &x, &coarse, &mut act, &mut models);
-        assert_eq!(&bytes[..2], &[5, 0x44]);
+        let mut models = LevelModels::new();
+        let bytes = encode_fresh(&level, &x, &coarse, &mut models);
+        assert_eq!((mode_of(&bytes), bytes[1]), (Some(5), 0x44));
     }
 
     /// The encoder's mode plan (`LevelModels::only`): each level in its planned mode,
@@ -2561,32 +2367,33 @@ mod tests {
     #[test]
     fn planned_modes_are_the_ones_coded() {
         let (level, coarse, x) = rotated_fixture(10);
-        let nv = level.nv;
         let free = {
-            let mut act = vec![UNKNOWN; nv];
-            let mut models = LevelModels::new(ROTATED_VERSION);
-            encode_fresh(&level, &x, &coarse, &mut act, &mut models)
+            let mut models = LevelModels::new();
+            encode_fresh(&level, &x, &coarse, &mut models)
         };
         for (plan, want) in [(0u8, Some(0u8)), (1, Some(1)), (4, Some(4)), (2, None)] {
-            let mut act = vec![UNKNOWN; nv];
-            let mut models = LevelModels::new(ROTATED_VERSION);
+            let mut models = LevelModels::new();
             models.only = Some(vec![plan, plan].into_iter());
-            let bytes = encode_fresh(&level, &x, &coarse, &mut act, &mut models);
+            let bytes = encode_fresh(&level, &x, &coarse, &mut models);
             match want {
                 Some(m) => assert_eq!(bytes[0], m, "planned {plan}"),
-                None => assert_eq!(bytes, free, "mode {plan} is not open: every mode"),
+                None => assert_eq!(
+                    mode_of(&bytes),
+                    mode_of(&free),
+                    "mode {plan} is not open: every mode"
+                ),
             }
             // The plan's first entry was used; the second is left for the next level.
             assert_eq!(
                 models.only.as_ref().map(|o| o.as_slice()),
                 Some(&[plan][..])
             );
-            let y = decode_fresh(&bytes, &level, false, &coarse, ROTATED_VERSION, None, None);
+            let y = decode_fresh(&bytes, &level, false, &coarse, None, None);
             assert_eq!(y.unwrap(), x, "planned {plan}");
         }
     }
 
-    /// A level coded in `mode` alone from fresh format 18 models, with its mode byte.
+    /// A level coded in `mode` alone from fresh models, with its mode byte.
     fn forced(
         level: &Level,
         sqrt2: bool,
@@ -2595,47 +2402,34 @@ mod tests {
         phases: Option<&Phases>,
         mode: Mode<'_>,
     ) -> Vec<u8> {
-        forced_at(PHASE_VERSION, level, sqrt2, x, coarse, phases, mode)
+        forced_zero(level, sqrt2, x, coarse, phases, mode, None)
     }
 
-    /// A Catmull-Clark level with phases coded by [`encode`] as format `version`'s first
+    /// A Catmull-Clark level with phases coded by [`encode`] as a hierarchy's first
     /// level, in the mode it finds smallest.
     fn encode_phased_fresh(
-        version: u16,
         level: &Level,
         x: &[Vec<i64>; 3],
         coarse: &[Vec<i64>; 3],
         phases: &Phases,
     ) -> Vec<u8> {
-        let mut act = vec![UNKNOWN; level.nv];
-        let mut models = LevelModels::new(version);
+        let mut models = LevelModels::new();
         let ph = Some(phases);
-        encode(
-            level,
-            false,
-            x,
-            coarse,
-            &mut act,
-            &mut models,
-            None,
-            ph,
-            usize::MAX,
-        )
-        .unwrap()
+        encode(level, false, x, coarse, &mut models, None, ph, usize::MAX).unwrap()
     }
 
-    /// [`forced`] with format `version`'s models and stream layout.
-    fn forced_at(
-        version: u16,
+    /// [`forced`] with the zero slots `zero` where given, else the ones the encoder finds.
+    fn forced_zero(
         level: &Level,
         sqrt2: bool,
         x: &[Vec<i64>; 3],
         coarse: &[Vec<i64>; 3],
         phases: Option<&Phases>,
         mode: Mode<'_>,
+        zero: Option<u8>,
     ) -> Vec<u8> {
-        let mut m = Models::new(version);
-        let (mut act, mut mags) = (vec![UNKNOWN; level.nv], Vec::new());
+        let mut m = Models::new();
+        let mut mags = Vec::new();
         let corrections = match mode {
             Mode::Corrected(w) | Mode::CorrectedPhased(w, _) => corrections(level, x, &w).unwrap(),
             _ => Vec::new(),
@@ -2645,7 +2439,7 @@ mod tests {
             corrections,
             ..Default::default()
         };
-        let zero = axis_zero_slots(version, level, sqrt2, x, mode, &prep, phases);
+        let zero = zero.unwrap_or_else(|| axis_zero_slots(level, sqrt2, x, mode, &prep, phases));
         let body = encode_mode(
             level,
             sqrt2,
@@ -2653,13 +2447,11 @@ mod tests {
             coarse,
             &prep,
             phases,
-            &mut act,
             &mut mags,
             mode,
             false,
             &mut m,
             usize::MAX,
-            version,
             zero,
         )
         .unwrap();
@@ -2760,10 +2552,10 @@ mod tests {
             let phases = p.phases(&fine, nd, true);
             let bytes = forced(&level, false, &x, &coarse, Some(&phases), Mode::Phased);
             let ph = Some(Phasing::Cc(&p));
-            let y = decode_fresh(&bytes, &level, false, &coarse, PHASE_VERSION, None, ph);
+            let y = decode_fresh(&bytes, &level, false, &coarse, None, ph);
             // Read with the decoder's phases, the level comes back synthesised.
             assert_eq!(y.unwrap(), fine, "{w:?}");
-            let err = decode_fresh(&bytes, &level, false, &coarse, PHASE_VERSION, None, None);
+            let err = decode_fresh(&bytes, &level, false, &coarse, None, None);
             assert!(err.unwrap_err().to_string().contains("phase"), "{w:?}");
         }
     }
@@ -2801,13 +2593,12 @@ mod tests {
             Mode::TangentPhased(&targets),
         );
         assert_ne!(two[1..], seven[1..]);
-        for (bytes, targets, version, ok) in [
-            (&seven, Some(&targets[..]), PHASE_VERSION, true),
-            (&two, Some(&targets[..]), PHASE_VERSION, true),
-            (&seven, None, PHASE_VERSION, false),
-            (&seven, Some(&targets[..]), ROTATED_VERSION, false),
+        for (bytes, targets, ok) in [
+            (&seven, Some(&targets[..]), true),
+            (&two, Some(&targets[..]), true),
+            (&seven, None, false),
         ] {
-            let r = decode_fresh(bytes, &level, true, &coarse, version, targets, None);
+            let r = decode_fresh(bytes, &level, true, &coarse, targets, None);
             assert_eq!(r.is_ok(), ok);
             if ok {
                 assert_eq!(r.unwrap(), x);
@@ -2826,10 +2617,9 @@ mod tests {
                 follow_faces(&level, &coarse, &mut x);
             }
             let run = |prev: Option<u8>| {
-                let mut act = vec![UNKNOWN; level.nv];
-                let mut models = LevelModels::new(ROTATED_VERSION);
+                let mut models = LevelModels::new();
                 models.prev_mode = prev;
-                encode_fresh(&level, &x, &coarse, &mut act, &mut models)
+                encode_fresh(&level, &x, &coarse, &mut models)
             };
             let free = run(None);
             for prev in [0, 1, 4, 5] {
@@ -2846,28 +2636,21 @@ mod tests {
     }
 
     #[test]
-    fn rotated_modes_need_format_17_and_valid_weights() {
+    fn rotated_modes_need_valid_weights() {
         let (level, coarse, x) = rotated_fixture(10);
         let body = body_in_mode(&level, &coarse, &x, Mode::Shifted(2, 5)).unwrap();
-        let run = |version: u16, head: &[u8]| {
+        let run = |head: &[u8]| {
             let mut payload = head.to_vec();
             payload.extend_from_slice(&body);
-            decode_fresh(&payload, &level, false, &coarse, version, None, None)
+            decode_fresh(&payload, &level, false, &coarse, None, None)
         };
-        assert_eq!(run(17, &[5, 0x25]).unwrap(), x);
-        for (version, head) in [
-            (16, &[5u8, 0x25][..]),
-            (16, &[4]),
-            (17, &[5, 0x95]),
-            (17, &[5, 0x29]),
-            (17, &[3]),
-            (17, &[6]),
-        ] {
-            let err = run(version, head).unwrap_err().to_string();
-            assert!(err.contains("LEVL"), "{version} {head:?}: {err}");
+        assert_eq!(run(&[5, 0x25]).unwrap(), x);
+        for head in [&[5u8, 0x95][..], &[5, 0x29], &[3], &[6]] {
+            let err = run(head).unwrap_err().to_string();
+            assert!(err.contains("LEVL"), "{head:?}: {err}");
         }
         // Mode 5 without its weights.
-        let err = decode_fresh(&[5], &level, false, &coarse, 17, None, None).unwrap_err();
+        let err = decode_fresh(&[5], &level, false, &coarse, None, None).unwrap_err();
         assert!(err.to_string().contains("shift weights"), "{err}");
     }
 
@@ -2976,29 +2759,21 @@ mod tests {
             }
         }
         let coarse: [Vec<i64>; 3] = std::array::from_fn(|_| vec![0; nv]);
-        let mut act = vec![UNKNOWN; nv];
-        let mut models = LevelModels::new(CORRECTED_VERSION);
-        let bytes = encode_fresh(&level, &x, &coarse, &mut act, &mut models);
-        assert_eq!(bytes[0], 8);
+        let mut models = LevelModels::new();
+        let bytes = encode_fresh(&level, &x, &coarse, &mut models);
+        assert_eq!(mode_of(&bytes), Some(8));
         let plain = forced(&level, false, &x, &coarse, None, Mode::Plain);
         assert!(bytes.len() < plain.len(), "{} {}", bytes.len(), plain.len());
         // As the encoder chose, and with the generating weights.
         let gen_bytes = forced(&level, false, &x, &coarse, None, Mode::Corrected(gen));
         for b in [bytes, gen_bytes] {
-            let y = decode_fresh(&b, &level, false, &coarse, CORRECTED_VERSION, None, None);
+            let y = decode_fresh(&b, &level, false, &coarse, None, None);
             assert_eq!(y.unwrap(), x);
         }
-        // Format 19 does not try it.
-        let mut models = LevelModels::new(CORRECTED_VERSION - 1);
-        let mut act = vec![UNKNOWN; nv];
-        assert_ne!(
-            encode_fresh(&level, &x, &coarse, &mut act, &mut models)[0],
-            8
-        );
     }
 
     #[test]
-    fn corrected_mode_needs_format_20_valid_weights_and_a_catmull_clark_level() {
+    fn corrected_mode_needs_valid_weights_and_a_catmull_clark_level() {
         let (level, _) = grid_level(5);
         let (nv, nd) = (level.nv, level.ne() + level.nf());
         let x: [Vec<i64>; 3] = std::array::from_fn(|k| {
@@ -3011,26 +2786,25 @@ mod tests {
         let bytes = forced(&level, false, &x, &coarse, None, Mode::Corrected(w));
         assert_eq!(&bytes[..6], &[8, 0b1100, 246, 5, 64, 192]);
         let body = &bytes[6..];
-        let run = |version: u16, head: &[u8]| {
+        let run = |head: &[u8]| {
             let mut payload = head.to_vec();
             payload.extend_from_slice(body);
-            decode_fresh(&payload, &level, false, &coarse, version, None, None)
+            decode_fresh(&payload, &level, false, &coarse, None, None)
         };
-        assert_eq!(run(20, &bytes[..6]).unwrap(), x);
-        for (version, head) in [
-            (19, &bytes[..6]),
-            (20, &[8, 0b1000100, 246, 5, 64, 192][..]),
-            (20, &[8, 0b1100, 246, 5, 65, 192]),
-            (20, &[8, 0b1100, 246, 5, 64, 191]),
-            (20, &[8, 0b1100, 246, 5, 64, 128]),
-            (20, &[8, 0b1100, 128, 5, 64, 192]),
+        assert_eq!(run(&bytes[..6]).unwrap(), x);
+        for head in [
+            &[8, 0b1000100, 246, 5, 64, 192][..],
+            &[8, 0b1100, 246, 5, 65, 192],
+            &[8, 0b1100, 246, 5, 64, 191],
+            &[8, 0b1100, 246, 5, 64, 128],
+            &[8, 0b1100, 128, 5, 64, 192],
         ] {
-            let err = run(version, head).unwrap_err().to_string();
-            assert!(err.contains("LEVL"), "{version} {head:?}: {err}");
+            let err = run(head).unwrap_err().to_string();
+            assert!(err.contains("LEVL"), "{head:?}: {err}");
         }
         // Weights cut short.
         for cut in 1..6 {
-            let err = decode_fresh(&bytes[..cut], &level, false, &coarse, 20, None, None);
+            let err = decode_fresh(&bytes[..cut], &level, false, &coarse, None, None);
             assert!(err.unwrap_err().to_string().contains("LEVL"), "{cut}");
         }
         // A sqrt(2) level has no mode 8.
@@ -3040,7 +2814,7 @@ mod tests {
         let sc: [Vec<i64>; 3] = std::array::from_fn(|_| vec![0; sq.nv]);
         let mut payload = vec![8, 0];
         payload.extend(forced(&sq, true, &sx, &sc, None, Mode::Plain).split_off(1));
-        let err = decode_fresh(&payload, &sq, true, &sc, 20, None, None).unwrap_err();
+        let err = decode_fresh(&payload, &sq, true, &sc, None, None).unwrap_err();
         assert!(err.to_string().contains("unknown level mode 8"), "{err}");
         // A correction beyond a detail's bound is corrupt, not a panic or a wrap.
         let mut big = x.clone();
@@ -3069,28 +2843,14 @@ mod tests {
             let mode = Mode::CorrectedPhased(wts, Rounding::Apart);
             let bytes = forced(&level, false, &x, &coarse, Some(&phases), mode);
             assert_eq!(bytes[0], 9);
-            let v = CORRECTED_PHASED_VERSION;
-            let y = decode_fresh(
-                &bytes,
-                &level,
-                false,
-                &coarse,
-                v,
-                None,
-                Some(Phasing::Cc(&p)),
-            );
+            let y = decode_fresh(&bytes, &level, false, &coarse, None, Some(Phasing::Cc(&p)));
             assert_eq!(y.unwrap(), fine, "{w:?}");
-            let err = decode_fresh(&bytes, &level, false, &coarse, v, None, None).unwrap_err();
+            let err = decode_fresh(&bytes, &level, false, &coarse, None, None).unwrap_err();
             assert!(err.to_string().contains("phase"), "{w:?}: {err}");
-            let old = decode_fresh(&bytes, &level, false, &coarse, v - 1, None, None);
-            assert!(old
-                .unwrap_err()
-                .to_string()
-                .contains("unknown level mode 9"));
             // The same weights unphased (mode 8) is another stream.
             let plain = forced(&level, false, &x, &coarse, None, Mode::Corrected(wts));
             assert_ne!(plain[1..], bytes[1..]);
-            let y = decode_fresh(&plain, &level, false, &coarse, v, None, None);
+            let y = decode_fresh(&plain, &level, false, &coarse, None, None);
             assert_eq!(y.unwrap(), x, "{w:?}");
         }
     }
@@ -3123,11 +2883,10 @@ mod tests {
         assert!(joint_correction([big - 32, 0, 0], [0; 3]).is_some());
     }
 
-    /// Format 26's zero slots: on a level whose x and y details are all 0 (a terrain
-    /// grid's, say) the modes that code the axes themselves flag slots 0 and 1 and leave
-    /// them out, which codes smaller than format 25 and decodes exactly; the flags are
-    /// an unknown mode before format 26, and a level read with them cleared is not read
-    /// as it was written.
+    /// Zero slots: on a level whose x and y details are all 0 (a terrain grid's, say)
+    /// the modes that code the axes themselves flag slots 0 and 1 and leave them out,
+    /// which codes smaller than coding them and decodes exactly; a level read with them
+    /// cleared is not read as it was written.
     #[test]
     fn zero_slots_leave_out_axes_whose_values_are_all_0() {
         use crate::transform::{Phaser, Stencils, Wavelet};
@@ -3163,13 +2922,13 @@ mod tests {
         ] {
             let name = mode.byte();
             let phased = mode.phased();
-            let read = |bytes: &[u8], version: u16| {
+            let read = |bytes: &[u8]| {
                 let ph = phased.then_some(Phasing::Cc(&p));
-                decode_fresh(bytes, &level, false, &coarse, version, None, ph)
+                decode_fresh(bytes, &level, false, &coarse, None, ph)
             };
             let want = if phased { &fine } else { &x };
-            let at = |v| forced_at(v, &level, false, &x, &coarse, Some(&phases), mode);
-            let (with, without) = (at(ZERO_VERSION), at(ZERO_VERSION - 1));
+            let at = |z| forced_zero(&level, false, &x, &coarse, Some(&phases), mode, z);
+            let (with, without) = (at(None), at(Some(0)));
             assert_eq!(with[0], 0x30 | name, "mode {name}");
             assert_eq!(without[0], name, "mode {name}");
             assert!(
@@ -3178,45 +2937,36 @@ mod tests {
                 with.len(),
                 without.len()
             );
-            assert_eq!(&read(&with, ZERO_VERSION).unwrap(), want, "mode {name}");
-            assert_eq!(
-                &read(&without, ZERO_VERSION - 1).unwrap(),
-                want,
-                "mode {name}"
-            );
-            // Format 25 knows no flags; cleared, the stream is read as if it held x and y.
-            let err = read(&with, ZERO_VERSION - 1).unwrap_err().to_string();
-            assert!(err.contains("unknown level mode"), "mode {name}: {err}");
+            assert_eq!(&read(&with).unwrap(), want, "mode {name}");
+            assert_eq!(&read(&without).unwrap(), want, "mode {name}");
+            // Cleared, the stream is read as if it held x and y.
             let mut cleared = with.clone();
             cleared[0] = name;
-            if let Ok(y) = read(&cleared, ZERO_VERSION) {
+            if let Ok(y) = read(&cleared) {
                 assert!(&y != want, "mode {name}");
             }
         }
         // A slot flagged with a value other than 0 is not a coding of the level.
-        let mut m = Models::new(ZERO_VERSION);
+        let mut m = Models::new();
         let mut enc = Encoder::new();
         let put = |m: &mut Models, enc: &mut Encoder, d, zero| {
             put(enc, m, 0, [0; 3], d, None, Phased::No, false, zero)
         };
         assert_eq!(put(&mut m, &mut enc, [0, 0, 3], 0b011), Some([0, 0, 2]));
         assert_eq!(put(&mut m, &mut enc, [0, 1, 3], 0b011), None);
-        // And the encoder flags them itself from format 26, not before.
-        for version in [ZERO_VERSION - 1, ZERO_VERSION] {
-            let bytes = encode_phased_fresh(version, &level, &x, &coarse, &phases);
-            let flags = if version >= ZERO_VERSION { 0x30 } else { 0 };
-            assert_eq!(bytes[0] & 0x70, flags, "{version}");
-            let mode = mode_of(version, &bytes).unwrap();
-            let ph = matches!(mode, 6 | 9).then_some(Phasing::Cc(&p));
-            let y = decode_fresh(&bytes, &level, false, &coarse, version, None, ph).unwrap();
-            assert_eq!(&y, if matches!(mode, 6 | 9) { &fine } else { &x });
-        }
+        // And the encoder flags them itself.
+        let bytes = encode_phased_fresh(&level, &x, &coarse, &phases);
+        assert_eq!(bytes[0] & 0x70, 0x30);
+        let mode = mode_of(&bytes).unwrap();
+        let ph = matches!(mode, 6 | 9).then_some(Phasing::Cc(&p));
+        let y = decode_fresh(&bytes, &level, false, &coarse, None, ph).unwrap();
+        assert_eq!(&y, if matches!(mode, 6 | 9) { &fine } else { &x });
     }
 
-    /// Format 26 in the modes whose slots are a frame's (1 and 4): on a flat level (z = 0
+    /// Zero slots in the modes whose slots are a frame's (1 and 4): on a flat level (z = 0
     /// everywhere) the normal part, slot 0, is all 0. The encoder finds that once it has
     /// coded the level, codes it again without the slot and keeps that: smaller than
-    /// format 25, and exact.
+    /// coding the slot, and exact.
     #[test]
     fn zero_slots_leave_out_a_flat_levels_normal_part() {
         let (level, _) = grid_level(17);
@@ -3231,38 +2981,27 @@ mod tests {
         x[1].extend(pseudo(12, nd, 5));
         x[2].resize(nv + nd, 0);
         let coarse: [Vec<i64>; 3] = std::array::from_fn(|k| x[k][..nv].to_vec());
-        for mode in [1u8, 4] {
-            let mut sizes = Vec::new();
-            for version in [ZERO_VERSION - 1, ZERO_VERSION] {
-                let mut act = vec![UNKNOWN; nv];
-                let mut models = LevelModels::new(version);
-                models.only = Some(vec![mode].into_iter());
-                let bytes = encode(
-                    &level,
-                    false,
-                    &x,
-                    &coarse,
-                    &mut act,
-                    &mut models,
-                    None,
-                    None,
-                    usize::MAX,
-                )
-                .unwrap();
-                let flags = if version >= ZERO_VERSION { 0x10 } else { 0 };
-                assert_eq!(bytes[0], flags | mode, "mode {mode}, format {version}");
-                let y = decode_fresh(&bytes, &level, false, &coarse, version, None, None);
-                assert_eq!(y.unwrap(), x, "mode {mode}, format {version}");
-                sizes.push(bytes.len());
-            }
-            assert!(sizes[1] < sizes[0], "mode {mode}: {sizes:?}");
+        for (mode, m) in [(1u8, Mode::Framed), (4, Mode::Rotated)] {
+            let mut models = LevelModels::new();
+            models.only = Some(vec![mode].into_iter());
+            let bytes = encode_fresh(&level, &x, &coarse, &mut models);
+            assert_eq!(bytes[0], 0x10 | mode, "mode {mode}");
+            let y = decode_fresh(&bytes, &level, false, &coarse, None, None);
+            assert_eq!(y.unwrap(), x, "mode {mode}");
+            // The same mode with the slot coded.
+            let with_slot = 1 + body_in_mode(&level, &coarse, &x, m).unwrap().len();
+            assert!(
+                bytes.len() < with_slot,
+                "mode {mode}: {} {with_slot}",
+                bytes.len()
+            );
         }
     }
 
     /// Fine values that are their prediction plus their correction rounded once, now
-    /// and then off by 16: mode 9 with joint rounding (format 25) codes them smaller than
-    /// with the correction rounded apart, the encoder chooses it from format 25 on and
-    /// not before, and it decodes exactly; before format 25 its flag is corrupt.
+    /// and then off by 16: mode 9 with joint rounding codes them smaller than with the
+    /// correction rounded apart, and it decodes exactly; a mask with both bits 6 and 7,
+    /// or bit 6 on mode 8, is corrupt.
     #[test]
     fn joint_rounding_pays_where_values_follow_prediction_plus_correction() {
         use crate::transform::{Phaser, Stencils, Wavelet};
@@ -3296,15 +3035,7 @@ mod tests {
             let phases = p.phases(&fine, nd, true);
             let at = |r: Rounding| {
                 let mode = Mode::CorrectedPhased(gen, r);
-                forced_at(
-                    JOINT_VERSION,
-                    &level,
-                    false,
-                    &x,
-                    &coarse,
-                    Some(&phases),
-                    mode,
-                )
+                forced(&level, false, &x, &coarse, Some(&phases), mode)
             };
             let (joint, apart) = (at(Rounding::Joint), at(Rounding::Apart));
             assert_eq!(joint[..2], [9, 0b111111 | JOINT]);
@@ -3314,48 +3045,37 @@ mod tests {
                 joint.len(),
                 apart.len()
             );
-            let read = |bytes: &[u8], version: u16| {
+            let read = |bytes: &[u8]| {
                 let ph = Some(Phasing::Cc(&p));
-                decode_fresh(bytes, &level, false, &coarse, version, None, ph)
+                decode_fresh(bytes, &level, false, &coarse, None, ph)
             };
-            assert_eq!(read(&joint, JOINT_VERSION).unwrap(), fine, "{w:?}");
-            assert_eq!(read(&apart, JOINT_VERSION).unwrap(), fine, "{w:?}");
-            let err = read(&joint, JOINT_VERSION - 1).unwrap_err().to_string();
-            assert!(err.contains("bad correction weights"), "{w:?}: {err}");
+            assert_eq!(read(&joint).unwrap(), fine, "{w:?}");
+            assert_eq!(read(&apart).unwrap(), fine, "{w:?}");
             // Both mask bits 6 and 7, or bit 6 on mode 8, are corrupt.
             let mut bad = joint.clone();
             bad[1] |= 0x80;
-            let err = read(&bad, JOINT_VERSION).unwrap_err().to_string();
+            let err = read(&bad).unwrap_err().to_string();
             assert!(err.contains("bad correction weights"), "{w:?}: {err}");
             bad[0] = 8;
             bad[1] = joint[1];
-            let err = read(&bad, JOINT_VERSION).unwrap_err().to_string();
+            let err = read(&bad).unwrap_err().to_string();
             assert!(err.contains("bad correction weights"), "{w:?}: {err}");
-            // The encoder, with weights of its own: it tries joint rounding from format 25
-            // (never smaller there than before), and not before.
-            let mut sizes = Vec::new();
-            for version in [JOINT_VERSION - 1, JOINT_VERSION] {
-                let bytes = encode_phased_fresh(version, &level, &x, &coarse, &phases);
-                if version < JOINT_VERSION && bytes[0] & 0x7f == 9 {
-                    assert_eq!(bytes[1] & JOINT, 0, "{w:?}");
-                }
-                // (A level in a phased mode comes back synthesised, else as details.)
-                let want = if matches!(bytes[0] & 0x7f, 6 | 9) {
-                    &fine
-                } else {
-                    &x
-                };
-                assert_eq!(&read(&bytes, version).unwrap(), want, "{w:?} {version}");
-                sizes.push(bytes.len());
-            }
-            assert!(sizes[1] <= sizes[0], "{w:?}: {sizes:?}");
+            // The encoder, with weights of its own: it decodes exactly.
+            let bytes = encode_phased_fresh(&level, &x, &coarse, &phases);
+            // (A level in a phased mode comes back synthesised, else as details.)
+            let want = if matches!(bytes[0] & 0x7f, 6 | 9) {
+                &fine
+            } else {
+                &x
+            };
+            assert_eq!(&read(&bytes).unwrap(), want, "{w:?}");
         }
     }
 
-    /// Details of one size everywhere (noise of 5 bits): an unbinned level (format 22)
-    /// codes them smaller than the neighbour bins do, and the encoder chooses it; a level
-    /// with large details in one corner and zeros elsewhere stays binned. Each payload
-    /// decodes exactly, and not with its flag flipped or before format 22.
+    /// Details of one size everywhere (noise of 5 bits): an unbinned level codes them
+    /// smaller than the neighbour bins do, and the encoder chooses it; a level with large
+    /// details in one corner and zeros elsewhere stays binned. Each payload decodes
+    /// exactly, and not with its flag flipped.
     #[test]
     fn unbinned_levels_pay_where_neighbours_tell_nothing() {
         let (level, _) = grid_level(33);
@@ -3377,66 +3097,54 @@ mod tests {
                 *v = if i < nd / 10 { *v * 64 } else { 0 };
             }
         }
-        let v = UNBINNED_VERSION;
         for (x, want) in [(&even, true), (&corner, false)] {
-            let mut act = vec![UNKNOWN; nv];
-            let mut models = LevelModels::new(v);
-            let bytes = encode_fresh(&level, x, &coarse, &mut act, &mut models);
-            assert_eq!(unbinned(v, &bytes), want, "mode byte {:#x}", bytes[0]);
-            let y = decode_fresh(&bytes, &level, false, &coarse, v, None, None);
+            let mut models = LevelModels::new();
+            let bytes = encode_fresh(&level, x, &coarse, &mut models);
+            assert_eq!(unbinned(&bytes), want, "mode byte {:#x}", bytes[0]);
+            let y = decode_fresh(&bytes, &level, false, &coarse, None, None);
             assert_eq!(&y.unwrap(), x);
             // The other choice, as a plan: larger, and exact too.
-            let mut act = vec![UNKNOWN; nv];
-            let mut models = LevelModels::new(v);
+            let mut models = LevelModels::new();
             models.only = Some(vec![bytes[0] ^ UNBINNED].into_iter());
-            let other = encode_fresh(&level, x, &coarse, &mut act, &mut models);
+            let other = encode_fresh(&level, x, &coarse, &mut models);
             assert_eq!(other[0], bytes[0] ^ UNBINNED);
             assert!(other.len() > bytes.len(), "{} {}", other.len(), bytes.len());
-            let y = decode_fresh(&other, &level, false, &coarse, v, None, None);
+            let y = decode_fresh(&other, &level, false, &coarse, None, None);
             assert_eq!(&y.unwrap(), x);
             // Read with the flag flipped: an error or other details.
             let mut flipped = bytes.clone();
             flipped[0] ^= UNBINNED;
-            let y = decode_fresh(&flipped, &level, false, &coarse, v, None, None);
+            let y = decode_fresh(&flipped, &level, false, &coarse, None, None);
             assert!(y.map_or(true, |y| &y != x));
         }
-        // Before format 22 the flag is an unknown mode; format 21 never sets it.
-        let mut act = vec![UNKNOWN; nv];
-        let mut models = LevelModels::new(v);
-        let bytes = encode_fresh(&level, &even, &coarse, &mut act, &mut models);
-        assert_eq!(mode_of(v, &bytes), Some(bytes[0] & 0x7f));
-        assert_eq!(mode_of(v - 1, &bytes), Some(bytes[0]));
-        let err = decode_fresh(&bytes, &level, false, &coarse, v - 1, None, None).unwrap_err();
-        assert!(err.to_string().contains("unknown level mode"), "{err}");
-        let mut act = vec![UNKNOWN; nv];
-        let mut models = LevelModels::new(v - 1);
-        let old = encode_fresh(&level, &even, &coarse, &mut act, &mut models);
-        assert!(!unbinned(v, &old) && old[0] & UNBINNED == 0);
+        // The mode without the flag.
+        let mut models = LevelModels::new();
+        let bytes = encode_fresh(&level, &even, &coarse, &mut models);
+        assert_eq!(mode_of(&bytes), Some(bytes[0] & 0x7f));
     }
 
-    /// Format 22 hands phased models on only from one phased level to the next (SPEC.md
+    /// Phased models are handed on only from one phased level to the next (SPEC.md
     /// 10.6): after a level in another mode, a phased level starts without them.
     #[test]
     fn phased_models_are_handed_on_between_phased_levels_only() {
-        let with_phased = |version: u16, last_phased: bool| {
-            let mut models = LevelModels::new(version);
-            let mut m = Models::new(version);
+        let with_phased = |last_phased: bool| {
+            let mut models = LevelModels::new();
+            let mut m = Models::new();
             m.get_phased(0, 2, 0, 1, 0).observe(3);
             models.last = Some(m);
             models.last_phased = last_phased;
             models
         };
         let plain = Mode::Plain;
-        for (version, last_phased, mode, kept) in [
-            (UNBINNED_VERSION, false, Mode::Phased, false),
-            (UNBINNED_VERSION, true, Mode::Phased, true),
-            (UNBINNED_VERSION, false, plain, true),
-            (UNBINNED_VERSION - 1, false, Mode::Phased, true),
+        for (last_phased, mode, kept) in [
+            (false, Mode::Phased, false),
+            (true, Mode::Phased, true),
+            (false, plain, true),
         ] {
-            let models = with_phased(version, last_phased);
+            let models = with_phased(last_phased);
             let m = models.ready(models.start(), mode);
-            assert_eq!(!m.ph.is_empty(), kept, "{version} {last_phased}");
-            assert_eq!(!m.ph_parents.is_empty(), kept, "{version} {last_phased}");
+            assert_eq!(!m.ph.is_empty(), kept, "{last_phased}");
+            assert_eq!(!m.ph_parents.is_empty(), kept, "{last_phased}");
         }
     }
 }

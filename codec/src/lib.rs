@@ -160,7 +160,7 @@ fn order_section(vertices: &[u32], faces: Vec<u32>, rotations: Vec<u32>) -> Vec<
         faces,
         rotations,
     };
-    order::encode(&o, FORMAT_VERSION)
+    order::encode(&o)
 }
 
 fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Header {
@@ -256,8 +256,7 @@ fn code_hierarchy(
         return None;
     }
     let (mut header, base_bytes) = hierarchy_base(canon, &x, header);
-    let mut act = vec![levels::UNKNOWN; canon.base.nv];
-    let mut models = levels::LevelModels::new(FORMAT_VERSION);
+    let mut models = levels::LevelModels::new();
     models.rotated = rotated;
     models.only = modes.map(Vec::into_iter);
     // Bytes the levels may take: a coding over the bound is not wanted.
@@ -265,7 +264,7 @@ fn code_hierarchy(
     let mut level_bytes = Vec::with_capacity(canon.levels.len());
     for (((l, c), t), ph) in canon.levels.iter().zip(&coarse).zip(&targets).zip(&phases) {
         let (s2, t) = (canon.sqrt2, t.as_deref());
-        let b = levels::encode(l, s2, &x, c, &mut act, &mut models, t, ph.as_ref(), room)?;
+        let b = levels::encode(l, s2, &x, c, &mut models, t, ph.as_ref(), room)?;
         room -= b.len();
         level_bytes.push(b);
     }
@@ -305,7 +304,7 @@ fn hierarchy_base(canon: &Canonical, x: &[Vec<i64>; 3], header: &Header) -> (Hea
         Family::Cc
     };
     header.poles = canon.poles.clone();
-    (header, flat::encode(&base, FORMAT_VERSION))
+    (header, flat::encode(&base))
 }
 
 /// Mean [`fit::defect`] over the axes of the finest level above which `auto` does not
@@ -377,7 +376,7 @@ fn code_fit(
             }
         }
         let mut level_bytes = vec![Vec::new(); canon.levels.len() - 1];
-        level_bytes.push(fit::encode_residuals(&x, pos, b, FORMAT_VERSION));
+        level_bytes.push(fit::encode_residuals(&x, pos, b));
         h.transform = Transform::Fit { bits: b };
         let p = Payloads {
             header: h,
@@ -588,7 +587,7 @@ fn code_family(
     let rotated = p
         .modes()
         .iter()
-        .any(|&m| matches!(levels::mode_of(FORMAT_VERSION, &[m]), Some(4 | 5)));
+        .any(|&m| matches!(levels::mode_of(&[m]), Some(4 | 5)));
     if let (true, Transform::Wavelet(w)) = (rotated, p.header.transform) {
         let d = p.header.disc;
         try_code(&mut p, w, d, false);
@@ -744,7 +743,7 @@ fn encode_with(
                 let order = flat::canonical_order(&by_faces);
                 let p = Payloads {
                     header: flat_h.clone(),
-                    base: flat::encode(&flat::permute(&by_faces, &order), FORMAT_VERSION),
+                    base: flat::encode(&flat::permute(&by_faces, &order)),
                     levels: Vec::new(),
                     order: opts.keep_order.then(|| order_section(&order, forder, rot)),
                 };
@@ -767,15 +766,8 @@ fn encode_with(
             )));
         }
         w.section(kind, payload);
-        let bytes =
-            payload.len() + subwave_container::section_overhead(FORMAT_VERSION, payload.len());
-        sections.push(section_info(
-            kind,
-            bytes,
-            FORMAT_VERSION,
-            transform,
-            payload,
-        ));
+        let bytes = payload.len() + subwave_container::section_overhead(payload.len());
+        sections.push(section_info(kind, bytes, transform, payload));
         Ok(())
     };
     put(&mut w, SectionKind::HEADER, &header.write())?;
@@ -790,14 +782,8 @@ fn encode_with(
         put(&mut w, SectionKind::ORDER, o)?;
     }
     let bytes = w.finish();
-    let end = subwave_container::section_overhead(FORMAT_VERSION, 0);
-    sections.push(section_info(
-        SectionKind::END,
-        end,
-        FORMAT_VERSION,
-        transform,
-        &[],
-    ));
+    let end = subwave_container::section_overhead(0);
+    sections.push(section_info(SectionKind::END, end, transform, &[]));
     Ok(Encoded {
         bytes,
         order,
@@ -860,14 +846,12 @@ fn expect_kind(c: &Container<'_>, i: usize, kind: SectionKind, what: &str) -> Re
     }
 }
 
-/// A section's entry in the section table: a level section's mode (version 3 on),
-/// unbinned flag (version 22 on), mode 9's joint flag (version 25 on) and zero slots
-/// (version 26 on) read from its payload (SPEC.md 10.1, 10.9); none of them under
-/// `transform` 9, whose level sections have no mode byte (10.4).
+/// A section's entry in the section table: a level section's mode, unbinned flag, mode
+/// 9's joint flag and zero slots read from its payload (SPEC.md 10.1, 10.9); none of them
+/// under `transform` 9, whose level sections have no mode byte (10.4).
 fn section_info(
     kind: SectionKind,
     bytes: usize,
-    version: u16,
     transform: Transform,
     payload: &[u8],
 ) -> SectionInfo {
@@ -876,12 +860,12 @@ fn section_info(
     SectionInfo {
         kind: kind.to_string(),
         bytes,
-        mode: level.then(|| levels::mode_of(version, payload)).flatten(),
-        unbinned: level && levels::unbinned(version, payload),
-        joint: level && levels::joint(version, payload),
+        mode: level.then(|| levels::mode_of(payload)).flatten(),
+        unbinned: level && levels::unbinned(payload),
+        joint: level && levels::joint(payload),
         zero_slots: match level {
             true => {
-                let z = levels::zero_slots(version, payload);
+                let z = levels::zero_slots(payload);
                 (0..3).filter(|s| z >> s & 1 == 1).collect()
             }
             false => Vec::new(),
@@ -900,7 +884,7 @@ pub fn inspect(bytes: &[u8], limits: &Limits) -> Result<Info> {
         sections: c
             .sections
             .iter()
-            .map(|s| section_info(s.kind, s.total_len(), c.version, t, s.payload))
+            .map(|s| section_info(s.kind, s.total_len(), t, s.payload))
             .collect(),
         bytes: bytes.len(),
     })
@@ -910,12 +894,7 @@ pub fn inspect(bytes: &[u8], limits: &Limits) -> Result<Info> {
 /// container must hold every section; otherwise a prefix is fine.
 fn layout(c: &Container<'_>, limits: &Limits, whole: bool) -> Result<Header> {
     expect_kind(c, 0, SectionKind::HEADER, "header")?;
-    let h = Header::read(
-        c.sections[0].payload,
-        c.sections[0].offset + 8,
-        limits,
-        c.version,
-    )?;
+    let h = Header::read(c.sections[0].payload, c.sections[0].offset + 8, limits)?;
     let mut expected = Vec::new();
     if h.has_value_map {
         expected.push((SectionKind::VALUE_MAP, "value map"));
@@ -972,7 +951,7 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
             .into());
         }
         let s = c.sections.remove(1);
-        Some(ValueMap::decode(s.payload, h.vertices, c.version)?)
+        Some(ValueMap::decode(s.payload, h.vertices)?)
     } else {
         None
     };
@@ -999,7 +978,6 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
         h.base_faces,
         h.base_corners,
         bound,
-        c.version,
     )?;
     let mut mesh = match h.transform {
         _ if h.levels == 0 => base,
@@ -1013,14 +991,9 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
     let mut input_order = false;
     if h.has_order && level == h.levels {
         if let Some(s) = c.sections.get(2 + h.levels as usize) {
-            if c.version == 1 {
-                let vorder = order::decode_v1(s.payload, mesh.vertex_count())?;
-                mesh = unpermute(&mesh, &vorder);
-            } else {
-                let degrees: Vec<u32> = mesh.face_starts.windows(2).map(|w| w[1] - w[0]).collect();
-                let o = order::decode(s.payload, mesh.vertex_count(), &degrees, c.version)?;
-                mesh = restore_order(&mesh, &o);
-            }
+            let degrees: Vec<u32> = mesh.face_starts.windows(2).map(|w| w[1] - w[0]).collect();
+            let o = order::decode(s.payload, mesh.vertex_count(), &degrees)?;
+            mesh = restore_order(&mesh, &o);
             input_order = true;
         }
     }
@@ -1071,8 +1044,7 @@ fn synthesise_levels(
     topo.starts = base.face_starts;
     let mut x: [Vec<i64>; 3] =
         std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect());
-    let mut act = vec![levels::UNKNOWN; topo.nv];
-    let mut models = levels::LevelModels::new(c.version);
+    let mut models = levels::LevelModels::new();
     let is_sqrt2 = h.family == Family::Sqrt2;
     // Polar hierarchies: which vertices are poles (the same at every level, SPEC.md 8.6);
     // every face at a pole must be a triangle.
@@ -1127,9 +1099,8 @@ fn synthesise_levels(
         // (Made before the details are decoded: while the coarse values alone are in
         // memory, which is smaller than making them after.)
         // Modes 6 and 9 read the predictions' phases (SPEC.md 10.6, 10.9).
-        let mode = levels::mode_of(c.version, payload);
-        let phased = (c.version >= levels::PHASE_VERSION && mode == Some(6))
-            || (c.version >= levels::CORRECTED_PHASED_VERSION && mode == Some(9));
+        let mode = levels::mode_of(payload);
+        let phased = matches!(mode, Some(6 | 9));
         let (predictions, phases) = match lazy {
             true => {
                 let (p, ph) = sqrt2::predictions_with(&level, &x, phased);
@@ -1139,8 +1110,7 @@ fn synthesise_levels(
         };
         let plan = (is_sqrt2 && w == Wavelet::Sqrt2Sym).then(|| sqrt2::Plan::new(&level, w));
         // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
-        let tangent = (c.version >= 7 && mode == Some(2))
-            || (c.version >= levels::PHASE_VERSION && mode == Some(7));
+        let tangent = matches!(mode, Some(2 | 7));
         let targets = (is_sqrt2 && tangent).then(|| match &predictions {
             Some(pr) => sqrt2::tangent_targets_from(&level, &x, pr),
             None => sqrt2::tangent_targets_from(&level, &x, &sqrt2::predictions(&level, &x)),
@@ -1161,7 +1131,6 @@ fn synthesise_levels(
             &level,
             is_sqrt2,
             &mut x,
-            &mut act,
             &mut models,
             targets.as_deref(),
             phasing,
@@ -1170,9 +1139,8 @@ fn synthesise_levels(
         let synthesised = phaser.is_some();
         drop(phaser);
         if l + 1 == upto as usize {
-            // The last level read: its activities and magnitudes serve no later level.
-            act = Vec::new();
-            models = levels::LevelModels::new(c.version);
+            // The last level read: its magnitudes serve no later level.
+            models = levels::LevelModels::new();
         }
         if is_sqrt2 && w == Wavelet::Ir2w {
             sqrt2::ir2w_synthesise(&level, &mut x);
@@ -1272,7 +1240,7 @@ fn synthesise_fit(c: &Container<'_>, h: &Header, base: Mesh, bits: u8, upto: u8)
     if upto == h.levels {
         check_finest_counts(h, &topo)?;
         let payload = c.sections[1 + upto as usize].payload;
-        fit::decode_residuals(payload, &mut x, bits, MAX_COORD, c.version)?;
+        fit::decode_residuals(payload, &mut x, bits, MAX_COORD)?;
     } else {
         // A coarser level: the control mesh's refinement, rounded to the grid.
         let half = (1i64 << bits) >> 1;

@@ -67,12 +67,9 @@ impl Unused {
 }
 
 /// Codes a permutation `order[new] = old` of `0..order.len()` (SPEC.md 7.1).
-pub fn put_perm(e: &mut Encoder, order: &[u32], version: u16) {
+pub fn put_perm(e: &mut Encoder, order: &[u32]) {
     let n = order.len();
-    let mut run = [
-        AdaptiveModel::for_version(2, version),
-        AdaptiveModel::for_version(2, version),
-    ];
+    let mut run = [AdaptiveModel::new(2), AdaptiveModel::new(2)];
     let mut unused = Unused::new(n);
     let mut prev: i64 = -1;
     let mut prev_hit = 0usize;
@@ -89,11 +86,8 @@ pub fn put_perm(e: &mut Encoder, order: &[u32], version: u16) {
 }
 
 /// Decodes a permutation of `0..n` and checks it is one.
-pub fn get_perm(d: &mut Decoder, n: usize, version: u16) -> Result<Vec<u32>> {
-    let mut run = [
-        AdaptiveModel::for_version(2, version),
-        AdaptiveModel::for_version(2, version),
-    ];
+pub fn get_perm(d: &mut Decoder, n: usize) -> Result<Vec<u32>> {
+    let mut run = [AdaptiveModel::new(2), AdaptiveModel::new(2)];
     let mut unused = Unused::new(n);
     let mut used = vec![false; n];
     let mut out = Vec::with_capacity(n);
@@ -132,23 +126,23 @@ pub struct InputOrder {
 }
 
 /// Codes the ORDR section of format 2 (SPEC.md 7).
-pub fn encode(o: &InputOrder, version: u16) -> Vec<u8> {
+pub fn encode(o: &InputOrder) -> Vec<u8> {
     let mut e = Encoder::new();
-    put_perm(&mut e, &o.vertices, version);
-    put_perm(&mut e, &o.faces, version);
-    let mut m = IntModel::for_version(version);
+    put_perm(&mut e, &o.vertices);
+    put_perm(&mut e, &o.faces);
+    let mut m = IntModel::new();
     for &r in &o.rotations {
         e.int(&mut m, r as i64);
     }
-    e.finish_for(version)
+    e.finish()
 }
 
 /// Decodes a format-2 ORDR section; `degrees[c]` is canonical face c's degree.
-pub fn decode(payload: &[u8], nv: usize, degrees: &[u32], version: u16) -> Result<InputOrder> {
-    let mut d = Decoder::new(payload, SECTION, version)?;
-    let vertices = get_perm(&mut d, nv, version)?;
-    let faces = get_perm(&mut d, degrees.len(), version)?;
-    let mut m = IntModel::for_version(version);
+pub fn decode(payload: &[u8], nv: usize, degrees: &[u32]) -> Result<InputOrder> {
+    let mut d = Decoder::new(payload, SECTION)?;
+    let vertices = get_perm(&mut d, nv)?;
+    let faces = get_perm(&mut d, degrees.len())?;
+    let mut m = IntModel::new();
     let mut rotations = Vec::with_capacity(degrees.len());
     for &k in degrees {
         let r = d.int(&mut m)?;
@@ -162,12 +156,6 @@ pub fn decode(payload: &[u8], nv: usize, degrees: &[u32], version: u16) -> Resul
         faces,
         rotations,
     })
-}
-
-/// Decodes a format-1 ORDR section: the vertex permutation alone.
-pub fn decode_v1(payload: &[u8], nv: usize) -> Result<Vec<u32>> {
-    let mut d = Decoder::new(payload, SECTION, 1)?;
-    get_perm(&mut d, nv, 1)
 }
 
 #[cfg(test)]
@@ -188,8 +176,8 @@ mod tests {
                 if n > 0 { p.swap(a, b); }
             }
             let o = InputOrder { vertices: p.clone(), faces: p.iter().rev().copied().collect(), rotations: p.iter().map(|&x| x % 4).collect() };
-            let bytes = encode(&o, 4);
-            prop_assert_eq!(decode(&bytes, n, &vec![4; n], 4).unwrap(), o);
+            let bytes = encode(&o);
+            prop_assert_eq!(decode(&bytes, n, &vec![4; n]).unwrap(), o);
         }
     }
 
@@ -201,6 +189,6 @@ mod tests {
             faces: p,
             rotations: vec![0; 100_000],
         };
-        assert!(encode(&o, 4).len() < 160, "{}", encode(&o, 4).len());
+        assert!(encode(&o).len() < 160, "{}", encode(&o).len());
     }
 }

@@ -95,16 +95,6 @@ impl Wavelet {
         }
     }
 
-    /// The first format version that has the transform.
-    pub fn since_version(self) -> u16 {
-        match self {
-            Wavelet::Sqrt2Lazy | Wavelet::Ir2w | Wavelet::Sqrt2Sym => 6,
-            Wavelet::Interp4 => 13,
-            Wavelet::Interp6 => 24,
-            _ => 2,
-        }
-    }
-
     /// The transform with a header code.
     pub fn from_code(c: u8) -> Option<Wavelet> {
         Wavelet::ALL

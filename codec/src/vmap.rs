@@ -36,10 +36,6 @@ fn distinct(positions: &[[i64; 3]], k: usize) -> Vec<i64> {
     v
 }
 
-/// First format whose axes may be coded on a lattice: values rounded from equal steps
-/// between the first and last, plus residuals (SPEC.md 3.1).
-pub const LATTICE_VERSION: u16 = 23;
-
 /// `round(k span / steps)`, halves up: lattice point k's offset from the first value.
 fn lattice_offset(k: i128, span: i128, steps: i128) -> i128 {
     (2 * k * span + steps).div_euclid(2 * steps)
@@ -221,8 +217,8 @@ impl ValueMap {
     /// Reads a VMAP payload of a mesh of `vertices` vertices, refusing (before
     /// allocating) more values than the mesh has or than the payload can hold
     /// (SPEC.md 2.6).
-    pub fn decode(payload: &[u8], vertices: u64, version: u16) -> Result<ValueMap> {
-        let mut d = Decoder::new(payload, SECTION, version)?;
+    pub fn decode(payload: &[u8], vertices: u64) -> Result<ValueMap> {
+        let mut d = Decoder::new(payload, SECTION)?;
         let mask = d.uniform(8)?;
         if mask == 0 {
             return Err(Error::corrupt(SECTION, "a value map of no axis"));
@@ -234,7 +230,7 @@ impl ValueMap {
                 continue;
             }
             let [mut count, mut first, mut extra, mut spread, mut skips, mut gaps] =
-                std::array::from_fn(|_| IntModel::for_version(version));
+                std::array::from_fn(|_| IntModel::new());
             let n = d.int(&mut count)?;
             if n < 0 || n as u64 >= vertices || n as u64 > 2048 * room {
                 return Err(Error::corrupt(
@@ -255,7 +251,7 @@ impl ValueMap {
                 Ok(())
             };
             let first = d.int(&mut first)? as i128;
-            let lattice = version >= LATTICE_VERSION && n > 0 && d.uniform(2)? == 1;
+            let lattice = n > 0 && d.uniform(2)? == 1;
             if lattice {
                 // Lattice point k_i, then the value rounded from it plus a residual.
                 let steps = n as i128 + d.int(&mut extra)? as i128;
@@ -304,7 +300,6 @@ impl ValueMap {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use subwave_container::FORMAT_VERSION;
 
     #[test]
     fn a_sparse_axis_is_mapped_and_comes_back_exactly() {
@@ -318,7 +313,7 @@ mod tests {
         assert_eq!(m.axes[2].as_deref(), None, "a single value spans 1");
         let mut r = m.ranks(&pos);
         assert!(r.iter().all(|p| (0..10).contains(&p[1])));
-        let back = ValueMap::decode(&m.encode(), 50, FORMAT_VERSION).unwrap();
+        let back = ValueMap::decode(&m.encode(), 50).unwrap();
         assert_eq!(back, m);
         back.values(&mut r, true).unwrap();
         assert_eq!(r, pos);
@@ -386,10 +381,7 @@ mod tests {
             let pos: Vec<[i64; 3]> = (0..n).map(|i| [v[i], 0, 0]).collect();
             let m = ValueMap::every_axis(&pos).unwrap();
             let bytes = m.encode();
-            assert_eq!(
-                ValueMap::decode(&bytes, n as u64, FORMAT_VERSION).unwrap(),
-                m
-            );
+            assert_eq!(ValueMap::decode(&bytes, n as u64).unwrap(), m);
             // The lattice of one step per value, or per metre, is found and chosen, and
             // costs at most half as much as the gaps.
             let k = lattice_points(v, steps).unwrap();
@@ -427,7 +419,7 @@ mod tests {
             }
             e.finish()
         };
-        let ok = |bytes: Vec<u8>| ValueMap::decode(&bytes, 10, FORMAT_VERSION);
+        let ok = |bytes: Vec<u8>| ValueMap::decode(&bytes, 10);
         // Steps 3, span 30: values 10, 20, 30, 40; and with a residual.
         let v = |m: ValueMap| m.axes[0].clone().unwrap();
         assert_eq!(v(ok(payload(0, 27, &[0, 0])).unwrap()), [10, 20, 30, 40]);
@@ -454,10 +446,7 @@ mod tests {
         assert_eq!(ValueMap::candidate(&pos), None);
         let every = ValueMap::every_axis(&pos).unwrap();
         assert!(every.axes.iter().all(Option::is_some));
-        assert_eq!(
-            ValueMap::decode(&every.encode(), 100, FORMAT_VERSION).unwrap(),
-            every
-        );
+        assert_eq!(ValueMap::decode(&every.encode(), 100).unwrap(), every);
     }
 
     #[test]
@@ -466,9 +455,9 @@ mod tests {
             axes: [Some(vec![-5, 0, 9, MAX_COORD]), None, None],
         };
         let bytes = m.encode();
-        assert_eq!(ValueMap::decode(&bytes, 4, FORMAT_VERSION).unwrap(), m);
+        assert_eq!(ValueMap::decode(&bytes, 4).unwrap(), m);
         // More values than vertices.
-        assert!(ValueMap::decode(&bytes, 3, FORMAT_VERSION).is_err());
+        assert!(ValueMap::decode(&bytes, 3).is_err());
         // Values past the range, and out of order.
         for v in [vec![0, MAX_COORD + 1], vec![5, 3]] {
             let mut e = Encoder::new();
@@ -478,16 +467,13 @@ mod tests {
             e.int(&mut f, v[0]);
             e.uniform(0, 2);
             e.int(&mut g, v[1] - v[0] - 1);
-            assert!(
-                ValueMap::decode(&e.finish(), 10, FORMAT_VERSION).is_err(),
-                "{v:?}"
-            );
+            assert!(ValueMap::decode(&e.finish(), 10).is_err(), "{v:?}");
         }
         // No axis; garbage; empty.
         let mut e = Encoder::new();
         e.uniform(0, 8);
-        assert!(ValueMap::decode(&e.finish(), 10, FORMAT_VERSION).is_err());
-        assert!(ValueMap::decode(&[0xff; 7], 10, FORMAT_VERSION).is_err());
-        let _ = ValueMap::decode(&[], 10, FORMAT_VERSION);
+        assert!(ValueMap::decode(&e.finish(), 10).is_err());
+        assert!(ValueMap::decode(&[0xff; 7], 10).is_err());
+        let _ = ValueMap::decode(&[], 10);
     }
 }

@@ -28,29 +28,20 @@ use std::fmt;
 /// the CR LF / SUB / LF tail catch 7-bit transfers and newline translation, as PNG's do.
 pub const MAGIC: [u8; 8] = [0x89, b'S', b'W', b'V', b'\r', b'\n', 0x1a, b'\n'];
 
-/// The format version this crate writes and the newest it reads.
+/// The format version this crate writes and the only one it reads: before the first
+/// release the format has one version at a time (SPEC.md 1), and a container of any other
+/// version is refused with an error that names it.
 pub const FORMAT_VERSION: u16 = 26;
-
-/// From this version a section is framed by a one-byte kind and a varint length
-/// ([`section_overhead`]); before it, by a four-byte kind and a `u32` length.
-pub const COMPACT_VERSION: u16 = 19;
 
 /// Bytes before the first section: magic, version, reserved.
 pub const PREAMBLE_LEN: usize = 12;
 
-/// Bytes a section adds around its payload in versions 1 to 18: kind, length, CRC.
-pub const SECTION_OVERHEAD: usize = 12;
-
 /// Longest varint of a compact section's length (lengths are below 2^32).
 const MAX_LENGTH_BYTES: usize = 5;
 
-/// Bytes a section of `payload_len` bytes adds around its payload in format `version`
-/// (SPEC.md 2.2): from version 19 one kind byte, the length's varint bytes and the CRC;
-/// before, [`SECTION_OVERHEAD`].
-pub fn section_overhead(version: u16, payload_len: usize) -> usize {
-    if version < COMPACT_VERSION {
-        return SECTION_OVERHEAD;
-    }
+/// Bytes a section of `payload_len` bytes adds around its payload (SPEC.md 2.2): one kind
+/// byte, the length's varint bytes and the CRC.
+pub fn section_overhead(payload_len: usize) -> usize {
     let mut n = 1;
     let mut v = payload_len >> 7;
     while v > 0 {
@@ -68,11 +59,20 @@ pub enum Error {
     #[error("not a subwave container (wrong magic bytes)")]
     BadMagic,
     /// The container was written by a newer version of the format.
-    #[error("format version {found} is newer than this build supports (up to {supported}); upgrade subwave")]
+    #[error("format version {found} is newer than this build reads (format {supported}); upgrade subwave")]
     NewerVersion {
         /// The version in the file.
         found: u16,
-        /// The newest version this build reads.
+        /// The version this build reads.
+        supported: u16,
+    },
+    /// The container was written in an older development format. Before the first
+    /// release only the current format is read: re-encode the mesh with this build.
+    #[error("format version {found} is an older development format; this build reads format {supported} only: compress the mesh again with this build")]
+    OlderVersion {
+        /// The version in the file.
+        found: u16,
+        /// The version this build reads.
         supported: u16,
     },
     /// The container is damaged or was not produced by a conforming encoder.
@@ -119,7 +119,7 @@ impl Error {
     }
 }
 
-/// A section's four-byte kind code (SPEC.md 2.2).
+/// A section's kind: its four-letter name in SPEC.md (2.2), written as one byte.
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
 pub struct SectionKind(pub [u8; 4]);
 
@@ -128,7 +128,7 @@ impl SectionKind {
     pub const HEADER: SectionKind = SectionKind(*b"HEAD");
     /// The base mesh: connectivity and positions.
     pub const BASE: SectionKind = SectionKind(*b"BASE");
-    /// Per-axis value maps (version 11 on).
+    /// Per-axis value maps.
     pub const VALUE_MAP: SectionKind = SectionKind(*b"VMAP");
     /// One refinement level's coefficients.
     pub const LEVEL: SectionKind = SectionKind(*b"LEVL");
@@ -137,7 +137,7 @@ impl SectionKind {
     /// Marks the end of a complete container.
     pub const END: SectionKind = SectionKind(*b"SEND");
 
-    /// Every kind, with its one-byte code from version 19 on (SPEC.md 2.2).
+    /// Every kind, with its one-byte code in the stream (SPEC.md 2.2).
     const CODES: [(SectionKind, u8); 6] = [
         (SectionKind::HEADER, b'H'),
         (SectionKind::VALUE_MAP, b'V'),
@@ -147,7 +147,7 @@ impl SectionKind {
         (SectionKind::END, b'E'),
     ];
 
-    /// The one-byte code of a known kind (version 19 on), or `None`.
+    /// The one-byte code of a known kind, or `None`.
     pub fn code(self) -> Option<u8> {
         Self::CODES
             .iter()
@@ -155,7 +155,7 @@ impl SectionKind {
             .map(|&(_, c)| c)
     }
 
-    /// The kind of a one-byte code (version 19 on), or `None` if no kind has it.
+    /// The kind of a one-byte code, or `None` if no kind has it.
     pub fn from_code(code: u8) -> Option<SectionKind> {
         Self::CODES
             .iter()
@@ -259,8 +259,14 @@ impl<'a> Container<'a> {
                 supported: FORMAT_VERSION,
             });
         }
-        if version == 0 {
-            return Err(Error::malformed(8, "format version 0 does not exist"));
+        if version < FORMAT_VERSION {
+            if version == 0 {
+                return Err(Error::malformed(8, "format version 0 does not exist"));
+            }
+            return Err(Error::OlderVersion {
+                found: version,
+                supported: FORMAT_VERSION,
+            });
         }
         let reserved = u16::from_le_bytes([bytes[10], bytes[11]]);
         if reserved != 0 {
@@ -281,12 +287,7 @@ impl<'a> Container<'a> {
                 });
             }
             let rest = &bytes[pos..];
-            let frame = if version >= COMPACT_VERSION {
-                compact_frame(rest, pos)?
-            } else {
-                legacy_frame(rest)
-            };
-            let Some((kind, len, head)) = frame else {
+            let Some((kind, len, head)) = frame(rest, pos)? else {
                 if lenient {
                     break;
                 }
@@ -318,7 +319,7 @@ impl<'a> Container<'a> {
             let payload = &rest[head..head + len];
             let c = head + len;
             let crc_stored = u32::from_le_bytes([rest[c], rest[c + 1], rest[c + 2], rest[c + 3]]);
-            if section_crc(version, &rest[..c]) != crc_stored {
+            if section_crc(&rest[..c]) != crc_stored {
                 return Err(Error::Checksum {
                     kind,
                     offset: pos as u64,
@@ -356,18 +357,10 @@ impl<'a> Container<'a> {
     }
 }
 
-/// A section's kind, payload length and header length in versions 1 to 18: four kind
-/// bytes and a `u32`; `None` if the header is cut off.
-fn legacy_frame(rest: &[u8]) -> Option<(SectionKind, u64, usize)> {
-    let h = rest.get(..8)?;
-    let kind = SectionKind([h[0], h[1], h[2], h[3]]);
-    Some((kind, u32::from_le_bytes([h[4], h[5], h[6], h[7]]) as u64, 8))
-}
-
-/// [`legacy_frame`] from version 19 on: one kind byte and a canonical varint length
-/// below 2^32 (SPEC.md 2.2); `Ok(None)` if the header is cut off, an error if it is
-/// malformed (`pos`: the section's offset).
-fn compact_frame(rest: &[u8], pos: usize) -> Result<Option<(SectionKind, u64, usize)>, Error> {
+/// A section's kind, payload length and header length: one kind byte and a canonical
+/// varint length below 2^32 (SPEC.md 2.2); `Ok(None)` if the header is cut off, an error
+/// if it is malformed (`pos`: the section's offset).
+fn frame(rest: &[u8], pos: usize) -> Result<Option<(SectionKind, u64, usize)>, Error> {
     let Some(&code) = rest.first() else {
         return Ok(None);
     };
@@ -402,14 +395,12 @@ fn compact_frame(rest: &[u8], pos: usize) -> Result<Option<(SectionKind, u64, us
     ))
 }
 
-/// A section's checksum (SPEC.md 2.2): CRC-32 of its kind, length and payload (as
-/// framed in that version), preceded from format version 3 on by the version (two bytes, little-endian), so that no bit
-/// flip in the preamble's version can pass for another readable version.
-pub fn section_crc(version: u16, section: &[u8]) -> u32 {
+/// A section's checksum (SPEC.md 2.2): CRC-32 of the format version (two bytes,
+/// little-endian), then the section's kind byte, length and payload, so that no bit flip
+/// in the preamble's version can pass for another version.
+pub fn section_crc(section: &[u8]) -> u32 {
     let mut h = crc32fast::Hasher::new();
-    if version >= 3 {
-        h.update(&version.to_le_bytes());
-    }
+    h.update(&FORMAT_VERSION.to_le_bytes());
     h.update(section);
     h.finalize()
 }
@@ -418,7 +409,6 @@ pub fn section_crc(version: u16, section: &[u8]) -> u32 {
 #[derive(Debug, Clone)]
 pub struct ContainerWriter {
     out: Vec<u8>,
-    version: u16,
 }
 
 impl Default for ContainerWriter {
@@ -430,22 +420,11 @@ impl Default for ContainerWriter {
 impl ContainerWriter {
     /// Starts a container with the preamble of [`FORMAT_VERSION`].
     pub fn new() -> Self {
-        Self::for_version(FORMAT_VERSION)
-    }
-
-    /// Starts a container of format `version` (1 to [`FORMAT_VERSION`]), framed as that
-    /// version frames sections: for rewriting a container under its own version (tests,
-    /// tools); the payloads are the caller's to make right for it.
-    ///
-    /// # Panics
-    /// If `version` is 0 or newer than [`FORMAT_VERSION`].
-    pub fn for_version(version: u16) -> Self {
-        assert!((1..=FORMAT_VERSION).contains(&version), "version {version}");
         let mut out = Vec::with_capacity(1024);
         out.extend_from_slice(&MAGIC);
-        out.extend_from_slice(&version.to_le_bytes());
+        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
         out.extend_from_slice(&0u16.to_le_bytes());
-        ContainerWriter { out, version }
+        ContainerWriter { out }
     }
 
     /// Appends one section.
@@ -458,17 +437,12 @@ impl ContainerWriter {
         let len = u32::try_from(payload.len()).expect("section payload under 4 GiB");
         let start = self.out.len();
         let code = kind.code().expect("a known section kind");
-        if self.version >= COMPACT_VERSION {
-            self.out.push(code);
-            let mut length = ByteWriter::new();
-            length.varint(len as u64);
-            self.out.extend_from_slice(&length.out);
-        } else {
-            self.out.extend_from_slice(&kind.0);
-            self.out.extend_from_slice(&len.to_le_bytes());
-        }
+        self.out.push(code);
+        let mut length = ByteWriter::new();
+        length.varint(len as u64);
+        self.out.extend_from_slice(&length.out);
         self.out.extend_from_slice(payload);
-        let crc = section_crc(self.version, &self.out[start..]);
+        let crc = section_crc(&self.out[start..]);
         self.out.extend_from_slice(&crc.to_le_bytes());
     }
 
@@ -482,34 +456,6 @@ impl ContainerWriter {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn containers_of_every_version_parse_back() {
-        for version in 1..=FORMAT_VERSION {
-            let mut w = ContainerWriter::for_version(version);
-            w.section(SectionKind::HEADER, &[1, 2, 3]);
-            w.section(SectionKind::LEVEL, &[7; 200]);
-            let bytes = w.finish();
-            let c = Container::parse(&bytes, &Limits::default()).unwrap();
-            assert_eq!(c.version, version);
-            let kinds: Vec<_> = c
-                .sections
-                .iter()
-                .map(|s| (s.kind, s.payload.len()))
-                .collect();
-            assert_eq!(
-                kinds,
-                [
-                    (SectionKind::HEADER, 3),
-                    (SectionKind::LEVEL, 200),
-                    (SectionKind::END, 0)
-                ]
-            );
-            // Framed as the version frames: 12 bytes a section before 19, 6 or 7 after.
-            let framing = bytes.len() - PREAMBLE_LEN - 203;
-            assert_eq!(framing, if version < COMPACT_VERSION { 36 } else { 19 });
-        }
-    }
 
     fn sample() -> Vec<u8> {
         let mut w = ContainerWriter::new();
@@ -552,7 +498,7 @@ mod tests {
     #[test]
     fn prefix_keeps_whole_sections() {
         let b = sample();
-        let cut = PREAMBLE_LEN + section_overhead(FORMAT_VERSION, 3) + 3 + 5;
+        let cut = PREAMBLE_LEN + section_overhead(3) + 3 + 5;
         let c = Container::parse_prefix(&b[..cut], &Limits::default()).unwrap();
         assert!(!c.complete);
         assert_eq!(c.sections.len(), 1);
@@ -595,50 +541,29 @@ mod tests {
         ));
     }
 
-    /// A container in the framing of versions 1 to 18: four-byte kinds, `u32` lengths.
-    fn legacy(version: u16, sections: &[(SectionKind, &[u8])]) -> Vec<u8> {
-        let mut out = MAGIC.to_vec();
-        out.extend_from_slice(&version.to_le_bytes());
-        out.extend_from_slice(&[0, 0]);
-        for &(kind, payload) in sections.iter().chain([&(SectionKind::END, &[][..])]) {
-            let start = out.len();
-            out.extend_from_slice(&kind.0);
-            out.extend_from_slice(&(payload.len() as u32).to_le_bytes());
-            out.extend_from_slice(payload);
-            let crc = section_crc(version, &out[start..]);
-            out.extend_from_slice(&crc.to_le_bytes());
-        }
-        out
-    }
-
     #[test]
-    fn versions_before_19_keep_their_framing() {
-        let payload = [7u8; 130];
-        for version in [1, 2, 3, 18] {
-            let b = legacy(
-                version,
-                &[
-                    (SectionKind::HEADER, &[1, 2]),
-                    (SectionKind::LEVEL, &payload),
-                ],
-            );
-            let c = Container::parse(&b, &Limits::default()).unwrap();
-            assert_eq!(c.version, version);
-            assert_eq!(c.sections.len(), 3);
-            assert_eq!(c.sections[1].payload, &payload[..]);
-            assert_eq!(c.sections[1].total_len(), 130 + SECTION_OVERHEAD);
-            assert_eq!(
-                c.sections[1].offset,
-                (PREAMBLE_LEN + 2 + SECTION_OVERHEAD) as u64
-            );
-            // The compact framing is not read in an older version, nor the reverse.
+    fn other_versions_are_refused_by_name() {
+        for version in [1, 18, FORMAT_VERSION - 1] {
             let mut older = sample();
             older[8..10].copy_from_slice(&version.to_le_bytes());
-            assert!(Container::parse(&older, &Limits::default()).is_err());
+            let e = Container::parse(&older, &Limits::default()).unwrap_err();
+            assert_eq!(
+                e,
+                Error::OlderVersion {
+                    found: version,
+                    supported: FORMAT_VERSION
+                }
+            );
+            assert!(e
+                .to_string()
+                .contains(&format!("format version {version} ")));
         }
-        let mut newer = legacy(18, &[(SectionKind::HEADER, &[1, 2])]);
-        newer[8..10].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
-        assert!(Container::parse(&newer, &Limits::default()).is_err());
+        let mut zero = sample();
+        zero[8..10].copy_from_slice(&0u16.to_le_bytes());
+        assert!(matches!(
+            Container::parse(&zero, &Limits::default()),
+            Err(Error::Malformed { offset: 8, .. })
+        ));
     }
 
     #[test]
@@ -650,12 +575,11 @@ mod tests {
             let c = Container::parse(&b, &Limits::default()).unwrap();
             let s = &c.sections[0];
             assert_eq!(s.payload.len(), n);
-            assert_eq!(s.total_len(), n + section_overhead(FORMAT_VERSION, n));
+            assert_eq!(s.total_len(), n + section_overhead(n));
             assert_eq!(b.len(), PREAMBLE_LEN + s.total_len() + 6, "{n}");
         }
-        assert_eq!(section_overhead(FORMAT_VERSION, 127), 6);
-        assert_eq!(section_overhead(FORMAT_VERSION, 128), 7);
-        assert_eq!(section_overhead(18, 128), SECTION_OVERHEAD);
+        assert_eq!(section_overhead(127), 6);
+        assert_eq!(section_overhead(128), 7);
     }
 
     #[test]

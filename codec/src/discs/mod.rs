@@ -46,15 +46,6 @@ impl DiscTransform {
         }
     }
 
-    /// The oldest format version with this code (SPEC.md 5).
-    pub fn since_version(self) -> u16 {
-        if self.lifted() {
-            10
-        } else {
-            8
-        }
-    }
-
     /// Whether the radial analysis runs first.
     pub fn radial_first(self) -> bool {
         matches!(
