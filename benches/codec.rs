@@ -6,8 +6,8 @@
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 use subwave::{EncodeOptions, TransformChoice, Wavelet};
-use subwave_codec::coder::{Decoder, Encoder, IntModel};
-use subwave_codec::hierarchy::{canonicalise, cc, Topo};
+use subwave_codec::entropy::{Decoder, Encoder, IntModel};
+use subwave_codec::topology::{canonicalise, cc, Topo};
 use subwave_codec::transform::{analyse, synthesise};
 
 fn mesh() -> subwave::Loaded {

@@ -2,8 +2,8 @@
 //! mesh's finest positions (SPEC.md 9.10), per recovered hierarchy: the fit's residual
 //! RMS per axis, then per precision B the share of nonzero residuals and their order-0
 //! entropy. `cargo run --release --example fit_probe -- MESH [Q]`
-use subwave_codec::fit::{defect, subdivide, Operator};
-use subwave_codec::hierarchy::{canonicalise, cc, Topo};
+use subwave_codec::topology::{canonicalise, cc, Topo};
+use subwave_codec::transform::fit::{defect, subdivide, Operator};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();

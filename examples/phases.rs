@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use subwave_codec::hierarchy::{canonicalise, cc, Level, Topo};
+use subwave_codec::topology::{canonicalise, cc, Level, Topo};
 use subwave_codec::transform::{analyse, synthesise, Wavelet};
 
 fn ms(t: Instant) -> f64 {

@@ -3,8 +3,8 @@
 //! panics only when a property is violated: a hostile input that is merely refused is
 //! fine, a panic inside the library is a bug.
 
-use subwave_codec::coder::{AdaptiveModel, Decoder, Encoder, IntModel};
-use subwave_codec::hierarchy::{Level, Topo};
+use subwave_codec::entropy::{AdaptiveModel, Decoder, Encoder, IntModel};
+use subwave_codec::topology::{Level, Topo};
 use subwave_codec::transform::{analyse, synthesise};
 
 use crate::{DecodeOptions, EncodeOptions, Limits, Mesh, Quantization, TransformChoice, Wavelet};
@@ -182,9 +182,9 @@ pub fn lifting_roundtrip(data: &[u8]) {
         assert_eq!(x, orig, "{} does not invert", w.name());
     }
     // The sqrt(2) transforms on the same coarse mesh (face points only).
-    let n = subwave_codec::sqrt2::fine_nv(&level);
+    let n = subwave_codec::topology::sqrt2::fine_nv(&level);
     for w in Wavelet::SQRT2 {
-        let plan = subwave_codec::sqrt2::Plan::new(&level, w);
+        let plan = subwave_codec::transform::sqrt2::Plan::new(&level, w);
         let mut x = orig[..n].to_vec();
         plan.analyse(&mut x);
         plan.synthesise(&mut x);

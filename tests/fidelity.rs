@@ -4,7 +4,7 @@
 //! points everywhere, vertex points at valence 4), and bilinear analysis on a regular
 //! periodic grid is the separable 5/3 (linear B-spline) wavelet.
 
-use subwave_codec::hierarchy::{Level, Topo};
+use subwave_codec::topology::{Level, Topo};
 use subwave_codec::transform::{analyse, synthesise, Wavelet};
 use subwave_corpus::PolyMesh;
 
@@ -206,7 +206,8 @@ fn dyadic_sym_keeps_constants_exactly_in_floating_point() {
 /// (sqrt2-lazy) the coarse vertices keep their noise.
 #[test]
 fn ir2w_low_pass_filters_noise_level_by_level() {
-    use subwave_codec::sqrt2::{fine, fine_nv, Plan};
+    use subwave_codec::topology::sqrt2::{fine, fine_nv};
+    use subwave_codec::transform::sqrt2::Plan;
     const STEPS: usize = 8;
     // A quad base whose extraordinary vertices (valence 3) are isolated, like the
     // paper's: the cube after two Catmull-Clark steps, 98 vertices.
@@ -291,7 +292,7 @@ fn ir2w_low_pass_filters_noise_level_by_level() {
 
 /// A closed surface of revolution as three polar nets (x, y, z): `n` spokes, `k` rings
 /// between the poles, a mushroom-like profile.
-fn polar_mushroom(n: usize, k: usize) -> [subwave_codec::polar::Net; 3] {
+fn polar_mushroom(n: usize, k: usize) -> [subwave_codec::transform::polar::reference::Net; 3] {
     use std::f64::consts::{PI, TAU};
     let profile = |t: f64| {
         // t in [0, 1] from the top pole to the bottom one: (radius, height).
@@ -312,7 +313,7 @@ fn polar_mushroom(n: usize, k: usize) -> [subwave_codec::polar::Net; 3] {
         }
         let (_, za) = profile(0.0);
         let (_, zb) = profile(1.0);
-        subwave_codec::polar::Net {
+        subwave_codec::transform::polar::reference::Net {
             n,
             k,
             poles: if a == 2 { [za, zb] } else { [0.0, 0.0] },
@@ -331,7 +332,7 @@ fn polar_mushroom(n: usize, k: usize) -> [subwave_codec::polar::Net; 3] {
 /// circular first B) end close to each other.
 #[test]
 fn polar_lifting_keeps_the_noise_error_flat_over_levels() {
-    use subwave_codec::polar::{analyse, synthesise, Lifting, Net, Order};
+    use subwave_codec::transform::polar::reference::{analyse, synthesise, Lifting, Net, Order};
     const LEVELS: usize = 4;
     let base = polar_mushroom(8, 5);
     let refine = |net: &Net, levels: usize, order: Order| {

@@ -1,8 +1,10 @@
 //! Writes the frozen tables of the integer polar transforms (SPEC.md 9.9) from the
-//! floating-point reference in `subwave_codec::polar` (gamma of eq. 1; the lifting
+//! floating-point reference in `subwave_codec::transform::polar::reference` (gamma of eq. 1; the lifting
 //! weights t, s and w solved from eq. 7/8 with the appendix's inner products), as Rust
 //! source: `cargo run -p subwave-codec --example polar_tables > codec/src/discs/tables.rs`.
-use subwave_codec::polar::{circular_weights_fixed, gamma_fixed, radial_weights_fixed};
+use subwave_codec::transform::polar::reference::{
+    circular_weights_fixed, gamma_fixed, radial_weights_fixed,
+};
 
 fn list<T: ToString>(xs: impl IntoIterator<Item = T>) -> String {
     xs.into_iter()
@@ -17,7 +19,7 @@ fn main() {
     println!("//! The frozen weights of the integer polar transforms (SPEC.md 9.9), times 2^16:");
     println!("//! gamma (summing to exactly 2^15) and the lifting weights t, s and w, as");
     println!(
-        "//! `crate::polar::gamma_fixed`, `radial_weights_fixed` and `circular_weights_fixed`"
+        "//! `crate::transform::polar::reference::gamma_fixed`, `radial_weights_fixed` and `circular_weights_fixed`"
     );
     println!("//! compute them (a test checks it). Written by");
     println!("//! `cargo run -p subwave-codec --example polar_tables`.");

@@ -1,9 +1,9 @@
 //! Prints the frozen IR2W tables (SPEC.md 9.7) from the solver in
-//! `subwave_codec::sqrt2::solve`: `cargo run -p subwave-codec --example sqrt2_tables`.
-use subwave_codec::sqrt2::solve;
+//! `subwave_codec::transform::sqrt2::solve`: `cargo run -p subwave-codec --example sqrt2_tables`.
+use subwave_codec::transform::sqrt2::solve;
 
 fn main() {
-    let max = subwave_codec::sqrt2::TABLE_MAX;
+    let max = subwave_codec::transform::sqrt2::TABLE_MAX;
     println!("alpha (x 2^16), valence: j = 0..n-1");
     for (i, row) in solve::alpha_table(max).iter().enumerate() {
         println!("{:>2}: {:?}", i + 3, row);

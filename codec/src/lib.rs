@@ -5,36 +5,30 @@
 // Numeric kernels index several arrays (axes, positions, weights) in lockstep.
 #![allow(clippy::needless_range_loop)]
 
-pub mod coder;
-pub mod discs;
+pub mod entropy;
 pub mod error;
-pub mod fit;
-pub mod flat;
-pub mod header;
-pub mod hierarchy;
 pub mod io;
-pub mod levels;
 pub mod mesh;
-pub mod order;
-pub mod polar;
 pub mod quant;
-pub mod sqrt2;
+pub mod sections;
+pub mod topology;
 pub mod transform;
-pub mod vmap;
 
-pub use discs::DiscTransform;
 pub use error::{Error, Result};
-pub use header::{Family, Header, Source, Transform};
 pub use mesh::{Mesh, MAX_COORD};
 pub use quant::{FloatWidth, Quantization, RawCoords};
+pub use sections::head::{Family, Header, Source, Transform};
+pub use sections::vmap::ValueMap;
 pub use subwave_container::{Limits, FORMAT_VERSION};
+pub use transform::polar::DiscTransform;
 pub use transform::Wavelet;
-pub use vmap::ValueMap;
 
 use std::collections::HashMap;
 
-use hierarchy::{Canonical, Level, Topo};
+use sections::{base, levl, ordr};
 use subwave_container::{Container, ContainerWriter, SectionKind};
+use topology::{Canonical, Level, Topo};
+use transform::{fit, polar, sqrt2};
 
 /// Which transform to use on a hierarchy.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -155,12 +149,12 @@ impl Payloads {
 /// The ORDR payload (SPEC.md 7): the coded vertex order (`vertices[coded] = input`),
 /// face order and corner rotations.
 fn order_section(vertices: &[u32], faces: Vec<u32>, rotations: Vec<u32>) -> Vec<u8> {
-    let o = order::InputOrder {
+    let o = ordr::InputOrder {
         vertices: vertices.to_vec(),
         faces,
         rotations,
     };
-    order::encode(&o)
+    ordr::encode(&o)
 }
 
 fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Header {
@@ -205,7 +199,7 @@ fn code_hierarchy(
     // sqrt(2) levels: their tangent targets (SPEC.md 10.3), from the same coarse values;
     // sqrt2-lazy levels: their predictions' phases (10.6).
     let mut targets: Vec<Option<Vec<[i64; 3]>>> = vec![None; canon.levels.len()];
-    let mut phases: Vec<Option<levels::Phases>> = vec![None; canon.levels.len()];
+    let mut phases: Vec<Option<transform::phase::Phases>> = vec![None; canon.levels.len()];
     for (l, level) in canon.levels.iter().enumerate().rev() {
         // As the decoder: sqrt2-lazy keeps the coarse values, so one prediction per
         // face serves the analysis and the tangent targets; the other sqrt(2)
@@ -217,19 +211,19 @@ fn code_hierarchy(
         });
         let plan = (canon.sqrt2 && predictions.is_none()).then(|| sqrt2::Plan::new(level, w));
         if let Some(p) = &predictions {
-            let n = sqrt2::fine_nv(level);
+            let n = topology::sqrt2::fine_nv(level);
             for (xs, pk) in x.iter_mut().zip(p) {
                 sqrt2::apply_predictions(&mut xs[..n], level.nv, pk, true);
             }
         } else if let Some(plan) = &plan {
-            let n = sqrt2::fine_nv(level);
+            let n = topology::sqrt2::fine_nv(level);
             for xs in x.iter_mut() {
                 plan.analyse(&mut xs[..n]);
             }
         } else {
             // Polar levels: the poles' discs first, then the rest (SPEC.md 9.9).
             let n = level.fine_nv();
-            let (discs, owned) = discs::discs(level, &canon.poles, l as u32, disc);
+            let (discs, owned) = polar::discs(level, &canon.poles, l as u32, disc);
             let st = transform::Stencils::new(level, w);
             // Predict-only transforms: the phases of mode 6 (SPEC.md 10.6), from the fine
             // values (the decoder makes them as it reads the level).
@@ -240,7 +234,7 @@ fn code_hierarchy(
             }
             for xs in x.iter_mut() {
                 for d in &discs {
-                    discs::analyse(d, disc, &mut xs[..n]);
+                    polar::analyse(d, disc, &mut xs[..n]);
                 }
                 transform::analyse_with(level, w, &st, &mut xs[..n], &owned);
             }
@@ -252,11 +246,11 @@ fn code_hierarchy(
             (None, None) => None,
         };
     }
-    if x.iter().flatten().any(|v| v.abs() > levels::MAX_LIFTED) {
+    if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
         return None;
     }
     let (mut header, base_bytes) = hierarchy_base(canon, &x, header);
-    let mut models = levels::LevelModels::new();
+    let mut models = levl::LevelModels::new();
     models.rotated = rotated;
     models.only = modes.map(Vec::into_iter);
     // Bytes the levels may take: a coding over the bound is not wanted.
@@ -264,7 +258,7 @@ fn code_hierarchy(
     let mut level_bytes = Vec::with_capacity(canon.levels.len());
     for (((l, c), t), ph) in canon.levels.iter().zip(&coarse).zip(&targets).zip(&phases) {
         let (s2, t) = (canon.sqrt2, t.as_deref());
-        let b = levels::encode(l, s2, &x, c, &mut models, t, ph.as_ref(), room)?;
+        let b = levl::encode(l, s2, &x, c, &mut models, t, ph.as_ref(), room)?;
         room -= b.len();
         level_bytes.push(b);
     }
@@ -304,7 +298,7 @@ fn hierarchy_base(canon: &Canonical, x: &[Vec<i64>; 3], header: &Header) -> (Hea
         Family::Cc
     };
     header.poles = canon.poles.clone();
-    (header, flat::encode(&base))
+    (header, base::encode(&base))
 }
 
 /// Mean [`fit::defect`] over the axes of the finest level above which `auto` does not
@@ -366,7 +360,7 @@ fn code_fit(
         let s = (1u64 << b) as f64;
         let mut x: [Vec<i64>; 3] =
             std::array::from_fn(|k| control.iter().map(|v| (v[k] * s).round() as i64).collect());
-        if x.iter().flatten().any(|v| v.abs() > levels::MAX_LIFTED) {
+        if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
             continue;
         }
         let (mut h, base_bytes) = hierarchy_base(canon, &x, header);
@@ -376,7 +370,7 @@ fn code_fit(
             }
         }
         let mut level_bytes = vec![Vec::new(); canon.levels.len() - 1];
-        level_bytes.push(fit::encode_residuals(&x, pos, b));
+        level_bytes.push(levl::fit::encode_residuals(&x, pos, b));
         h.transform = Transform::Fit { bits: b };
         let p = Payloads {
             header: h,
@@ -587,7 +581,7 @@ fn code_family(
     let rotated = p
         .modes()
         .iter()
-        .any(|&m| matches!(levels::mode_of(&[m]), Some(4 | 5)));
+        .any(|&m| matches!(levl::mode_of(&[m]), Some(4 | 5)));
     if let (true, Transform::Wavelet(w)) = (rotated, p.header.transform) {
         let d = p.header.disc;
         try_code(&mut p, w, d, false);
@@ -661,11 +655,11 @@ fn encode_with(
         let mut families: Vec<(Vec<Canonical>, Wavelet, &[Wavelet])> = Vec::new();
         if want_cc {
             let mut canons = Vec::new();
-            for rec in hierarchy::cc::recover_all(mesh.vertex_count(), &topo, max) {
-                canons.push(hierarchy::canonicalise(&rec, gates)?);
+            for rec in topology::cc::recover_all(mesh.vertex_count(), &topo, max) {
+                canons.push(topology::canonicalise(&rec, gates)?);
             }
             // Polar levels take the Catmull-Clark transforms (SPEC.md 8.6).
-            canons.extend(hierarchy::polar::recover_all(
+            canons.extend(topology::polar::recover_all(
                 mesh.vertex_count(),
                 &topo,
                 max,
@@ -693,8 +687,8 @@ fn encode_with(
             }
         }
         if want_sqrt2 {
-            let canons: Vec<Canonical> = sqrt2::recover::recover(&topo, max)
-                .and_then(|rec| sqrt2::recover::canonicalise(&rec, &topo, gates).ok())
+            let canons: Vec<Canonical> = topology::sqrt2::recover(&topo, max)
+                .and_then(|rec| topology::sqrt2::canonicalise(&rec, &topo, gates).ok())
                 .into_iter()
                 .collect();
             families.push((canons, Wavelet::Sqrt2Lazy, &Wavelet::SQRT2));
@@ -733,17 +727,17 @@ fn encode_with(
             // order of first use (SPEC.md 6.1).
             let mut best_flat: Option<(Payloads, Vec<u32>)> = None;
             let nf = mesh.face_count();
-            let mut candidates = vec![flat::gate_order(&mesh.face_starts, &mesh.faces)];
+            let mut candidates = vec![topology::gates::gate_order(&mesh.face_starts, &mesh.faces)];
             if opts.keep_order {
                 candidates.push(((0..nf as u32).collect(), vec![0; nf]));
-                candidates.push((flat::face_order(mesh), vec![0; nf]));
+                candidates.push((base::face_order(mesh), vec![0; nf]));
             }
             for (forder, rot) in candidates {
-                let by_faces = flat::permute_faces_rotated(mesh, &forder, &rot);
-                let order = flat::canonical_order(&by_faces);
+                let by_faces = base::permute_faces_rotated(mesh, &forder, &rot);
+                let order = base::canonical_order(&by_faces);
                 let p = Payloads {
                     header: flat_h.clone(),
-                    base: flat::encode(&flat::permute(&by_faces, &order)),
+                    base: base::encode(&base::permute(&by_faces, &order)),
                     levels: Vec::new(),
                     order: opts.keep_order.then(|| order_section(&order, forder, rot)),
                 };
@@ -860,12 +854,12 @@ fn section_info(
     SectionInfo {
         kind: kind.to_string(),
         bytes,
-        mode: level.then(|| levels::mode_of(payload)).flatten(),
-        unbinned: level && levels::unbinned(payload),
-        joint: level && levels::joint(payload),
+        mode: level.then(|| levl::mode_of(payload)).flatten(),
+        unbinned: level && levl::unbinned(payload),
+        joint: level && levl::joint(payload),
         zero_slots: match level {
             true => {
-                let z = levels::zero_slots(payload);
+                let z = levl::zero_slots(payload);
                 (0..3).filter(|s| z >> s & 1 == 1).collect()
             }
             false => Vec::new(),
@@ -970,9 +964,9 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
     let bound = if h.levels == 0 {
         MAX_COORD
     } else {
-        levels::MAX_LIFTED
+        levl::MAX_LIFTED
     };
-    let base = flat::decode(
+    let base = base::decode(
         c.sections[1].payload,
         h.base_vertices,
         h.base_faces,
@@ -992,7 +986,7 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
     if h.has_order && level == h.levels {
         if let Some(s) = c.sections.get(2 + h.levels as usize) {
             let degrees: Vec<u32> = mesh.face_starts.windows(2).map(|w| w[1] - w[0]).collect();
-            let o = order::decode(s.payload, mesh.vertex_count(), &degrees)?;
+            let o = ordr::decode(s.payload, mesh.vertex_count(), &degrees)?;
             mesh = restore_order(&mesh, &o);
             input_order = true;
         }
@@ -1044,7 +1038,7 @@ fn synthesise_levels(
     topo.starts = base.face_starts;
     let mut x: [Vec<i64>; 3] =
         std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect());
-    let mut models = levels::LevelModels::new();
+    let mut models = levl::LevelModels::new();
     let is_sqrt2 = h.family == Family::Sqrt2;
     // Polar hierarchies: which vertices are poles (the same at every level, SPEC.md 8.6);
     // every face at a pole must be a triangle.
@@ -1079,12 +1073,12 @@ fn synthesise_levels(
         };
         // Refuse a refinement larger than the header's finest mesh before building it.
         let (fine_nv, fine_faces) = if is_sqrt2 {
-            (sqrt2::fine_nv(&level), level.ne())
+            (topology::sqrt2::fine_nv(&level), level.ne())
         } else {
             (level.fine_nv(), level.fine_faces_with(&pole))
         };
         check_refinement_size(h, fine_nv, fine_faces)?;
-        if is_sqrt2 && !sqrt2::closed(&level) {
+        if is_sqrt2 && !topology::sqrt2::closed(&level) {
             return Err(Error::corrupt("BASE", "a sqrt(2) level with a boundary"));
         }
         let payload = c.sections[2 + l].payload;
@@ -1099,7 +1093,7 @@ fn synthesise_levels(
         // (Made before the details are decoded: while the coarse values alone are in
         // memory, which is smaller than making them after.)
         // Modes 6 and 9 read the predictions' phases (SPEC.md 10.6, 10.9).
-        let mode = levels::mode_of(payload);
+        let mode = levl::mode_of(payload);
         let phased = matches!(mode, Some(6 | 9));
         let (predictions, phases) = match lazy {
             true => {
@@ -1122,11 +1116,11 @@ fn synthesise_levels(
             _ => None,
         };
         let phasing = match (&phases, &phaser) {
-            (Some(p), _) => Some(levels::Phasing::Ready(p)),
-            (None, Some(p)) => Some(levels::Phasing::Cc(p)),
+            (Some(p), _) => Some(levl::Phasing::Ready(p)),
+            (None, Some(p)) => Some(levl::Phasing::Cc(p)),
             (None, None) => None,
         };
-        levels::decode(
+        levl::decode(
             payload,
             &level,
             is_sqrt2,
@@ -1140,7 +1134,7 @@ fn synthesise_levels(
         drop(phaser);
         if l + 1 == upto as usize {
             // The last level read: its magnitudes serve no later level.
-            models = levels::LevelModels::new();
+            models = levl::LevelModels::new();
         }
         if is_sqrt2 && w == Wavelet::Ir2w {
             sqrt2::ir2w_synthesise(&level, &mut x);
@@ -1155,25 +1149,25 @@ fn synthesise_levels(
                 sqrt2::apply_predictions(xs, level.nv, pk, false);
             }
         } else if !synthesised {
-            let (discs, owned) = discs::discs(&level, &h.poles, l as u32, h.disc);
+            let (discs, owned) = polar::discs(&level, &h.poles, l as u32, h.disc);
             let st = st.unwrap_or_else(|| transform::Stencils::new(&level, w));
             for xs in x.iter_mut() {
                 transform::synthesise_with(&level, w, &st, xs, &owned);
                 for d in discs.iter().rev() {
-                    discs::synthesise(d, h.disc, xs);
+                    polar::synthesise(d, h.disc, xs);
                 }
             }
         }
-        if x.iter().flatten().any(|v| v.abs() > levels::MAX_LIFTED) {
+        if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
             return Err(Error::corrupt("LEVL", "reconstructed value out of range"));
         }
         if is_sqrt2 && l + 1 < upto as usize {
             // Only sqrt2-sym reads the per-vertex lists: the others' levels are made
             // without them.
-            next = Some(sqrt2::next_level(level, w == Wavelet::Sqrt2Sym)?);
+            next = Some(topology::sqrt2::next_level(level, w == Wavelet::Sqrt2Sym)?);
         } else if is_sqrt2 {
             // The finest topology needs only the level's edges: its other arrays go first.
-            topo = sqrt2::fine_owned(level);
+            topo = topology::sqrt2::fine_owned(level);
         } else if pole.is_empty() && l + 1 < upto as usize {
             // A Catmull-Clark level's successor, derived from it (no edge lookups).
             next = Some(level.next());
@@ -1240,7 +1234,7 @@ fn synthesise_fit(c: &Container<'_>, h: &Header, base: Mesh, bits: u8, upto: u8)
     if upto == h.levels {
         check_finest_counts(h, &topo)?;
         let payload = c.sections[1 + upto as usize].payload;
-        fit::decode_residuals(payload, &mut x, bits, MAX_COORD)?;
+        levl::fit::decode_residuals(payload, &mut x, bits, MAX_COORD)?;
     } else {
         // A coarser level: the control mesh's refinement, rounded to the grid.
         let half = (1i64 << bits) >> 1;
@@ -1261,7 +1255,7 @@ fn synthesise_fit(c: &Container<'_>, h: &Header, base: Mesh, bits: u8, upto: u8)
     Ok(mesh)
 }
 
-/// Undoes [`flat::permute`]: `order[new] = old`.
+/// Undoes [`base::permute`]: `order[new] = old`.
 fn unpermute(mesh: &Mesh, order: &[u32]) -> Mesh {
     let mut positions = vec![[0i64; 3]; order.len()];
     for (new, &old) in order.iter().enumerate() {
@@ -1275,7 +1269,7 @@ fn unpermute(mesh: &Mesh, order: &[u32]) -> Mesh {
 }
 
 /// Puts vertices and faces back in the input's order (SPEC.md 7).
-fn restore_order(mesh: &Mesh, o: &order::InputOrder) -> Mesh {
+fn restore_order(mesh: &Mesh, o: &ordr::InputOrder) -> Mesh {
     let mut out = unpermute(mesh, &o.vertices);
     let nf = mesh.face_count();
     let mut degree = vec![0u32; nf];
@@ -1305,7 +1299,7 @@ fn restore_order(mesh: &Mesh, o: &order::InputOrder) -> Mesh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hierarchy::fixtures::{prism_with_triangles, pseudo};
+    use crate::topology::fixtures::{prism_with_triangles, pseudo};
 
     /// `code_hierarchy`'s bound: a coding whose BASE and LEVL payloads fit is the
     /// unbounded one, byte for byte; one byte less and it is refused. With and without
@@ -1314,10 +1308,10 @@ mod tests {
     fn bounded_codings_are_the_unbounded_ones_or_none() {
         let mut t = prism_with_triangles();
         for _ in 0..3 {
-            t = hierarchy::Level::new(&t).unwrap().fine();
+            t = topology::Level::new(&t).unwrap().fine();
         }
-        let rec = hierarchy::cc::recover_all(t.nv, &t, 16).remove(0);
-        let canon = hierarchy::canonicalise(&rec, true).unwrap();
+        let rec = topology::cc::recover_all(t.nv, &t, 16).remove(0);
+        let canon = topology::canonicalise(&rec, true).unwrap();
         let vals: Vec<Vec<i64>> = (0..3).map(|k| pseudo(k + 1, t.nv, 12)).collect();
         let mesh = Mesh {
             positions: (0..t.nv)

@@ -2,9 +2,12 @@
 //! face points', each as x, y, z with integer models chosen by class, axis, the previous
 //! axis's magnitude and the activity of the coarser neighbours.
 
-use crate::coder::{class_of, Decoder, Encoder, IntModel};
+pub mod fit;
+
+use crate::entropy::{class_of, Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
-use crate::hierarchy::Level;
+use crate::topology::Level;
+use crate::transform::phase::{phase, Phases, FRAC_DIV};
 
 /// Largest magnitude of a lifted value or detail (SPEC.md 9.3).
 pub const MAX_LIFTED: i64 = (1 << 52) - 1;
@@ -38,17 +41,6 @@ struct Models {
 /// Phase bins: the size of a prediction's remainder in sixths of its divisor, 0..=2.
 const PHASE_BINS: usize = 3;
 
-/// Per axis and detail, the phase of the detail's prediction (SPEC.md 10.6), and for a
-/// Catmull-Clark level its fraction (10.9).
-#[derive(Clone, Default)]
-pub struct Phases {
-    /// Bit 2 set when the remainder is negative, bits 0 and 1 its bin.
-    pub codes: [Vec<u8>; 3],
-    /// Where the unrounded prediction lies from the rounded one, in [`FRAC_DIV`]ths
-    /// (rounded); empty where no level mode reads it (sqrt(2) levels).
-    pub fracs: [Vec<i16>; 3],
-}
-
 /// Detail `i`'s phases on the three axes.
 fn phases_at(p: &Phases, i: usize) -> [u8; 3] {
     [p.codes[0][i], p.codes[1][i], p.codes[2][i]]
@@ -58,9 +50,6 @@ fn phases_at(p: &Phases, i: usize) -> [u8; 3] {
 fn fracs_at(p: &Phases, i: usize) -> [i16; 3] {
     [p.fracs[0][i], p.fracs[1][i], p.fracs[2][i]]
 }
-
-/// A prediction's fraction (SPEC.md 10.9) is in 512ths.
-pub const FRAC_DIV: i128 = 512;
 
 /// Mode 9's mask bit for joint rounding: each correction rounded together with the
 /// prediction's fraction, the value phased by that sum's remainder (SPEC.md 10.9).
@@ -73,16 +62,6 @@ enum Rounding {
     Apart,
     /// With the prediction's fraction, the value phased by their sum's phase.
     Joint,
-}
-
-/// The phase of a prediction `[n / d]` (9.1 rounding, `d > 0`) from its remainder
-/// `r = n - d [n / d]` (so `-d / 2 <= r < d / 2`): the sign of `r`, and how many of
-/// `d, 2d` are at most `6 |r|`.
-#[inline]
-pub fn phase(r: i128, d: i128) -> u8 {
-    let (a, d) = (6 * r.unsigned_abs(), d.unsigned_abs());
-    let bin = (a >= d) as u8 + (a >= 2 * d) as u8;
-    ((r < 0) as u8) << 2 | bin
 }
 
 /// The mode byte's unbinned flag: every value of the level is coded with the shared
@@ -137,7 +116,7 @@ type Weights = [[[i8; NFEAT]; 3]; 2];
 /// face point: the sum of the earlier faces beside its edges, and of its own edge
 /// points.
 fn corr_features(level: &Level, x: &[Vec<i64>; 3], i: usize) -> [[i128; 3]; NFEAT] {
-    use crate::hierarchy::NONE;
+    use crate::topology::NONE;
     let nv = level.nv;
     let mut f = [[0i128; 3]; NFEAT];
     let mut add = |which: usize, j: usize| {
@@ -680,7 +659,7 @@ fn frame(level: &Level, normals: &[[i128; 3]], detail: usize) -> Option<(usize, 
     let mut n = [0i128; 3];
     if detail < level.ne() {
         for &f in &level.edge_faces[detail] {
-            if f != crate::hierarchy::NONE {
+            if f != crate::topology::NONE {
                 let m = normals[f as usize];
                 for d in 0..3 {
                     n[d] += m[d];
@@ -915,7 +894,7 @@ fn tangent_ref(level: &Level, coarse: &[Vec<i64>; 3], fd: usize) -> [i128; 3] {
 /// for a boundary edge or a component above 2^52.
 fn edge_offset(level: &Level, coarse: &[Vec<i64>; 3], e: usize) -> Option<[i64; 3]> {
     let [f1, f2] = level.edge_faces[e];
-    if f1 == crate::hierarchy::NONE || f2 == crate::hierarchy::NONE {
+    if f1 == crate::topology::NONE || f2 == crate::topology::NONE {
         return None;
     }
     let (c1, c2) = (
@@ -1455,20 +1434,6 @@ enum Mode<'a> {
     CorrectedPhased(Weights, Rounding),
 }
 
-/// Test helper: the phase (SPEC.md 10.6) of an integer detail `d` whose unrounded
-/// counterpart (the same analysis on floating point values) is `exact`: the sign of
-/// `g = d - exact` and how many of 1/6, 2/6 are at most `|g|`; `None` too near a bin's
-/// edge for floating point to tell.
-#[cfg(test)]
-pub(crate) fn expected_phase(d: i64, exact: f64) -> Option<u8> {
-    let g = d as f64 - exact;
-    let a = 6.0 * g.abs();
-    if (a - 1.0).abs() < 1e-6 || (a - 2.0).abs() < 1e-6 {
-        return None;
-    }
-    Some(((g < 0.0) as u8) << 2 | ((a >= 1.0) as u8 + (a >= 2.0) as u8))
-}
-
 /// Where a level's phases come from in the decoder (SPEC.md 10.6).
 pub enum Phasing<'a> {
     /// Every detail's, known before the level is read (sqrt2-lazy: from the coarse
@@ -1934,7 +1899,7 @@ fn synthesise_edges(p: &crate::transform::Phaser<'_>, level: &Level, x: &mut [Ve
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hierarchy::fixtures::{prism_with_triangles, pseudo};
+    use crate::topology::fixtures::{prism_with_triangles, pseudo};
 
     /// [`super::encode`] of a Catmull-Clark level without a limit or targets.
     fn encode_fresh(
@@ -2565,13 +2530,13 @@ mod tests {
     #[test]
     fn tangent_phase_mode_round_trips_on_sqrt2_levels() {
         let mut t = prism_with_triangles();
-        t = crate::sqrt2::fine(&Level::new(&t).unwrap());
-        t = crate::sqrt2::fine(&Level::new(&t).unwrap());
+        t = crate::topology::sqrt2::fine(&Level::new(&t).unwrap());
+        t = crate::topology::sqrt2::fine(&Level::new(&t).unwrap());
         let level = Level::new(&t).unwrap();
         let (nv, nf) = (level.nv, level.nf());
         let coarse: [Vec<i64>; 3] = std::array::from_fn(|k| pseudo(60 + k as u64, nv, 10));
-        let p = crate::sqrt2::predictions(&level, &coarse);
-        let targets = crate::sqrt2::tangent_targets_from(&level, &coarse, &p);
+        let p = crate::transform::sqrt2::predictions(&level, &coarse);
+        let targets = crate::transform::sqrt2::tangent_targets_from(&level, &coarse, &p);
         // Face points at their centroids (rounded), less the predictions: the details.
         let x: [Vec<i64>; 3] = std::array::from_fn(|k| {
             let mut v = coarse[k].clone();
@@ -2656,7 +2621,7 @@ mod tests {
 
     /// A level over a regular `n` x `n` grid of quads, with each coarse vertex's (x, y).
     fn grid_level(n: u32) -> (Level, Vec<[i64; 2]>) {
-        use crate::hierarchy::Topo;
+        use crate::topology::Topo;
         let mut t = Topo::new((n * n) as usize);
         for j in 0..n - 1 {
             for i in 0..n - 1 {

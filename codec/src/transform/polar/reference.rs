@@ -9,7 +9,7 @@
 //! vertex rule corrected): beta = 1/2, alpha = 1/4, so C = sum(gamma) = 1/2 and U = 1/2
 //! for valences n >= 4.
 
-use crate::sqrt2::solve::solve;
+use crate::transform::sqrt2::solve::solve;
 
 /// The spoke weights gamma_0..gamma_{n-1} of a pole of valence n (eq. 1, beta = 1/2).
 pub fn gamma(n: usize) -> Vec<f64> {
@@ -26,7 +26,7 @@ pub const ONE: i64 = 1 << 16;
 
 /// Gamma of valence `n` times 2^16, rounded half away from zero, re-balanced so that the
 /// weights sum to exactly 2^15 (one half, the pole keeping the other half): the residual
-/// goes to k = 0. This is what the frozen table (`crate::discs::GAMMA`) holds.
+/// goes to k = 0. This is what the frozen table (`crate::transform::polar::GAMMA`) holds.
 pub fn gamma_fixed(n: usize) -> Vec<i64> {
     let mut g: Vec<i64> = gamma(n)
         .iter()
@@ -43,13 +43,13 @@ fn fixed(w: f64) -> i32 {
 }
 
 /// The circular lifting weights w_{-2..3} (Table 2) times 2^16: what the frozen table
-/// (`crate::discs::tables::LIFT_W`) holds.
+/// (`crate::transform::polar::tables::LIFT_W`) holds.
 pub fn circular_weights_fixed() -> [i32; 6] {
     circular_weights().map(fixed)
 }
 
 /// The radial lifting weights of valence `n` times 2^16: t (n + 2 entries) and s (three
-/// cases of eight), what the frozen tables (`crate::discs::tables::LIFT_T`, `LIFT_S`)
+/// cases of eight), what the frozen tables (`crate::transform::polar::tables::LIFT_T`, `LIFT_S`)
 /// hold.
 pub fn radial_weights_fixed(n: usize) -> (Vec<i32>, [[i32; 8]; 3]) {
     let w = radial_weights(n);

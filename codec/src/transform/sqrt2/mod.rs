@@ -1,5 +1,5 @@
-//! sqrt(2) hierarchies (SPEC.md 8.4-8.5, 9.6-9.8): the refinement, its recovery from a
-//! flat mesh, and the three transforms on it (`sqrt2-lazy`, `ir2w`, `sqrt2-sym`).
+//! The sqrt(2) transforms (SPEC.md 9.6-9.8): `sqrt2-lazy`, `ir2w` and `sqrt2-sym` on the
+//! levels of a sqrt(2) hierarchy (its refinement and recovery: [`crate::topology::sqrt2`]).
 //!
 //! One sqrt(2) step keeps every coarse vertex and inserts one face point per coarse face;
 //! the fine faces are the quads (a, f2, b, f1), one per coarse edge a-b, f1 being the face
@@ -11,12 +11,11 @@
 //! other: synthesis undoes analysis exactly for any weights. The exception is
 //! `sqrt2-sym`'s 16/13 scaling, an injective rounding inverted exactly (SPEC.md 9.8).
 
-pub mod recover;
 pub mod solve;
 pub mod tables;
 
-use crate::hierarchy::{Level, Topo, NONE};
-use crate::levels::{phase, Phases};
+use crate::topology::{Level, Topo, NONE};
+use crate::transform::phase::{phase, Phases};
 use crate::transform::{Sample, Wavelet};
 use solve::Rings;
 
@@ -25,116 +24,6 @@ pub const TABLE_MAX: usize = 16;
 
 /// Fixed-point scale of the table weights.
 const ONE: i128 = 1 << 16;
-
-/// Whether every coarse edge has two faces (sqrt(2) levels need a closed mesh).
-pub fn closed(level: &Level) -> bool {
-    level.edge_faces.iter().all(|f| f[1] != NONE)
-}
-
-/// The fine topology of one sqrt(2) step (SPEC.md 8.4): per coarse edge, in edge order,
-/// the quad (a, f2, b, f1). The level must be [`closed`].
-pub fn fine(level: &Level) -> Topo {
-    fine_of_edges(level.nv, level.nf(), &level.edges, &level.edge_faces)
-}
-
-/// [`fine`] of a level no longer needed: its other arrays are freed before the fine
-/// faces are allocated (the decoder's last sqrt(2) step, where memory peaks).
-pub fn fine_owned(mut level: Level) -> Topo {
-    let nf = level.nf();
-    level.free_vertex_adjacency();
-    level.coarse = Topo::new(0);
-    level.face_edges = Vec::new();
-    fine_of_edges(level.nv, nf, &level.edges, &level.edge_faces)
-}
-
-fn fine_of_edges(nv: usize, nf: usize, edges: &[[u32; 2]], edge_faces: &[[u32; 2]]) -> Topo {
-    let mut t = Topo::new(nv + nf);
-    t.idx.reserve(4 * edges.len());
-    t.starts.reserve(edges.len());
-    let f0 = nv as u32;
-    for (&[a, b], &[f1, f2]) in edges.iter().zip(edge_faces) {
-        t.push(&[a, f0 + f2, b, f0 + f1]);
-    }
-    t
-}
-
-/// The level of [`fine`]`(level)`, equal to `Level::new(&fine(level))` but derived from
-/// `level` without looking edges up: a fine edge joins a corner's vertex to its face's
-/// point, so it is numbered by the corner. Falls back to [`Level::new`] unless every face
-/// has distinct corners (then each corner is one fine edge between the quads of its two
-/// coarse edges). The level must be [`closed`]. It is consumed, and its arrays freed
-/// before the new level's adjacency is built (the decoder's memory peaks here). Without
-/// `lists` the new level has no per-vertex lists (a decoder's sqrt2-lazy or ir2w level,
-/// which never reads them), as if [`Level::free_vertex_adjacency`] had been called.
-pub fn next_level(level: Level, lists: bool) -> crate::error::Result<Level> {
-    let fine_topo = fine(&level);
-    let topo = &level.coarse;
-    let distinct = (0..topo.nf()).all(|f| {
-        let face = topo.face(f);
-        face.iter()
-            .enumerate()
-            .all(|(i, v)| !face[i + 1..].contains(v))
-    });
-    if !distinct {
-        drop(level);
-        let mut next = Level::new(&fine_topo)?;
-        if !lists {
-            next.free_vertex_adjacency();
-        }
-        return Ok(next);
-    }
-    // Per coarse edge, its two occurrences as (corner, next corner) slots, in face order.
-    let mut occ = vec![[[NONE; 2]; 2]; level.ne()];
-    for f in 0..topo.nf() {
-        let s = topo.starts[f] as usize;
-        let k = topo.face(f).len();
-        for i in 0..k {
-            let e = level.face_edges[s + i] as usize;
-            let n = (occ[e][0][0] != NONE) as usize;
-            let next = if i + 1 == k { s } else { s + i + 1 };
-            occ[e][n] = [(s + i) as u32, next as u32];
-        }
-    }
-    // The corner slot of vertex v in the face occurrence `o`.
-    let slot = |o: [u32; 2], v: u32| {
-        if topo.idx[o[0] as usize] == v {
-            o[0]
-        } else {
-            o[1]
-        }
-    };
-    let n_edges = topo.idx.len();
-    let mut id = vec![NONE; n_edges];
-    let mut edges = Vec::with_capacity(n_edges);
-    let mut edge_faces = Vec::with_capacity(n_edges);
-    let mut face_edges = Vec::with_capacity(fine_topo.idx.len());
-    for (q, &[a, b]) in level.edges.iter().enumerate() {
-        let [o1, o2] = occ[q];
-        let quad = fine_topo.face(q);
-        // Quad (a, F2, b, F1): its edges belong to these corners.
-        let corners = [slot(o2, a), slot(o2, b), slot(o1, b), slot(o1, a)];
-        for (i, &c) in corners.iter().enumerate() {
-            let c = c as usize;
-            if id[c] == NONE {
-                id[c] = edges.len() as u32;
-                edges.push([quad[i], quad[(i + 1) % 4]]);
-                edge_faces.push([q as u32, NONE]);
-            } else {
-                edge_faces[id[c] as usize][1] = q as u32;
-            }
-            face_edges.push(id[c]);
-        }
-    }
-    drop((occ, id, level));
-    Ok(Level::from_edges(
-        fine_topo, edges, edge_faces, face_edges, lists,
-    ))
-}
-
-/// Number of fine vertices of a sqrt(2) step.
-pub fn fine_nv(level: &Level) -> usize {
-    level.nv + level.nf()
-}
 
 /// Weighted sums, precomputed once per level and transform: `targets[i]` gets
 /// `sum(w * x[src]) / den[i]` (CSR rows).
@@ -706,7 +595,8 @@ pub fn ir2w_synthesise(level: &Level, x: &mut [Vec<i64>; 3]) {
 #[cfg(test)]
 mod prediction_tests {
     use super::*;
-    use crate::hierarchy::fixtures::prism_with_triangles;
+    use crate::topology::fixtures::prism_with_triangles;
+    use crate::topology::sqrt2::{fine, fine_nv};
 
     /// Pseudo-random fine values of `level` in `-2^(bits - 1)..2^(bits - 1)` (xorshift
     /// from the state `s`).
@@ -751,7 +641,7 @@ mod prediction_tests {
                     if bits > 41 {
                         continue; // beyond f64's exact integers
                     }
-                    if let Some(want) = crate::levels::expected_phase(d[i], e[i]) {
+                    if let Some(want) = crate::transform::phase::expected_phase(d[i], e[i]) {
                         assert_eq!(
                             ph.codes[k][f], want,
                             "face {f} axis {k}: {} vs {}",
@@ -799,7 +689,8 @@ mod prediction_tests {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hierarchy::fixtures::{prism_with_triangles, pseudo};
+    use crate::topology::fixtures::{prism_with_triangles, pseudo};
+    use crate::topology::sqrt2::{closed, fine, fine_nv, fine_owned, next_level};
 
     #[test]
     fn next_level_is_the_level_of_the_fine_faces() {

@@ -6,7 +6,7 @@
 //! [`super::tables`], and a test checks they are exactly what [`alpha_table`] and
 //! [`omega_table`] produce. `cargo run -p subwave-codec --example sqrt2_tables` prints them.
 
-use crate::hierarchy::{Topo, NONE};
+use crate::topology::{Topo, NONE};
 
 /// Fixed-point scale of every table weight: 2^16.
 pub const ONE: i64 = 1 << 16;
@@ -52,7 +52,7 @@ pub struct Rings {
 impl Rings {
     /// Builds the rings of `t` (for the solver; the codec uses [`Rings::from_level`]).
     pub fn new(t: &Topo) -> Rings {
-        match crate::hierarchy::Level::new(t) {
+        match crate::topology::Level::new(t) {
             Ok(level) => Rings::from_level(&level),
             Err(_) => Rings {
                 starts: vec![0; t.nv + 1],
@@ -63,7 +63,7 @@ impl Rings {
     }
 
     /// Builds the rings of a level's coarse mesh from its edge-face adjacency.
-    pub fn from_level(level: &crate::hierarchy::Level) -> Rings {
+    pub fn from_level(level: &crate::topology::Level) -> Rings {
         let t = &level.coarse;
         let nc = t.idx.len();
         // link[c]: the corner of the same vertex in the face across the corner's

@@ -3,7 +3,9 @@
 //! flat mesh in any vertex and face order (encoder only).
 
 pub mod cc;
+pub mod gates;
 pub mod polar;
+pub mod sqrt2;
 
 use crate::error::{Error, Result};
 
@@ -526,7 +528,7 @@ pub struct Canonical {
     pub fine: Topo,
     /// `order[c]` = the input number of canonical vertex `c` (finest level).
     pub order: Vec<u32>,
-    /// The levels are sqrt(2) steps ([`crate::sqrt2`]), not Catmull-Clark ones.
+    /// The levels are sqrt(2) steps ([`crate::topology::sqrt2`]), not Catmull-Clark ones.
     pub sqrt2: bool,
     /// Polar hierarchies (SPEC.md 8.6): the poles in canonical numbers, increasing;
     /// empty for every other hierarchy.
@@ -545,7 +547,7 @@ pub(crate) fn base_numbering(
     // With `gates`, faces in the order the connectivity coder's gates visit them
     // (SPEC.md 6.2); else as recovered (which keeps a file's own order cheap to record).
     let (forder, rot) = if gates {
-        crate::flat::gate_order(&base_in.starts, &base_in.idx)
+        gates::gate_order(&base_in.starts, &base_in.idx)
     } else {
         ((0..base_in.nf() as u32).collect(), vec![0; base_in.nf()])
     };

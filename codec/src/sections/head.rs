@@ -2,9 +2,9 @@
 
 use subwave_container::{ByteReader, ByteWriter, Limits};
 
-use crate::discs::DiscTransform;
 use crate::error::{Error, Result};
 use crate::quant::{FloatWidth, Quantization};
+use crate::transform::polar::DiscTransform;
 use crate::transform::Wavelet;
 
 /// Which subdivision family the levels follow.
@@ -266,7 +266,7 @@ impl Header {
             FIT_CODE => {
                 let at = r.offset();
                 let bits = r.u8("fit precision")?;
-                if bits > crate::fit::MAX_EXTRA_BITS {
+                if bits > crate::transform::fit::MAX_EXTRA_BITS {
                     return Err(malformed(
                         at,
                         format!("a fit with {bits} extra bits, at most 16"),

@@ -6,7 +6,12 @@
 //! subtracted, in reverse order) undoes analysis exactly for any weights: boundary rules
 //! and rounding can cost compression, never losslessness.
 
-use crate::hierarchy::{flag, Level, NONE};
+pub mod fit;
+pub mod phase;
+pub mod polar;
+pub mod sqrt2;
+
+use crate::topology::{flag, Level, NONE};
 
 /// The wavelet transforms on Catmull-Clark hierarchies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -113,7 +118,7 @@ impl Wavelet {
 
     /// Analysis steps in order of computation (Table 1 of Bertram et al., integer
     /// variant of their section 4.3); empty for `DyadicSym`, which has its own steps,
-    /// and for the sqrt(2) transforms ([`crate::sqrt2`]).
+    /// and for the sqrt(2) transforms ([`crate::transform::sqrt2`]).
     pub fn steps(self) -> &'static [Step] {
         use Kind::{S, W};
         match self {
@@ -1111,8 +1116,13 @@ impl<'a> Phaser<'a> {
     /// The phases of details `0..n` on the three axes of `x` (for face points, the
     /// values must hold the fine edge points), and with `fracs` their fractions
     /// (SPEC.md 10.9).
-    pub fn phases(&self, x: &[Vec<i64>; 3], n: usize, fracs: bool) -> crate::levels::Phases {
-        let mut p = crate::levels::Phases::default();
+    pub fn phases(
+        &self,
+        x: &[Vec<i64>; 3],
+        n: usize,
+        fracs: bool,
+    ) -> crate::transform::phase::Phases {
+        let mut p = crate::transform::phase::Phases::default();
         for k in 0..3 {
             for i in 0..n {
                 if fracs {
@@ -1133,7 +1143,7 @@ impl<'a> Phaser<'a> {
     #[inline]
     pub fn predict(&self, x: &[i64], i: usize) -> (i64, u8) {
         let (p, r, d) = self.exact(x, i);
-        (p, crate::levels::phase(r, d))
+        (p, crate::transform::phase::phase(r, d))
     }
 
     /// [`Phaser::predict`] and the fraction: the unrounded prediction lies about
@@ -1142,8 +1152,8 @@ impl<'a> Phaser<'a> {
     pub fn predict_frac(&self, x: &[i64], i: usize) -> (i64, u8, i16) {
         let (p, r, d) = self.exact(x, i);
         // (|r| <= d / 2, so the fraction is at most 256 in magnitude.)
-        let frac = round_div(crate::levels::FRAC_DIV * r, d) as i16;
-        (p, crate::levels::phase(r, d), frac)
+        let frac = round_div(crate::transform::phase::FRAC_DIV * r, d) as i16;
+        (p, crate::transform::phase::phase(r, d), frac)
     }
 
     /// Detail `i`'s correction `p`, and where its unrounded prediction lies: `r / d`
@@ -1291,7 +1301,7 @@ fn dyadic_sym<T: Sample>(level: &Level, x: &mut [T], forward: bool, skip: &[bool
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hierarchy::Topo;
+    use crate::topology::Topo;
     use proptest::prelude::*;
 
     fn grid(n: u32) -> Topo {
@@ -1306,7 +1316,7 @@ mod tests {
     }
 
     fn mixed() -> Topo {
-        crate::hierarchy::fixtures::prism_with_triangles()
+        crate::topology::fixtures::prism_with_triangles()
     }
 
     fn open_mixed() -> Topo {
@@ -1331,7 +1341,7 @@ mod tests {
                 for w in [Wavelet::Lazy, Wavelet::Interp4, Wavelet::Interp6] {
                     let st = Stencils::new(level, w);
                     let p = Phaser::new(level, w, &st).unwrap();
-                    let x = crate::hierarchy::fixtures::pseudo(n as u64 + 3, level.fine_nv(), 12);
+                    let x = crate::topology::fixtures::pseudo(n as u64 + 3, level.fine_nv(), 12);
                     let mut d = x.clone();
                     analyse(level, w, &mut d);
                     let mut e: Vec<f64> = x.iter().map(|&v| v as f64).collect();
@@ -1345,7 +1355,7 @@ mod tests {
                         // the fraction is that in 512ths, rounded.
                         let off = frac as f64 / 512.0 - (d[j] as f64 - e[j]);
                         assert!(off.abs() <= 1.0 / 1024.0 + 1e-9, "{w:?} detail {i}: {off}");
-                        if let Some(want) = crate::levels::expected_phase(d[j], e[j]) {
+                        if let Some(want) = crate::transform::phase::expected_phase(d[j], e[j]) {
                             assert_eq!(q, want, "{w:?} detail {i}: {} vs {}", d[j], e[j]);
                             seen[q as usize] += 1;
                         }
@@ -1554,11 +1564,11 @@ mod tests {
         for f in &files {
             let topo = obj_topology(&std::fs::read_to_string(f).unwrap());
             let name = f.display().to_string();
-            if let Some(rec) = crate::hierarchy::cc::recover(topo.nv, &topo, 16) {
-                let canon = crate::hierarchy::canonicalise(&rec, true).unwrap();
+            if let Some(rec) = crate::topology::cc::recover(topo.nv, &topo, 16) {
+                let canon = crate::topology::canonicalise(&rec, true).unwrap();
                 levels.extend(canon.levels.into_iter().map(|l| (name.clone(), l)));
             }
-            if let Some(canon) = crate::hierarchy::polar::recover(topo.nv, &topo, 16) {
+            if let Some(canon) = crate::topology::polar::recover(topo.nv, &topo, 16) {
                 levels.extend(canon.levels.into_iter().map(|l| (name.clone(), l)));
             }
         }

@@ -57,12 +57,12 @@ pub const OMEGA: [[i32; 7]; 14] = [
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sqrt2::solve;
+    use crate::transform::sqrt2::solve;
 
     #[test]
     fn frozen_tables_are_the_solver_output() {
-        let alpha = solve::alpha_table(crate::sqrt2::TABLE_MAX);
-        let omega = solve::omega_table(crate::sqrt2::TABLE_MAX);
+        let alpha = solve::alpha_table(crate::transform::sqrt2::TABLE_MAX);
+        let omega = solve::omega_table(crate::transform::sqrt2::TABLE_MAX);
         assert_eq!(alpha.len(), ALPHA.len());
         for (n, (frozen, solved)) in ALPHA.iter().zip(&alpha).enumerate() {
             let frozen: Vec<i64> = frozen.iter().map(|&w| w as i64).collect();

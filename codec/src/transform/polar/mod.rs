@@ -2,12 +2,13 @@
 //! refinement rules of polar subdivision (Zhao et al. 2009, eq. 2-6) inverted in
 //! integers (the lazy wavelet), optionally followed by the paper's local lifting (eq.
 //! 11-13, weights from the frozen tables), inside the image of each pole's base fan,
-//! joined to a Catmull-Clark transform outside it. [`crate::polar`] holds the
+//! joined to a Catmull-Clark transform outside it. [`crate::transform::polar::reference`] holds the
 //! floating-point reference.
 
+pub mod reference;
 pub mod tables;
 
-use crate::hierarchy::Level;
+use crate::topology::Level;
 use crate::transform::round_div;
 
 /// Which polar transform a polar hierarchy's discs take (the header's disc byte).
@@ -533,24 +534,27 @@ fn spokes(disc: &Disc, stride: usize) -> Spokes<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hierarchy::Topo;
+    use crate::topology::Topo;
 
     #[test]
     fn the_frozen_tables_are_the_reference_solvers() {
         for (i, row) in tables::GAMMA.iter().enumerate() {
             let n = i + tables::GAMMA_MIN;
-            let want = crate::polar::gamma_fixed(n);
+            let want = crate::transform::polar::reference::gamma_fixed(n);
             assert_eq!(
                 row.iter().map(|&g| g as i64).collect::<Vec<_>>(),
                 want,
                 "n = {n}"
             );
             assert_eq!(want.iter().sum::<i64>(), 1 << 15);
-            let (t, s) = crate::polar::radial_weights_fixed(n);
+            let (t, s) = crate::transform::polar::reference::radial_weights_fixed(n);
             assert_eq!(tables::LIFT_T[i], &t[..], "t, n = {n}");
             assert_eq!(tables::LIFT_S[i], s, "s, n = {n}");
         }
-        assert_eq!(tables::LIFT_W, crate::polar::circular_weights_fixed());
+        assert_eq!(
+            tables::LIFT_W,
+            crate::transform::polar::reference::circular_weights_fixed()
+        );
     }
 
     /// A lat-long sphere with poles 0 and 1, refined `levels` times by the polar rule.

@@ -1,6 +1,6 @@
 //! The frozen weights of the integer polar transforms (SPEC.md 9.9), times 2^16:
 //! gamma (summing to exactly 2^15) and the lifting weights t, s and w, as
-//! `crate::polar::gamma_fixed`, `radial_weights_fixed` and `circular_weights_fixed`
+//! `crate::transform::polar::reference::gamma_fixed`, `radial_weights_fixed` and `circular_weights_fixed`
 //! compute them (a test checks it). Written by
 //! `cargo run -p subwave-codec --example polar_tables`.
 //! Valences 4..=64; index = valence - 4.

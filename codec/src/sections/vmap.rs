@@ -5,7 +5,7 @@
 //! the set itself, once. Ranks keep the order of the values, so a smooth surface stays
 //! smooth, while the spacing the set left empty costs nothing.
 
-use crate::coder::{Decoder, Encoder, IntModel};
+use crate::entropy::{Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
 use crate::mesh::MAX_COORD;
 

@@ -2,7 +2,7 @@
 //! (SPEC.md 7). Runs of consecutive indices cost a fraction of a bit each; the rest is
 //! coded as a rank among the indices not yet used, close to log2(n!) bits in all.
 
-use crate::coder::{AdaptiveModel, Decoder, Encoder, IntModel};
+use crate::entropy::{AdaptiveModel, Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
 
 const SECTION: &str = "ORDR";

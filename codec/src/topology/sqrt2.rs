@@ -1,4 +1,5 @@
-//! Recovering sqrt(2) hierarchies from a flat mesh (SPEC.md 8.5).
+//! sqrt(2) hierarchies: the refinement (SPEC.md 8.4) and its recovery from a flat mesh
+//! (8.5).
 //!
 //! A sqrt(2) step's fine mesh is a closed quad mesh whose vertex graph is bipartite: old
 //! vertices on one side, face points on the other. Undoing a step picks one side as the
@@ -9,9 +10,119 @@
 //! smallest depth.
 
 use crate::error::{Error, Result};
-use crate::hierarchy::{
+use crate::topology::{
     base_numbering, check_matches, csr, push_face_points, Canonical, Level, PairMap, Topo, NONE,
 };
+
+/// Whether every coarse edge has two faces (sqrt(2) levels need a closed mesh).
+pub fn closed(level: &Level) -> bool {
+    level.edge_faces.iter().all(|f| f[1] != NONE)
+}
+
+/// The fine topology of one sqrt(2) step (SPEC.md 8.4): per coarse edge, in edge order,
+/// the quad (a, f2, b, f1). The level must be [`closed`].
+pub fn fine(level: &Level) -> Topo {
+    fine_of_edges(level.nv, level.nf(), &level.edges, &level.edge_faces)
+}
+
+/// [`fine`] of a level no longer needed: its other arrays are freed before the fine
+/// faces are allocated (the decoder's last sqrt(2) step, where memory peaks).
+pub fn fine_owned(mut level: Level) -> Topo {
+    let nf = level.nf();
+    level.free_vertex_adjacency();
+    level.coarse = Topo::new(0);
+    level.face_edges = Vec::new();
+    fine_of_edges(level.nv, nf, &level.edges, &level.edge_faces)
+}
+
+fn fine_of_edges(nv: usize, nf: usize, edges: &[[u32; 2]], edge_faces: &[[u32; 2]]) -> Topo {
+    let mut t = Topo::new(nv + nf);
+    t.idx.reserve(4 * edges.len());
+    t.starts.reserve(edges.len());
+    let f0 = nv as u32;
+    for (&[a, b], &[f1, f2]) in edges.iter().zip(edge_faces) {
+        t.push(&[a, f0 + f2, b, f0 + f1]);
+    }
+    t
+}
+
+/// The level of [`fine`]`(level)`, equal to `Level::new(&fine(level))` but derived from
+/// `level` without looking edges up: a fine edge joins a corner's vertex to its face's
+/// point, so it is numbered by the corner. Falls back to [`Level::new`] unless every face
+/// has distinct corners (then each corner is one fine edge between the quads of its two
+/// coarse edges). The level must be [`closed`]. It is consumed, and its arrays freed
+/// before the new level's adjacency is built (the decoder's memory peaks here). Without
+/// `lists` the new level has no per-vertex lists (a decoder's sqrt2-lazy or ir2w level,
+/// which never reads them), as if [`Level::free_vertex_adjacency`] had been called.
+pub fn next_level(level: Level, lists: bool) -> crate::error::Result<Level> {
+    let fine_topo = fine(&level);
+    let topo = &level.coarse;
+    let distinct = (0..topo.nf()).all(|f| {
+        let face = topo.face(f);
+        face.iter()
+            .enumerate()
+            .all(|(i, v)| !face[i + 1..].contains(v))
+    });
+    if !distinct {
+        drop(level);
+        let mut next = Level::new(&fine_topo)?;
+        if !lists {
+            next.free_vertex_adjacency();
+        }
+        return Ok(next);
+    }
+    // Per coarse edge, its two occurrences as (corner, next corner) slots, in face order.
+    let mut occ = vec![[[NONE; 2]; 2]; level.ne()];
+    for f in 0..topo.nf() {
+        let s = topo.starts[f] as usize;
+        let k = topo.face(f).len();
+        for i in 0..k {
+            let e = level.face_edges[s + i] as usize;
+            let n = (occ[e][0][0] != NONE) as usize;
+            let next = if i + 1 == k { s } else { s + i + 1 };
+            occ[e][n] = [(s + i) as u32, next as u32];
+        }
+    }
+    // The corner slot of vertex v in the face occurrence `o`.
+    let slot = |o: [u32; 2], v: u32| {
+        if topo.idx[o[0] as usize] == v {
+            o[0]
+        } else {
+            o[1]
+        }
+    };
+    let n_edges = topo.idx.len();
+    let mut id = vec![NONE; n_edges];
+    let mut edges = Vec::with_capacity(n_edges);
+    let mut edge_faces = Vec::with_capacity(n_edges);
+    let mut face_edges = Vec::with_capacity(fine_topo.idx.len());
+    for (q, &[a, b]) in level.edges.iter().enumerate() {
+        let [o1, o2] = occ[q];
+        let quad = fine_topo.face(q);
+        // Quad (a, F2, b, F1): its edges belong to these corners.
+        let corners = [slot(o2, a), slot(o2, b), slot(o1, b), slot(o1, a)];
+        for (i, &c) in corners.iter().enumerate() {
+            let c = c as usize;
+            if id[c] == NONE {
+                id[c] = edges.len() as u32;
+                edges.push([quad[i], quad[(i + 1) % 4]]);
+                edge_faces.push([q as u32, NONE]);
+            } else {
+                edge_faces[id[c] as usize][1] = q as u32;
+            }
+            face_edges.push(id[c]);
+        }
+    }
+    drop((occ, id, level));
+    Ok(Level::from_edges(
+        fine_topo, edges, edge_faces, face_edges, lists,
+    ))
+}
+
+/// Number of fine vertices of a sqrt(2) step.
+pub fn fine_nv(level: &Level) -> usize {
+    level.nv + level.nf()
+}
 
 /// A recovered sqrt(2) hierarchy, in the input's vertex numbers.
 #[derive(Debug, Clone)]
@@ -217,7 +328,7 @@ pub fn recover(topo: &Topo, max_levels: usize) -> Option<Recovered> {
     if topo.nf() == 0 || !topo.all_quads() {
         return None;
     }
-    let mut comps = crate::hierarchy::cc::components(n, topo);
+    let mut comps = crate::topology::cc::components(n, topo);
     let mut chains = Vec::with_capacity(comps.len());
     let mut depth = max_levels;
     for (verts, t) in &mut comps {
@@ -272,12 +383,12 @@ pub fn canonicalise(rec: &Recovered, input: &Topo, gates: bool) -> Result<Canoni
     let mut cur = base.clone();
     for l in 0..rec.levels() {
         let lvl = Level::new(&cur)?;
-        if !super::closed(&lvl) {
+        if !closed(&lvl) {
             return Err(Error::InvalidMesh("sqrt(2) level with a boundary".into()));
         }
         let mut next = order.clone();
         push_face_points(&lvl, &order, &rec.face_points[l], &mut next)?;
-        cur = super::fine(&lvl);
+        cur = fine(&lvl);
         levels.push(lvl);
         order = next;
     }
@@ -296,7 +407,7 @@ pub fn canonicalise(rec: &Recovered, input: &Topo, gates: bool) -> Result<Canoni
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hierarchy::fixtures::{prism_with_triangles, shuffle};
+    use crate::topology::fixtures::{prism_with_triangles, shuffle};
     use std::collections::HashMap;
 
     /// The coarse faces and their points of a coarsening.
@@ -364,7 +475,7 @@ mod tests {
         let mut t = prism_with_triangles();
         let (mut agreed, mut refused) = (0, 0);
         for depth in 1..=4 {
-            t = crate::sqrt2::fine(&Level::new(&t).unwrap());
+            t = crate::topology::sqrt2::fine(&Level::new(&t).unwrap());
             for seed in 0..15u64 {
                 let mut m = if seed == 0 {
                     t.clone()
@@ -429,7 +540,7 @@ mod tests {
     fn recovers_every_depth_from_a_shuffled_mesh() {
         let mut t = prism_with_triangles();
         for depth in 1..=5 {
-            t = crate::sqrt2::fine(&Level::new(&t).unwrap());
+            t = crate::topology::sqrt2::fine(&Level::new(&t).unwrap());
             // Shuffle vertex numbers and face order, rotate corners.
             let n = t.nv;
             let perm: Vec<u32> = (0..n as u32).map(|i| (i * 7919 + 13) % n as u32).collect();

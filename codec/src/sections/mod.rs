@@ -1,0 +1,8 @@
+//! The container's sections (SPEC.md 2.4), one module per kind, named as SPEC.md names
+//! them: each holds its payload's wire format, both ways.
+
+pub mod base;
+pub mod head;
+pub mod levl;
+pub mod ordr;
+pub mod vmap;
