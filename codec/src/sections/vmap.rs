@@ -63,7 +63,7 @@ fn lattice_points(v: &[i64], steps: i64) -> Option<Vec<i64>> {
 }
 
 /// Codes one axis's sorted distinct values `v` (SPEC.md 3.1): its count less one, its
-/// first value, then (format 23 on) a flag and either the gaps' changes or, given the
+/// first value, then a flag and either the gaps' changes or, given the
 /// values' points `lattice` ([`lattice_points`]), the lattice's steps' excess over the
 /// count, the span's excess over the steps, then per value its skipped lattice points
 /// (when there are any) and its residual.

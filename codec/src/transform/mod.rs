@@ -35,7 +35,7 @@ pub enum Wavelet {
     Interp4,
     /// Prediction only, by the 6-point rule (3, -25, 150, 150, -25, 3) / 256 along the
     /// mesh's lines where they run straight on for three coarse vertices each way
-    /// (Deslauriers-Dubuc), interp4's rules elsewhere; no update (SPEC.md 9.12, format 24).
+    /// (Deslauriers-Dubuc), interp4's rules elsewhere; no update (SPEC.md 9.12).
     Interp6,
     /// sqrt(2) levels: the interpolatory prediction of Wang & Ma 2009 (eq. 1) alone
     /// (SPEC.md 9.7).

@@ -2205,7 +2205,7 @@ mod tests {
         (level, coarse, x)
     }
 
-    /// The body of `x`'s details coded in `mode` from fresh format 17 models, or `None`
+    /// The body of `x`'s details coded in `mode` from fresh models, or `None`
     /// if the mode cannot code them.
     fn body_in_mode(
         level: &Level,
@@ -2525,8 +2525,7 @@ mod tests {
         }
     }
 
-    /// Mode 7 on a sqrt(2) level: exact round trip; corrupt without targets, and before
-    /// format 18.
+    /// Mode 7 on a sqrt(2) level: exact round trip; corrupt without targets.
     #[test]
     fn tangent_phase_mode_round_trips_on_sqrt2_levels() {
         let mut t = prism_with_triangles();
@@ -2792,7 +2791,7 @@ mod tests {
     }
 
     /// Mode 9 on lazy, interp4 and interp6 levels: read with the decoder's phases, the level
-    /// comes back synthesised; without phases, before format 21, or read as mode 8 it
+    /// comes back synthesised; without phases or read as mode 8 it
     /// does not.
     #[test]
     fn corrected_phased_mode_round_trips_on_catmull_clark_levels() {

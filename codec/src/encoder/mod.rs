@@ -1,0 +1,419 @@
+//! The encoder: options, the container it writes, and the order it keeps (SPEC.md 2, 7).
+//! Which hierarchy and transform codes smallest is the search's ([`search`]).
+
+mod search;
+
+pub(crate) use search::*;
+
+use std::collections::HashMap;
+
+use crate::error::{Error, Result};
+use crate::info::{section_info, SectionInfo};
+use crate::mesh::Mesh;
+use crate::quant::Quantization;
+use crate::sections::head::{Family, Header, Source, Transform};
+use crate::sections::vmap::ValueMap;
+use crate::sections::{base, levl, ordr};
+use crate::topology::{self, Canonical, Topo};
+use crate::transform::polar::{self, DiscTransform};
+use crate::transform::{self, fit, sqrt2, Wavelet};
+use subwave_container::{ContainerWriter, SectionKind};
+
+/// Which transform to use on a hierarchy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TransformChoice {
+    /// Try every transform and keep the smallest container.
+    #[default]
+    Auto,
+    /// This one.
+    Fixed(Wavelet),
+    /// The subdivision fit (SPEC.md 9.10) on a Catmull-Clark hierarchy.
+    Fit,
+}
+
+/// How to encode.
+#[derive(Debug, Clone)]
+pub struct EncodeOptions {
+    /// Store the input's vertex and face order (ORDR section).
+    pub keep_order: bool,
+    /// The format the mesh was read from, recorded so decoding can default to it.
+    pub source: Source,
+    /// The transform for subdivision levels.
+    pub transform: TransformChoice,
+    /// Most refinement levels to look for (0: code the mesh flat).
+    pub max_levels: u8,
+    /// Polar hierarchies: the transform of the poles' discs (SPEC.md 9.9); `None` tries
+    /// each with the best Catmull-Clark transform and keeps the smallest.
+    pub disc: Option<DiscTransform>,
+    /// Per-axis value maps (SPEC.md 3.1): `None` tries the sparse axes' map beside no
+    /// map and keeps the smaller container, `Some(true)` maps every axis, `Some(false)`
+    /// none.
+    pub value_map: Option<bool>,
+    /// How many threads the encoder may use (0 counts as 1): `auto` then codes its
+    /// candidate families and transforms at once. The container is the same for every
+    /// count; each thread holds a coding's working memory.
+    pub threads: usize,
+}
+
+impl Default for EncodeOptions {
+    fn default() -> Self {
+        EncodeOptions {
+            keep_order: false,
+            source: Source::Unknown,
+            transform: TransformChoice::Auto,
+            max_levels: 16,
+            disc: None,
+            value_map: None,
+            threads: 1,
+        }
+    }
+}
+
+/// The result of [`encode`].
+#[derive(Debug, Clone)]
+pub struct Encoded {
+    /// The container.
+    pub bytes: Vec<u8>,
+    /// `order[i]` is the input index of decoded vertex `i` (when the container has no
+    /// ORDR section; with one, decoding restores the input order itself).
+    pub order: Vec<u32>,
+    /// The header written.
+    pub header: Header,
+    /// Sections written, in order.
+    pub sections: Vec<SectionInfo>,
+}
+
+/// Section payloads before they are wrapped in a container.
+pub(crate) struct Payloads {
+    pub(crate) header: Header,
+    pub(crate) base: Vec<u8>,
+    pub(crate) levels: Vec<Vec<u8>>,
+    /// The ORDR section, when the input order is kept: it depends on the coded order,
+    /// so candidates are compared with it.
+    pub(crate) order: Option<Vec<u8>>,
+}
+
+impl Payloads {
+    /// Bytes of the BASE and LEVL payloads: what the codings of one hierarchy differ by.
+    fn coded(&self) -> usize {
+        self.base.len() + self.levels.iter().map(Vec::len).sum::<usize>()
+    }
+
+    fn size(&self) -> usize {
+        self.coded() + self.order.as_ref().map_or(0, Vec::len)
+    }
+
+    /// Each LEVL payload's mode byte, its flags included (SPEC.md 10.1):
+    /// the plan of a coding in the same modes.
+    fn modes(&self) -> Vec<u8> {
+        self.levels
+            .iter()
+            .filter_map(|l| l.first().copied())
+            .collect()
+    }
+}
+
+/// The ORDR payload (SPEC.md 7): the coded vertex order (`vertices[coded] = input`),
+/// face order and corner rotations.
+pub(crate) fn order_section(vertices: &[u32], faces: Vec<u32>, rotations: Vec<u32>) -> Vec<u8> {
+    let o = ordr::InputOrder {
+        vertices: vertices.to_vec(),
+        faces,
+        rotations,
+    };
+    ordr::encode(&o)
+}
+
+pub(crate) fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Header {
+    Header {
+        vertices: mesh.vertex_count() as u64,
+        faces: mesh.face_count() as u64,
+        corners: mesh.corner_count() as u64,
+        base_vertices: mesh.vertex_count() as u64,
+        base_faces: mesh.face_count() as u64,
+        base_corners: mesh.corner_count() as u64,
+        levels: 0,
+        family: Family::None,
+        transform: Transform::None,
+        quantization: *q,
+        source: opts.source,
+        has_order: opts.keep_order,
+        has_value_map: false,
+        poles: Vec::new(),
+        disc: DiscTransform::None,
+    }
+}
+
+/// Matches canonical faces to the input's: position and first corner (SPEC.md 7).
+pub(crate) fn face_order(mesh: &Mesh, fine: &Topo, vorder: &[u32]) -> Result<(Vec<u32>, Vec<u32>)> {
+    let mut by_edge: HashMap<(u32, u32), (u32, u32)> = HashMap::with_capacity(mesh.corner_count());
+    for (j, face) in mesh.iter_faces().enumerate() {
+        let k = face.len();
+        for r in 0..k {
+            by_edge.insert((face[r], face[(r + 1) % k]), (j as u32, r as u32));
+        }
+    }
+    let mut perm = Vec::with_capacity(fine.nf());
+    let mut rot = Vec::with_capacity(fine.nf());
+    for c in 0..fine.nf() {
+        let f = fine.face(c);
+        let key = (vorder[f[0] as usize], vorder[f[1] as usize]);
+        let &(j, r) = by_edge
+            .get(&key)
+            .ok_or_else(|| Error::InvalidMesh("hierarchy does not match the input faces".into()))?;
+        perm.push(j);
+        rot.push(r);
+    }
+    Ok((perm, rot))
+}
+
+/// The mesh's positions in a hierarchy's canonical order, per axis.
+pub(crate) fn canonical_positions(mesh: &Mesh, canon: &Canonical) -> [Vec<i64>; 3] {
+    std::array::from_fn(|k| {
+        canon
+            .order
+            .iter()
+            .map(|&o| mesh.positions[o as usize][k])
+            .collect()
+    })
+}
+
+/// Encodes an integer mesh whose values map to the file's through `q`: as a
+/// Catmull-Clark, sqrt(2) or polar hierarchy when one is found, else flat; with the
+/// value map of `opts.value_map` (SPEC.md 3.1) when it makes the container smaller.
+pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Encoded> {
+    mesh.validate()?;
+    let map = match opts.value_map {
+        Some(false) => None,
+        Some(true) => ValueMap::every_axis(&mesh.positions),
+        None => ValueMap::candidate(&mesh.positions),
+    };
+    let Some(map) = map else {
+        return encode_with(mesh, q, opts, None);
+    };
+    let ranked = Mesh {
+        positions: map.ranks(&mesh.positions),
+        face_starts: mesh.face_starts.clone(),
+        faces: mesh.faces.clone(),
+    };
+    let mapped = encode_with(&ranked, q, opts, Some(&map))?;
+    if opts.value_map == Some(true) {
+        return Ok(mapped);
+    }
+    let plain = encode_with(mesh, q, opts, None)?;
+    Ok(if mapped.bytes.len() < plain.bytes.len() {
+        mapped
+    } else {
+        plain
+    })
+}
+
+/// [`encode`] with a given value map (`mesh` holding the ranks on its mapped axes).
+fn encode_with(
+    mesh: &Mesh,
+    q: &Quantization,
+    opts: &EncodeOptions,
+    vmap: Option<&ValueMap>,
+) -> Result<Encoded> {
+    let mut flat_h = flat_header(mesh, q, opts);
+    flat_h.has_value_map = vmap.is_some();
+    let mut topo = Topo::new(mesh.vertex_count());
+    topo.idx = mesh.faces.clone();
+    topo.starts = mesh.face_starts.clone();
+    // The best hierarchy coding, and the canonical hierarchy it was made from.
+    let mut best: Option<Payloads> = None;
+    let mut chosen: Option<Canonical> = None;
+    if opts.max_levels > 0 {
+        let (want_cc, want_sqrt2) = match opts.transform {
+            TransformChoice::Auto => (true, true),
+            TransformChoice::Fixed(w) => (!w.is_sqrt2(), w.is_sqrt2()),
+            TransformChoice::Fit => (true, false),
+        };
+        let fit_only = opts.transform == TransformChoice::Fit;
+        let max = opts.max_levels as usize;
+        // The base mesh's faces in the order of the connectivity coder's gates, unless
+        // the input's order is kept: then as recovered, which makes the order cheap.
+        let gates = !opts.keep_order;
+        // Per family: its candidate hierarchies, the transform that compares them, and
+        // the family's other transforms (tried on the better candidate with `auto`).
+        let mut families: Vec<(Vec<Canonical>, Wavelet, &[Wavelet])> = Vec::new();
+        if want_cc {
+            let mut canons = Vec::new();
+            for rec in topology::cc::recover_all(mesh.vertex_count(), &topo, max) {
+                canons.push(topology::canonicalise(&rec, gates)?);
+            }
+            // Polar levels take the Catmull-Clark transforms (SPEC.md 8.6).
+            canons.extend(topology::polar::recover_all(
+                mesh.vertex_count(),
+                &topo,
+                max,
+                gates,
+            ));
+            // The subdivision fit, on each candidate whose finest level is near a
+            // subdivision (every candidate when asked for by name).
+            let try_fit = matches!(opts.transform, TransformChoice::Auto | TransformChoice::Fit);
+            for canon in canons.iter().filter(|_| try_fit) {
+                let pos = canonical_positions(mesh, canon);
+                if let Some(mut p) = code_fit(canon, &pos, &flat_h, &FIT_BITS, !fit_only) {
+                    if opts.keep_order {
+                        let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
+                        p.order = Some(order_section(&canon.order, faces, rotations));
+                    }
+                    if best.as_ref().is_none_or(|b| p.size() < b.size()) {
+                        best = Some(p);
+                        chosen = Some(canon.clone());
+                    }
+                }
+            }
+            // A mesh and its dual can both be the base: compare them with one transform.
+            if !fit_only {
+                families.push((canons, Wavelet::Bicubic, &Wavelet::ALL));
+            }
+        }
+        if want_sqrt2 {
+            let canons: Vec<Canonical> = topology::sqrt2::recover(&topo, max)
+                .and_then(|rec| topology::sqrt2::canonicalise(&rec, &topo, gates).ok())
+                .into_iter()
+                .collect();
+            families.push((canons, Wavelet::Sqrt2Lazy, &Wavelet::SQRT2));
+        }
+        // The families code apart; on several threads at once, each with its share.
+        families.retain(|(canons, ..)| !canons.is_empty());
+        let threads = opts.threads.max(1);
+        let share = (threads / families.len().max(1)).max(1);
+        // Each family is taken once, by the thread that codes it (on one thread, in
+        // order).
+        let jobs: Vec<_> = families
+            .into_iter()
+            .map(|f| std::sync::Mutex::new(Some(f)))
+            .collect();
+        let coded = par_map(&jobs, threads, |job| {
+            let taken = job.lock().map(|mut j| j.take()).ok().flatten();
+            let (canons, first, others) = taken.expect("each family is coded once");
+            code_family(mesh, opts, &flat_h, canons, first, others, share)
+        });
+        for family in coded {
+            let Some((p, canon)) = family? else {
+                continue;
+            };
+            if best.as_ref().is_none_or(|b| p.size() < b.size()) {
+                best = Some(p);
+                chosen = Some(canon);
+            }
+        }
+    }
+    let (payloads, order) = match (best, chosen) {
+        (Some(p), Some(canon)) => (p, canon.order),
+        _ => {
+            // Faces as the connectivity coder's gates visit them (rotated to start at
+            // their gate); when the order is kept, also in the input's order and
+            // breadth-first, whichever codes smaller with the ORDR section. Vertices in
+            // order of first use (SPEC.md 6.1).
+            let mut best_flat: Option<(Payloads, Vec<u32>)> = None;
+            let nf = mesh.face_count();
+            let mut candidates = vec![topology::gates::gate_order(&mesh.face_starts, &mesh.faces)];
+            if opts.keep_order {
+                candidates.push(((0..nf as u32).collect(), vec![0; nf]));
+                candidates.push((base::face_order(mesh), vec![0; nf]));
+            }
+            for (forder, rot) in candidates {
+                let by_faces = base::permute_faces_rotated(mesh, &forder, &rot);
+                let order = base::canonical_order(&by_faces);
+                let p = Payloads {
+                    header: flat_h.clone(),
+                    base: base::encode(&base::permute(&by_faces, &order)),
+                    levels: Vec::new(),
+                    order: opts.keep_order.then(|| order_section(&order, forder, rot)),
+                };
+                if best_flat.as_ref().is_none_or(|b| p.size() < b.0.size()) {
+                    best_flat = Some((p, order));
+                }
+            }
+            best_flat.expect("at least one candidate")
+        }
+    };
+    let header = payloads.header.clone();
+    let transform = header.transform;
+    let mut w = ContainerWriter::new();
+    let mut sections = Vec::new();
+    let mut put = |w: &mut ContainerWriter, kind: SectionKind, payload: &[u8]| {
+        if payload.len() >= u32::MAX as usize {
+            return Err(Error::Range(format!(
+                "section {kind} would be {} bytes, over the format's 4 GiB",
+                payload.len()
+            )));
+        }
+        w.section(kind, payload);
+        let bytes = payload.len() + subwave_container::section_overhead(payload.len());
+        sections.push(section_info(kind, bytes, transform, payload));
+        Ok(())
+    };
+    put(&mut w, SectionKind::HEADER, &header.write())?;
+    if let Some(m) = vmap {
+        put(&mut w, SectionKind::VALUE_MAP, &m.encode())?;
+    }
+    put(&mut w, SectionKind::BASE, &payloads.base)?;
+    for l in &payloads.levels {
+        put(&mut w, SectionKind::LEVEL, l)?;
+    }
+    if let Some(o) = &payloads.order {
+        put(&mut w, SectionKind::ORDER, o)?;
+    }
+    let bytes = w.finish();
+    let end = subwave_container::section_overhead(0);
+    sections.push(section_info(SectionKind::END, end, transform, &[]));
+    Ok(Encoded {
+        bytes,
+        order,
+        header,
+        sections,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::topology::fixtures::{prism_with_triangles, pseudo};
+
+    /// `code_hierarchy`'s bound: a coding whose BASE and LEVL payloads fit is the
+    /// unbounded one, byte for byte; one byte less and it is refused. With and without
+    /// a mode plan, for several transforms.
+    #[test]
+    fn bounded_codings_are_the_unbounded_ones_or_none() {
+        let mut t = prism_with_triangles();
+        for _ in 0..3 {
+            t = topology::Level::new(&t).unwrap().fine();
+        }
+        let rec = topology::cc::recover_all(t.nv, &t, 16).remove(0);
+        let canon = topology::canonicalise(&rec, true).unwrap();
+        let vals: Vec<Vec<i64>> = (0..3).map(|k| pseudo(k + 1, t.nv, 12)).collect();
+        let mesh = Mesh {
+            positions: (0..t.nv)
+                .map(|v| std::array::from_fn(|k| vals[k][v]))
+                .collect(),
+            face_starts: t.starts.clone(),
+            faces: t.idx.clone(),
+        };
+        let q = Quantization::Decimal { decimals: 0 };
+        let header = flat_header(&mesh, &q, &EncodeOptions::default());
+        let pos = canonical_positions(&mesh, &canon);
+        let d = DiscTransform::None;
+        for w in [Wavelet::Bicubic, Wavelet::Interp4, Wavelet::Lazy] {
+            let free = code_hierarchy(&canon, &pos, w, d, &header, true, None, UNBOUNDED).unwrap();
+            let plan = free.modes();
+            for modes in [None, Some(plan)] {
+                let whole =
+                    code_hierarchy(&canon, &pos, w, d, &header, true, modes.clone(), UNBOUNDED)
+                        .unwrap();
+                let n = whole.coded();
+                let fit = code_hierarchy(&canon, &pos, w, d, &header, true, modes.clone(), n)
+                    .unwrap_or_else(|| panic!("fits its own size {w:?} {:?} {n}", modes));
+                assert_eq!((fit.base, fit.levels), (whole.base, whole.levels), "{w:?}");
+                assert!(
+                    code_hierarchy(&canon, &pos, w, d, &header, true, modes, n - 1).is_none(),
+                    "{w:?}"
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,395 @@
+//! The encoder's search (not part of the format): which family, transform, level modes
+//! and fit precision code a mesh smallest, tried on one or more threads.
+
+use super::*;
+
+/// Codes a canonical hierarchy with wavelet `w` (SPEC.md 9, 10), trying the rotated
+/// level modes (10.5) when `rotated`, each level in its mode from `modes` where given
+/// (every open mode where not); `None` if a lifted value leaves the supported range or
+/// the BASE and LEVL payloads would take more than `bound` bytes.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn code_hierarchy(
+    canon: &Canonical,
+    pos: &[Vec<i64>; 3],
+    w: Wavelet,
+    disc: DiscTransform,
+    header: &Header,
+    rotated: bool,
+    modes: Option<Vec<u8>>,
+    bound: usize,
+) -> Option<Payloads> {
+    let mut x = pos.clone();
+    // The coarse values of each level, as the decoder will have them when it reads the
+    // level's details.
+    let mut coarse: Vec<[Vec<i64>; 3]> = vec![Default::default(); canon.levels.len()];
+    // sqrt(2) levels: their tangent targets (SPEC.md 10.3), from the same coarse values;
+    // sqrt2-lazy levels: their predictions' phases (10.6).
+    let mut targets: Vec<Option<Vec<[i64; 3]>>> = vec![None; canon.levels.len()];
+    let mut phases: Vec<Option<transform::phase::Phases>> = vec![None; canon.levels.len()];
+    for (l, level) in canon.levels.iter().enumerate().rev() {
+        // As the decoder: sqrt2-lazy keeps the coarse values, so one prediction per
+        // face serves the analysis and the tangent targets; the other sqrt(2)
+        // transforms take a plan.
+        let predictions = (canon.sqrt2 && w == Wavelet::Sqrt2Lazy).then(|| {
+            let (p, ph) = sqrt2::predictions_with(level, &x, true);
+            phases[l] = ph;
+            p
+        });
+        let plan = (canon.sqrt2 && predictions.is_none()).then(|| sqrt2::Plan::new(level, w));
+        if let Some(p) = &predictions {
+            let n = topology::sqrt2::fine_nv(level);
+            for (xs, pk) in x.iter_mut().zip(p) {
+                sqrt2::apply_predictions(&mut xs[..n], level.nv, pk, true);
+            }
+        } else if let Some(plan) = &plan {
+            let n = topology::sqrt2::fine_nv(level);
+            for xs in x.iter_mut() {
+                plan.analyse(&mut xs[..n]);
+            }
+        } else {
+            // Polar levels: the poles' discs first, then the rest (SPEC.md 9.9).
+            let n = level.fine_nv();
+            let (discs, owned) = polar::discs(level, &canon.poles, l as u32, disc);
+            let st = transform::Stencils::new(level, w);
+            // Predict-only transforms: the phases of mode 6 (SPEC.md 10.6), from the fine
+            // values (the decoder makes them as it reads the level).
+            if canon.poles.is_empty() {
+                if let Some(p) = transform::Phaser::new(level, w, &st) {
+                    phases[l] = Some(p.phases(&x, level.ne() + level.nf(), true));
+                }
+            }
+            for xs in x.iter_mut() {
+                for d in &discs {
+                    polar::analyse(d, disc, &mut xs[..n]);
+                }
+                transform::analyse_with(level, w, &st, &mut xs[..n], &owned);
+            }
+        }
+        coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
+        targets[l] = match (&predictions, &plan) {
+            (Some(p), _) => Some(sqrt2::tangent_targets_from(level, &coarse[l], p)),
+            (None, Some(plan)) => Some(sqrt2::tangent_targets(level, plan, &coarse[l])),
+            (None, None) => None,
+        };
+    }
+    if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
+        return None;
+    }
+    let (mut header, base_bytes) = hierarchy_base(canon, &x, header);
+    let mut models = levl::LevelModels::new();
+    models.rotated = rotated;
+    models.only = modes.map(Vec::into_iter);
+    // Bytes the levels may take: a coding over the bound is not wanted.
+    let mut room = bound.checked_sub(base_bytes.len())?;
+    let mut level_bytes = Vec::with_capacity(canon.levels.len());
+    for (((l, c), t), ph) in canon.levels.iter().zip(&coarse).zip(&targets).zip(&phases) {
+        let (s2, t) = (canon.sqrt2, t.as_deref());
+        let b = levl::encode(l, s2, &x, c, &mut models, t, ph.as_ref(), room)?;
+        room -= b.len();
+        level_bytes.push(b);
+    }
+    header.disc = if canon.poles.is_empty() {
+        DiscTransform::None
+    } else {
+        disc
+    };
+    header.transform = Transform::Wavelet(w);
+    Some(Payloads {
+        header,
+        base: base_bytes,
+        levels: level_bytes,
+        order: None,
+    })
+}
+
+/// The header and BASE payload of a hierarchy's coding: the base mesh with the values
+/// `x[k][..base vertices]` (SPEC.md 6), the header with the hierarchy's counts, family
+/// and poles (the transform is the caller's).
+pub(crate) fn hierarchy_base(
+    canon: &Canonical,
+    x: &[Vec<i64>; 3],
+    header: &Header,
+) -> (Header, Vec<u8>) {
+    let nb = canon.base.nv;
+    let mut base = Mesh::new();
+    base.positions = (0..nb).map(|i| [x[0][i], x[1][i], x[2][i]]).collect();
+    base.faces = canon.base.idx.clone();
+    base.face_starts = canon.base.starts.clone();
+    let mut header = header.clone();
+    header.base_vertices = nb as u64;
+    header.base_faces = canon.base.nf() as u64;
+    header.base_corners = canon.base.idx.len() as u64;
+    header.levels = canon.levels.len() as u8;
+    header.family = if canon.sqrt2 {
+        Family::Sqrt2
+    } else if !canon.poles.is_empty() {
+        Family::Polar
+    } else {
+        Family::Cc
+    };
+    header.poles = canon.poles.clone();
+    (header, base::encode(&base))
+}
+
+/// Mean [`fit::defect`] over the axes of the finest level above which `auto` does not
+/// try the fit: rounded subdivision gives about 70 / 12 (the variance of the rounding
+/// noise it sums), fitted detail far more.
+pub(crate) const FIT_SCREEN: f64 = 12.0;
+
+/// The least-squares fit stops when no control value moves by more than this (units of
+/// the grid): far below the 2^-10 of the finest precision tried.
+pub(crate) const FIT_TOLERANCE: f64 = 1e-5;
+
+/// No bound on a hierarchy coding's size ([`code_hierarchy`]).
+pub(crate) const UNBOUNDED: usize = usize::MAX;
+
+/// `auto` codes the best-ranked other transform of a family in every mode when its
+/// ranking size is below this many hundredths of the first transform's size.
+pub(crate) const RANK_MARGIN: usize = 103;
+
+/// Extra bits `auto` tries for the fit's control values.
+pub(crate) const FIT_BITS: [u8; 3] = [6, 8, 10];
+
+/// Codes a Catmull-Clark hierarchy as a subdivision fit (SPEC.md 9.10): the control
+/// values from least squares, then for each precision in `bits` the integer subdivision
+/// and the residuals; the smallest coding (B = 0 when no precision in `bits` keeps the
+/// values in range). `None` when `screen` is set and the finest level is far from any
+/// subdivision.
+pub(crate) fn code_fit(
+    canon: &Canonical,
+    pos: &[Vec<i64>; 3],
+    header: &Header,
+    bits: &[u8],
+    screen: bool,
+) -> Option<Payloads> {
+    let last = canon.levels.last()?;
+    if !canon.poles.is_empty() {
+        return None;
+    }
+    if screen {
+        let d: f64 = pos
+            .iter()
+            .map(|x| fit::defect(last, x).unwrap_or(f64::MAX))
+            .sum();
+        if d / 3.0 > FIT_SCREEN {
+            return None;
+        }
+    }
+    let nb = canon.base.nv;
+    let op = fit::Operator::new(&canon.levels);
+    let fine: Vec<[f64; 3]> = (0..pos[0].len())
+        .map(|i| std::array::from_fn(|k| pos[k][i] as f64))
+        .collect();
+    let control = op.fit(&fine, &fine[..nb], 400, FIT_TOLERANCE);
+    let mut best: Option<Payloads> = None;
+    // B = 0 last, for values too large for any precision asked for.
+    for b in bits.iter().copied().chain([0]) {
+        if b == 0 && best.is_some() {
+            break;
+        }
+        let s = (1u64 << b) as f64;
+        let mut x: [Vec<i64>; 3] =
+            std::array::from_fn(|k| control.iter().map(|v| (v[k] * s).round() as i64).collect());
+        if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
+            continue;
+        }
+        let (mut h, base_bytes) = hierarchy_base(canon, &x, header);
+        for l in &canon.levels {
+            for xs in x.iter_mut() {
+                fit::subdivide(l, xs);
+            }
+        }
+        let mut level_bytes = vec![Vec::new(); canon.levels.len() - 1];
+        level_bytes.push(levl::fit::encode_residuals(&x, pos, b));
+        h.transform = Transform::Fit { bits: b };
+        let p = Payloads {
+            header: h,
+            base: base_bytes,
+            levels: level_bytes,
+            order: None,
+        };
+        if best.as_ref().is_none_or(|q| p.size() < q.size()) {
+            best = Some(p);
+        }
+    }
+    best
+}
+
+/// The best coding of one family's candidate hierarchies (SPEC.md 8: Catmull-Clark and
+/// polar, or sqrt(2)) and the hierarchy it codes: every candidate with the family's
+/// first transform, then, with `auto`, the family's `others` ranked on the best
+/// candidate, the ranking's winner coded in every mode, and a coding without the
+/// rotated modes. `threads` (at least 1) may code the ranking's transforms at once; the
+/// result is the same for every count.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn code_family(
+    mesh: &Mesh,
+    opts: &EncodeOptions,
+    flat_h: &Header,
+    canons: Vec<Canonical>,
+    auto_first: Wavelet,
+    others: &[Wavelet],
+    threads: usize,
+) -> Result<Option<(Payloads, Canonical)>> {
+    let first = match opts.transform {
+        TransformChoice::Auto | TransformChoice::Fit => auto_first,
+        TransformChoice::Fixed(w) => w,
+    };
+    let mut fam_best: Option<(Payloads, Canonical, [Vec<i64>; 3])> = None;
+    for canon in canons {
+        let pos = canonical_positions(mesh, &canon);
+        // code_hierarchy drops the disc transform of a hierarchy without poles.
+        let disc = opts.disc.unwrap_or(DiscTransform::None);
+        let order = if opts.keep_order {
+            let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
+            Some(order_section(&canon.order, faces, rotations))
+        } else {
+            None
+        };
+        // Wanted only if smaller than the best candidate so far.
+        let bound = fam_best.as_ref().map_or(UNBOUNDED, |b| {
+            let order_len = order.as_ref().map_or(0, Vec::len);
+            b.0.size().saturating_sub(order_len + 1)
+        });
+        if let Some(mut p) = code_hierarchy(&canon, &pos, first, disc, flat_h, true, None, bound) {
+            p.order = order;
+            if fam_best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
+                fam_best = Some((p, canon, pos));
+            }
+        }
+    }
+    let Some((mut p, canon, pos)) = fam_best else {
+        return Ok(None);
+    };
+    // Codings of one hierarchy share their ORDR section (the order depends on the
+    // hierarchy only), so they compare by `coded()`, and a coding stops as soon
+    // as it cannot be wanted (`code_hierarchy`'s bound).
+    //
+    // Codes the chosen hierarchy with (w, d) and keeps it if smaller.
+    let try_code = |p: &mut Payloads, w: Wavelet, d: DiscTransform, rotated: bool| {
+        let bound = p.coded().saturating_sub(1);
+        if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, flat_h, rotated, None, bound) {
+            q.order = p.order.clone();
+            if q.coded() < p.coded() {
+                *p = q;
+            }
+        }
+    };
+    // Other (transform, disc) pairs are ranked coding each level in the mode p
+    // chose for it (a fraction of the work of trying every mode); the best of
+    // them is then coded in every mode. Whichever coding is smallest is kept.
+    let rank_then_code = |p: &mut Payloads, pairs: &[(Wavelet, DiscTransform)]| {
+        let modes = p.modes();
+        let mut ranked: Option<(usize, Wavelet, DiscTransform)> = None;
+        // The largest ranking size that leads to coding in every mode.
+        let margin = (p.coded() * RANK_MARGIN).div_ceil(100).saturating_sub(1);
+        // On several threads every ranking coding runs at once, with the widest bound
+        // the loop below can give (before anything is ranked); the loop then takes
+        // each coding only where it fits its own bound, as coded alone it would have
+        // (a coding within a bound is the same coding under any wider one).
+        let code = |&(w, d): &(Wavelet, DiscTransform), bound: usize| {
+            code_hierarchy(&canon, &pos, w, d, flat_h, true, Some(modes.clone()), bound)
+        };
+        let widest = p.coded().saturating_sub(1).max(margin);
+        let mut ahead = if threads > 1 {
+            par_map(pairs, threads, |pair| code(pair, widest))
+        } else {
+            Vec::new()
+        };
+        for (i, pair) in pairs.iter().enumerate() {
+            let (w, d) = *pair;
+            // Wanted if smaller than p, or ranked first within the margin.
+            let rank = ranked.map_or(margin, |(s, ..)| s.saturating_sub(1).min(margin));
+            let bound = p.coded().saturating_sub(1).max(rank);
+            let coded = match ahead.get_mut(i) {
+                Some(q) => q.take().filter(|q| q.coded() <= bound),
+                None => code(pair, bound),
+            };
+            if let Some(mut q) = coded {
+                if ranked.is_none_or(|(s, ..)| q.coded() < s) {
+                    ranked = Some((q.coded(), w, d));
+                }
+                q.order = p.order.clone();
+                if q.coded() < p.coded() {
+                    *p = q;
+                }
+            }
+        }
+        if let Some((_, w, d)) = ranked.filter(|&(s, ..)| s <= margin) {
+            try_code(p, w, d, true);
+        }
+    };
+    let disc = p.header.disc;
+    if opts.transform == TransformChoice::Auto {
+        let pairs: Vec<_> = others
+            .iter()
+            .filter(|&&w| w != first)
+            .map(|&w| (w, disc))
+            .collect();
+        rank_then_code(&mut p, &pairs);
+    }
+    // A polar hierarchy: the other disc transforms, with the best transform.
+    if let (false, None, Transform::Wavelet(w)) =
+        (canon.poles.is_empty(), opts.disc, p.header.transform)
+    {
+        let d0 = p.header.disc;
+        let pairs: Vec<_> = DiscTransform::ALL
+            .into_iter()
+            .filter(|&d| d != d0)
+            .map(|d| (w, d))
+            .collect();
+        rank_then_code(&mut p, &pairs);
+    }
+    // Each level keeps its smallest mode, but a rotated level hands the next one
+    // models learnt in another frame: the best coding without the rotated modes
+    // can be smaller in all. (Without a rotated level it would be this coding
+    // again: the same modes win, the rotated ones coming last on ties.)
+    let rotated = p
+        .modes()
+        .iter()
+        .any(|&m| matches!(levl::mode_of(&[m]), Some(4 | 5)));
+    if let (true, Transform::Wavelet(w)) = (rotated, p.header.transform) {
+        let d = p.header.disc;
+        try_code(&mut p, w, d, false);
+    }
+    Ok(Some((p, canon)))
+}
+
+/// `f` of every item, in order, on up to `threads` threads (this one among them), each
+/// taking the next item not yet taken.
+pub(crate) fn par_map<T: Sync, R: Send>(
+    items: &[T],
+    threads: usize,
+    f: impl Fn(&T) -> R + Sync,
+) -> Vec<R> {
+    let n = threads.min(items.len());
+    if n <= 1 {
+        return items.iter().map(f).collect();
+    }
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let work = || {
+        let mut done = Vec::new();
+        loop {
+            let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let Some(item) = items.get(i) else {
+                return done;
+            };
+            done.push((i, f(item)));
+        }
+    };
+    let mut out: Vec<Option<R>> = (0..items.len()).map(|_| None).collect();
+    std::thread::scope(|s| {
+        let others: Vec<_> = (1..n).map(|_| s.spawn(work)).collect();
+        let mine = work();
+        for (i, r) in others
+            .into_iter()
+            .flat_map(|h| h.join().expect("a coding thread panicked"))
+            .chain(mine)
+        {
+            out[i] = Some(r);
+        }
+    });
+    out.into_iter()
+        .map(|r| r.expect("every item was taken"))
+        .collect()
+}

@@ -1,0 +1,86 @@
+//! What a container holds, read without decoding any geometry (`subwave info`).
+
+use crate::decoder::layout;
+use crate::error::Result;
+use crate::sections::head::{Header, Transform};
+use crate::sections::levl;
+use crate::Limits;
+use subwave_container::{Container, SectionKind};
+
+/// One section's place in a container.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SectionInfo {
+    /// Its kind code, as text (`HEAD`, `BASE`, ...).
+    pub kind: String,
+    /// Bytes it occupies, overhead included.
+    pub bytes: usize,
+    /// A level section's coding mode (SPEC.md 10.1, 10.2: 0 plain, 1 normal frame, 2
+    /// tangent, ..., 9 phased corrected; without the unbinned and zero-slot flags);
+    /// `None` for other sections and for a subdivision fit's levels (10.4), which have no
+    /// mode.
+    pub mode: Option<u8>,
+    /// Whether a level section is unbinned (SPEC.md 10.1).
+    pub unbinned: bool,
+    /// Whether a mode 9 level rounds its corrections jointly (SPEC.md 10.9).
+    pub joint: bool,
+    /// A level section's slots whose values are all 0 and left out of its stream
+    /// (SPEC.md 10.1), in increasing order.
+    pub zero_slots: Vec<u8>,
+}
+
+/// A parsed header and section table, without decoding any geometry.
+#[derive(Debug, Clone)]
+pub struct Info {
+    /// Format version of the container.
+    pub version: u16,
+    /// The header.
+    pub header: Header,
+    /// Sections, in order.
+    pub sections: Vec<SectionInfo>,
+    /// Total bytes.
+    pub bytes: usize,
+}
+
+/// A section's entry in the section table: a level section's mode, unbinned flag, mode
+/// 9's joint flag and zero slots read from its payload (SPEC.md 10.1, 10.9); none of them
+/// under `transform` 9, whose level sections have no mode byte (10.4).
+pub(crate) fn section_info(
+    kind: SectionKind,
+    bytes: usize,
+    transform: Transform,
+    payload: &[u8],
+) -> SectionInfo {
+    let fit = matches!(transform, Transform::Fit { .. });
+    let level = kind == SectionKind::LEVEL && !fit;
+    SectionInfo {
+        kind: kind.to_string(),
+        bytes,
+        mode: level.then(|| levl::mode_of(payload)).flatten(),
+        unbinned: level && levl::unbinned(payload),
+        joint: level && levl::joint(payload),
+        zero_slots: match level {
+            true => {
+                let z = levl::zero_slots(payload);
+                (0..3).filter(|s| z >> s & 1 == 1).collect()
+            }
+            false => Vec::new(),
+        },
+    }
+}
+
+/// Reads the header and section table (SPEC.md 2, 5), checking every checksum.
+pub fn inspect(bytes: &[u8], limits: &Limits) -> Result<Info> {
+    let c = Container::parse(bytes, limits)?;
+    let header = layout(&c, limits, true)?;
+    let t = header.transform;
+    Ok(Info {
+        version: c.version,
+        header,
+        sections: c
+            .sections
+            .iter()
+            .map(|s| section_info(s.kind, s.total_len(), t, s.payload))
+            .collect(),
+        bytes: bytes.len(),
+    })
+}
