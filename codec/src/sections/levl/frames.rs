@@ -1,0 +1,552 @@
+//! The coding frames (SPEC.md 10.2, 10.3, 10.5, 10.7): coarse normals, the normal frame
+//! and its predictions, tangent targets' tangential parts, and the exact integer
+//! rotations of the rotated modes.
+
+use super::*;
+
+/// Newell's normal of coarse face `f`, in 128-bit integers (computed in 64 bits when
+/// every product and sum fits, as they do for coordinates below about 2^30).
+pub(super) fn face_normal(level: &Level, coarse: &[Vec<i64>; 3], f: usize) -> [i128; 3] {
+    if let Some(n) = face_normal_64(level, coarse, f) {
+        return n.map(|v| v as i128);
+    }
+    let c = level.coarse.face(f);
+    let k = c.len();
+    let mut n = [0i128; 3];
+    for i in 0..k {
+        let (a, b) = (c[i] as usize, c[(i + 1) % k] as usize);
+        let (px, py, pz) = (
+            coarse[0][a] as i128,
+            coarse[1][a] as i128,
+            coarse[2][a] as i128,
+        );
+        let (qx, qy, qz) = (
+            coarse[0][b] as i128,
+            coarse[1][b] as i128,
+            coarse[2][b] as i128,
+        );
+        n[0] += (py - qy) * (pz + qz);
+        n[1] += (pz - qz) * (px + qx);
+        n[2] += (px - qx) * (py + qy);
+    }
+    n
+}
+
+/// [`face_normal`] in 64-bit integers, or `None` if a product or sum would overflow.
+pub(super) fn face_normal_64(level: &Level, coarse: &[Vec<i64>; 3], f: usize) -> Option<[i64; 3]> {
+    let c = level.coarse.face(f);
+    let k = c.len();
+    let mut n = [0i64; 3];
+    // |values| <= 2^52, so their sums and differences fit; the products may not.
+    let term = |d: i64, s: i64, acc: i64| acc.checked_add(d.checked_mul(s)?);
+    let [x, y, z] = coarse;
+    // Edges (c[k - 1], c[0]), (c[0], c[1]), ...: the same terms as in corner order.
+    let mut a = *c.get(k.wrapping_sub(1))? as usize;
+    for &b in c {
+        let b = b as usize;
+        let (px, py, pz) = (x[a], y[a], z[a]);
+        let (qx, qy, qz) = (x[b], y[b], z[b]);
+        n[0] = term(py - qy, pz + qz, n[0])?;
+        n[1] = term(pz - qz, px + qx, n[1])?;
+        n[2] = term(px - qx, py + qy, n[2])?;
+        a = b;
+    }
+    Some(n)
+}
+
+/// Every coarse face's normal, once per level.
+pub(super) fn face_normals(level: &Level, coarse: &[Vec<i64>; 3]) -> Vec<[i128; 3]> {
+    (0..level.nf())
+        .map(|f| face_normal(level, coarse, f))
+        .collect()
+}
+
+/// The coding frame of a detail (SPEC.md 10.2): the axis where the coarse normal is
+/// largest (coded first) and the normal reduced to at most 24 bits, or `None` when the
+/// normal is zero.
+pub(super) fn frame(
+    level: &Level,
+    normals: &[[i128; 3]],
+    detail: usize,
+) -> Option<(usize, [i64; 3])> {
+    let mut n = [0i128; 3];
+    if detail < level.ne() {
+        for &f in &level.edge_faces[detail] {
+            if f != crate::topology::NONE {
+                let m = normals[f as usize];
+                for d in 0..3 {
+                    n[d] += m[d];
+                }
+            }
+        }
+    } else {
+        n = normals[detail - level.ne()];
+    }
+    let big = n.iter().map(|v| v.unsigned_abs()).max().unwrap_or(0);
+    if big == 0 {
+        return None;
+    }
+    let bits = 128 - big.leading_zeros();
+    let shift = bits.saturating_sub(24);
+    let r = n.map(|v| (v >> shift) as i64);
+    // The first axis of largest magnitude (after reduction it is still non-zero).
+    let mut k = 0;
+    for d in 1..3 {
+        if r[d].abs() > r[k].abs() {
+            k = d;
+        }
+    }
+    Some((k, r))
+}
+
+/// Order of the coded components and their predictions from the first one.
+pub(super) fn plan(fr: Option<(usize, [i64; 3])>) -> ([usize; 3], Option<[i64; 3]>) {
+    match fr {
+        None => ([0, 1, 2], None),
+        // The first component, then the other two in axis order.
+        Some((k, n)) => ([[0, 1, 2], [1, 0, 2], [2, 0, 1]][k], Some(n)),
+    }
+}
+
+/// The part of target `g` tangent to the plane of normal `n` (SPEC.md 10.3):
+/// `g - [(g . n) n / |n|^2]`, every component rounded alone.
+pub(super) fn tangential(g: [i64; 3], n: [i64; 3]) -> [i64; 3] {
+    let n2: i128 = n.iter().map(|&v| v as i128 * v as i128).sum();
+    let gn: i128 = (0..3).map(|k| g[k] as i128 * n[k] as i128).sum();
+    std::array::from_fn(|k| g[k] - crate::transform::round_div(gn * n[k] as i128, n2))
+}
+
+/// Prediction of component `j` from the first component's value `dk`: `[dk n_j / n_k]`.
+pub(super) fn predict(dk: i64, n: [i64; 3], k: usize, j: usize) -> i64 {
+    let (mut num, mut den) = (dk as i128 * n[j] as i128, n[k] as i128);
+    if den < 0 {
+        num = -num;
+        den = -den;
+    }
+    crate::transform::round_div(num, den)
+}
+
+// A level may code its details in an orthonormal frame: the coarse normal, a tangent
+
+// along the detail's coarse edge (or face diagonal) and their cross product, reached by
+
+// exact integer rotations (SPEC.md 10.5).
+
+/// Fixed-point bits of the rotations' lifting factors.
+pub(super) const ROT_BITS: u32 = 30;
+
+/// `[p y / 2^30]`, rounded half up.
+#[inline]
+pub(super) fn mul_q(p: i64, y: i64) -> i64 {
+    ((p as i128 * y as i128 + (1 << (ROT_BITS - 1))) >> ROT_BITS) as i64
+}
+
+/// `SQRT_TABLE[m] = floor(sqrt(m 2^16))`: square roots of 8-bit mantissas to 12 bits.
+pub(super) const SQRT_TABLE: [u32; 256] = {
+    let mut t = [0u32; 256];
+    let mut m = 0;
+    while m < 256 {
+        let v = (m as u32) << 16;
+        let mut r = 0u32;
+        while (r + 1) * (r + 1) <= v {
+            r += 1;
+        }
+        t[m] = r;
+        m += 1;
+    }
+    t
+};
+
+/// Floor of the square root of `v`: a first guess from [`SQRT_TABLE`] good to about
+/// 1 %, two Newton steps (each at least the floor after the first, the error squared
+/// each time), then exact correction.
+pub(super) fn isqrt(v: u64) -> u64 {
+    debug_assert!(v < 1 << 60, "the correction steps square the root");
+    if v < 256 {
+        return (SQRT_TABLE[v as usize] >> 8) as u64;
+    }
+    // An even shift leaving 7 or 8 significant bits: v = m 2^sh, sqrt(v) = sqrt(m) 2^(sh/2).
+    let len = 64 - v.leading_zeros();
+    let sh = (len - 7) & !1;
+    let m = (v >> sh) as usize;
+    let mut x = ((SQRT_TABLE[m] as u64) << (sh / 2)) >> 8;
+    x = x.max(1);
+    for _ in 0..2 {
+        x = (x + v / x) >> 1;
+    }
+    while x * x > v {
+        x -= 1;
+    }
+    while (x + 1) * (x + 1) <= v {
+        x += 1;
+    }
+    x
+}
+
+/// One plane rotation of components `i` and `j` as three lifting steps (SPEC.md 10.5),
+/// after negating both when `flip`: exactly invertible on integers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Givens {
+    pub(super) i: u8,
+    pub(super) j: u8,
+    pub(super) flip: bool,
+    /// The lifting factors, `|p|, |u| <= 2^30`.
+    pub(super) p: i32,
+    pub(super) u: i32,
+}
+
+impl Givens {
+    /// The rotation that turns `(a, b)` (components `i`, `j`) onto the positive `i` axis,
+    /// and the length it leaves there.
+    pub(super) fn towards(i: u8, j: u8, a: i64, b: i64) -> (Givens, i64) {
+        let flip = a < 0;
+        let (a, b) = if flip { (-a, -b) } else { (a, b) };
+        // |a|, |b| < 2^26 (24-bit normals and tangents, rotated), so the squares fit.
+        let r = isqrt((a * a + b * b) as u64) as i64;
+        // cos = a / r, sin = -b / r; p = (cos - 1) / sin = b / (r + a), u = sin.
+        let (p, u) = if r == 0 {
+            (0, 0)
+        } else {
+            // `transform::round_div` in 64 bits (|b| 2^31 + d < 2^58): its 128-bit checks
+            // cost 2.5 % of a rotated level's decode instructions.
+            let div = |n: i64, d: i64| ((2 * (n << ROT_BITS) + d).div_euclid(2 * d)) as i32;
+            (div(b, r + a), div(-b, r))
+        };
+        (Givens { i, j, flip, p, u }, r)
+    }
+
+    pub(super) fn forward(&self, v: &mut [i64; 3]) {
+        let (i, j, p, u) = (
+            self.i as usize,
+            self.j as usize,
+            self.p as i64,
+            self.u as i64,
+        );
+        if self.flip {
+            v[i] = -v[i];
+            v[j] = -v[j];
+        }
+        v[i] += mul_q(p, v[j]);
+        v[j] += mul_q(u, v[i]);
+        v[i] += mul_q(p, v[j]);
+    }
+
+    pub(super) fn inverse(&self, v: &mut [i64; 3]) {
+        let (i, j, p, u) = (
+            self.i as usize,
+            self.j as usize,
+            self.p as i64,
+            self.u as i64,
+        );
+        v[i] -= mul_q(p, v[j]);
+        v[j] -= mul_q(u, v[i]);
+        v[i] -= mul_q(p, v[j]);
+        if self.flip {
+            v[i] = -v[i];
+            v[j] = -v[j];
+        }
+    }
+}
+
+/// `v` shifted so that its largest magnitude has 24 bits (unchanged when zero).
+pub(super) fn to_24_bits(v: [i128; 3]) -> [i64; 3] {
+    let big = v.iter().map(|x| x.unsigned_abs()).max().unwrap_or(0);
+    if big == 0 {
+        return [0; 3];
+    }
+    let bits = 128 - big.leading_zeros() as i32;
+    let shift = bits - 24;
+    if shift >= 0 {
+        v.map(|x| (x >> shift) as i64)
+    } else {
+        v.map(|x| (x << -shift) as i64)
+    }
+}
+
+/// The rotation of a detail into its orthonormal frame (SPEC.md 10.5): normal `n` onto
+/// the first component, then the tangent reference `t` onto the second.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Rotation(pub(super) [Givens; 3]);
+
+impl Rotation {
+    pub(super) fn new(n: [i64; 3], t: [i128; 3]) -> Rotation {
+        let (g0, r1) = Givens::towards(0, 1, n[0], n[1]);
+        let (g1, _) = Givens::towards(0, 2, r1, n[2]);
+        let mut t = to_24_bits(t);
+        g0.forward(&mut t);
+        g1.forward(&mut t);
+        let (g2, _) = Givens::towards(1, 2, t[1], t[2]);
+        Rotation([g0, g1, g2])
+    }
+
+    pub(super) fn forward(&self, mut v: [i64; 3]) -> [i64; 3] {
+        self.0.iter().for_each(|g| g.forward(&mut v));
+        v
+    }
+
+    pub(super) fn inverse(&self, mut v: [i64; 3]) -> [i64; 3] {
+        self.0.iter().rev().for_each(|g| g.inverse(&mut v));
+        v
+    }
+}
+
+/// The tangent reference of detail `fd` (SPEC.md 10.5): an edge point's coarse edge,
+/// from its first end to its second; a face point's diagonal from its face's first
+/// corner to its third (to the second for a triangle).
+pub(super) fn tangent_ref(level: &Level, coarse: &[Vec<i64>; 3], fd: usize) -> [i128; 3] {
+    let (a, b) = if fd < level.ne() {
+        let [a, b] = level.edges[fd];
+        (a, b)
+    } else {
+        let c = level.coarse.face(fd - level.ne());
+        (c[0], if c.len() >= 4 { c[2] } else { c[1] })
+    };
+    std::array::from_fn(|k| coarse[k][b as usize] as i128 - coarse[k][a as usize] as i128)
+}
+
+/// Format 17's along-edge offset (SPEC.md 10.5): sixteen times the offset of the mean of
+/// an interior edge's two coarse face centroids from the edge's midpoint, rounded; `None`
+/// for a boundary edge or a component above 2^52.
+pub(super) fn edge_offset(level: &Level, coarse: &[Vec<i64>; 3], e: usize) -> Option<[i64; 3]> {
+    let [f1, f2] = level.edge_faces[e];
+    if f1 == crate::topology::NONE || f2 == crate::topology::NONE {
+        return None;
+    }
+    let (c1, c2) = (
+        level.coarse.face(f1 as usize),
+        level.coarse.face(f2 as usize),
+    );
+    let (k1, k2) = (c1.len() as i128, c2.len() as i128);
+    let [a, b] = level.edges[e];
+    let mut out = [0i64; 3];
+    for (k, o) in out.iter_mut().enumerate() {
+        let x = &coarse[k];
+        let sum = |c: &[u32]| c.iter().map(|&v| x[v as usize] as i128).sum::<i128>();
+        let ends = x[a as usize] as i128 + x[b as usize] as i128;
+        let num = 16 * (k2 * sum(c1) + k1 * sum(c2) - k1 * k2 * ends);
+        let v = crate::transform::round_div(num, 2 * k1 * k2);
+        if v.abs() > 1 << 52 {
+            return None;
+        }
+        *o = v;
+    }
+    Some(out)
+}
+
+/// A detail's rotation into its frame (SPEC.md 10.5) and, for an interior edge point,
+/// its rotated edge offset (see [`edge_offset`]).
+#[derive(Clone, Copy)]
+pub(super) struct RotFrame {
+    pub(super) rot: Rotation,
+    pub(super) offset: Option<[i64; 3]>,
+}
+
+impl RotFrame {
+    /// The frame of detail `fd` with coarse normal `n`; without an edge point's offset
+    /// unless `offset` (only [`Mode::Shifted`] reads it).
+    pub(super) fn new(
+        level: &Level,
+        coarse: &[Vec<i64>; 3],
+        sqrt2: bool,
+        fd: usize,
+        n: [i64; 3],
+        offset: bool,
+    ) -> Self {
+        let rot = Rotation::new(n, tangent_ref(level, coarse, fd));
+        let offset = if offset && !sqrt2 && fd < level.ne() {
+            edge_offset(level, coarse, fd).map(|v| rot.forward(v))
+        } else {
+            None
+        };
+        RotFrame { rot, offset }
+    }
+
+    /// What mode `mode` subtracts from the rotated values: eighths `(a, b)` of the
+    /// offset's tangential values with [`Mode::Shifted`], else nothing.
+    pub(super) fn pred(&self, mode: Mode<'_>) -> [i64; 3] {
+        match (mode, self.offset) {
+            (Mode::Shifted(a, b), Some(w)) => [
+                0,
+                crate::transform::round_div(a as i128 * w[1] as i128, 128),
+                crate::transform::round_div(b as i128 * w[2] as i128, 128),
+            ],
+            _ => [0; 3],
+        }
+    }
+}
+
+/// Every detail's [`RotFrame`] (`None` where the coarse normal is zero), computed once
+/// per level for all the encoder's rotated modes, from the coarse faces' `normals`.
+pub(super) fn rot_frames(
+    level: &Level,
+    coarse: &[Vec<i64>; 3],
+    normals: &[[i128; 3]],
+    sqrt2: bool,
+) -> Vec<Option<RotFrame>> {
+    let ne = if sqrt2 { level.ne() } else { 0 };
+    (0..details(level, sqrt2))
+        .map(|i| {
+            let fd = ne + i;
+            frame(level, normals, fd).map(|(_, n)| RotFrame::new(level, coarse, sqrt2, fd, n, true))
+        })
+        .collect()
+}
+
+/// The encoder's choice of mode 5's shift weights for a level (not normative): for
+/// each tangential value the eighth in 0..=8 whose residuals have the fewest bits.
+pub(super) fn shift_weights(
+    level: &Level,
+    x: &[Vec<i64>; 3],
+    frames: &[Option<RotFrame>],
+) -> (u8, u8) {
+    let mut cost = [[0u64; 9]; 2];
+    for (i, f) in frames.iter().enumerate() {
+        let Some(RotFrame {
+            rot,
+            offset: Some(w),
+        }) = f
+        else {
+            continue;
+        };
+        let d = rot.forward([x[0][level.nv + i], x[1][level.nv + i], x[2][level.nv + i]]);
+        for (slot, c) in cost.iter_mut().enumerate() {
+            for (q, cq) in c.iter_mut().enumerate() {
+                let p = crate::transform::round_div(q as i128 * w[slot + 1] as i128, 128);
+                *cq += class_of(d[slot + 1].saturating_sub(p)) as u64;
+            }
+        }
+    }
+    let best = |c: &[u64; 9]| (0..9).min_by_key(|&q| (c[q], q)).unwrap_or(0) as u8;
+    (best(&cost[0]), best(&cost[1]))
+}
+
+/// How a detail's values are phased (SPEC.md 10.6, 10.7).
+#[derive(Clone, Copy)]
+pub(super) enum Phased {
+    /// Not at all (modes 0 to 5).
+    No,
+    /// Mode 6: every value signed and modelled by the phase of its axis.
+    Axes([u8; 3]),
+    /// Mode 7: the values after the first shifted by their expected part and phased.
+    Tangent(TanTerms),
+}
+
+/// Mode 7's terms of a detail (SPEC.md 10.7): `u_d = rho_d + c Q_d` per axis, with `rho`
+/// the remainders of its face's centroid, `Q` the normal part of its tangent target, `c`
+/// its face's corner count.
+#[derive(Clone, Copy)]
+pub(super) struct TanTerms {
+    pub(super) u: [i128; 3],
+    pub(super) c: i128,
+}
+
+impl TanTerms {
+    /// The terms of the face point of face `f` whose tangent target `g` has the
+    /// tangential part `t` (so `Q = g - t`), from the coarse values.
+    pub(super) fn new(
+        level: &Level,
+        coarse: &[Vec<i64>; 3],
+        f: usize,
+        g: [i64; 3],
+        t: [i64; 3],
+    ) -> Self {
+        let face = level.coarse.face(f);
+        let c = face.len() as i128;
+        let mut u = [0i128; 3];
+        for (k, uk) in u.iter_mut().enumerate() {
+            let x = &coarse[k];
+            // Values below 2^52 (9.3): a face of up to 2^10 corners sums in 64 bits.
+            let s = if face.len() <= 1 << 10 {
+                face.iter().map(|&v| x[v as usize]).sum::<i64>() as i128
+            } else {
+                face.iter().map(|&v| x[v as usize] as i128).sum()
+            };
+            let rho = s - c * crate::transform::round_div(s, c) as i128;
+            *uk = rho + c * (g[k] as i128 - t[k] as i128);
+        }
+        TanTerms { u, c }
+    }
+
+    /// The shift and phase of the value at axis `j` (not the first, `k`) given the first
+    /// value `rk` and the value's prediction `pred = [rk n_j / n_k]`: `A / D` with
+    /// `A = n_k u_j - n_j u_k + c (rk n_j - n_k pred)`, `D = c n_k` (both negated when
+    /// `n_k < 0`) is its expected value; the shift is `[A / D]`, the phase that of the
+    /// remainder. `None` when the shift's magnitude passes 2^52.
+    pub(super) fn shift(
+        &self,
+        n: [i64; 3],
+        k: usize,
+        j: usize,
+        rk: i64,
+        pred: i64,
+    ) -> Option<(i64, u8)> {
+        self.shift_64(n, k, j, rk, pred)
+            .unwrap_or_else(|| self.shift_128(n, k, j, rk, pred))
+    }
+
+    /// [`TanTerms::shift`] in 128-bit arithmetic.
+    pub(super) fn shift_128(
+        &self,
+        n: [i64; 3],
+        k: usize,
+        j: usize,
+        rk: i64,
+        pred: i64,
+    ) -> Option<(i64, u8)> {
+        let (nk, nj) = (n[k] as i128, n[j] as i128);
+        let mut a =
+            nk * self.u[j] - nj * self.u[k] + self.c * (rk as i128 * nj - nk * pred as i128);
+        let mut d = self.c * nk;
+        if d < 0 {
+            a = -a;
+            d = -d;
+        }
+        // 9.1's rounding, in 64 bits when it fits (a 128-bit division is slow).
+        let q = match (i64::try_from(2 * a + d), i64::try_from(2 * d)) {
+            (Ok(t), Ok(dd)) => t.div_euclid(dd) as i128,
+            _ => (2 * a + d).div_euclid(2 * d),
+        };
+        if q.abs() > MAX_LIFTED as i128 {
+            return None;
+        }
+        Some((q as i64, phase(a - q * d, d)))
+    }
+
+    /// [`TanTerms::shift`] in 64-bit arithmetic, the same integers exactly; `None`
+    /// when a term would overflow (then 128 bits decide).
+    #[inline]
+    pub(super) fn shift_64(
+        &self,
+        n: [i64; 3],
+        k: usize,
+        j: usize,
+        rk: i64,
+        pred: i64,
+    ) -> Option<Option<(i64, u8)>> {
+        let (nk, nj) = (n[k], n[j]);
+        let (uj, uk, c) = (
+            i64::try_from(self.u[j]).ok()?,
+            i64::try_from(self.u[k]).ok()?,
+            i64::try_from(self.c).ok()?,
+        );
+        let inner = rk.checked_mul(nj)?.checked_sub(nk.checked_mul(pred)?)?;
+        let mut a = nk
+            .checked_mul(uj)?
+            .checked_sub(nj.checked_mul(uk)?)?
+            .checked_add(c.checked_mul(inner)?)?;
+        let mut d = c.checked_mul(nk)?;
+        if d < 0 {
+            a = a.checked_neg()?;
+            d = d.checked_neg()?;
+        }
+        let q = a
+            .checked_mul(2)?
+            .checked_add(d)?
+            .div_euclid(d.checked_mul(2)?);
+        if q.abs() > MAX_LIFTED {
+            return Some(None);
+        }
+        let r = a.checked_sub(q.checked_mul(d)?)?;
+        Some(Some((q, phase(r as i128, d as i128))))
+    }
+}

@@ -1,0 +1,311 @@
+//! The LEVL decoder (SPEC.md 10).
+
+use super::*;
+
+#[allow(clippy::too_many_arguments)]
+pub(super) fn get(
+    dec: &mut Decoder,
+    m: &mut Models,
+    class: usize,
+    nbr: [usize; 3],
+    fr: Option<(usize, [i64; 3])>,
+    ph: Phased,
+    unbinned: bool,
+    zero: u8,
+) -> Result<([i64; 3], [u8; 3])> {
+    let (order, n) = plan(fr);
+    let mut d = [0i64; 3];
+    let mut prev = 0;
+    let mut mags = [0u8; 3];
+    let bad = || Error::corrupt("LEVL", "detail out of range");
+    for (slot, &axis) in order.iter().enumerate() {
+        let pred = match (slot, n) {
+            (1 | 2, Some(n)) => predict(d[order[0]], n, order[0], axis),
+            _ => 0,
+        };
+        let q = match (ph, n) {
+            (Phased::Axes(p), _) => Some((0, p[axis])),
+            (Phased::Tangent(t), Some(n)) if slot > 0 => Some(
+                t.shift(n, order[0], axis, d[order[0]], pred)
+                    .ok_or_else(bad)?,
+            ),
+            _ => None,
+        };
+        let c = Ctx {
+            class,
+            slot,
+            prev,
+            nbr: nbr[slot],
+            bin: q.map(|(_, q)| (q & 3) as usize),
+            unbinned,
+        };
+        // A zero slot's values are not in the stream, and no model learns
+        // them.
+        let v = if zero >> slot & 1 == 1 {
+            0
+        } else {
+            let v = dec.int(m.model(c))?;
+            m.learn(c, v);
+            v
+        };
+        prev = class_of(v);
+        let v = match q {
+            Some((s, q)) => {
+                // (|v| < 2^62: the negation cannot overflow.)
+                let v = if q & 4 != 0 { -v } else { v };
+                v.checked_add(s).ok_or_else(bad)?
+            }
+            None => v,
+        };
+        mags[slot] = prev as u8;
+        let x = v.checked_add(pred).filter(|x| x.abs() <= MAX_LIFTED);
+        d[axis] = x.ok_or_else(bad)?;
+    }
+    Ok((d, mags))
+}
+
+/// Decodes what [`encode`] wrote into `x[k][nv..]`; `x[k][..nv]` are the coarse values.
+/// `targets` are the level's tangent targets (modes 2 and 7), `phasing` its phases (mode
+/// 6), each where the level has them.
+#[allow(clippy::too_many_arguments)]
+pub fn decode(
+    payload: &[u8],
+    level: &Level,
+    sqrt2: bool,
+    x: &mut [Vec<i64>; 3],
+    models: &mut LevelModels,
+    targets: Option<&[[i64; 3]]>,
+    phasing: Option<Phasing<'_>>,
+) -> Result<()> {
+    let (nv, nd) = (level.nv, details(level, sqrt2));
+    // Density bound (SPEC.md 2.6), checked before the level's arrays are sized.
+    if nd as u64 > 2048 * (payload.len() as u64 + 8) {
+        return Err(Error::corrupt(
+            "LEVL",
+            format!("{} bytes cannot hold {} details", payload.len(), nd),
+        ));
+    }
+    let no_targets = || Error::corrupt("LEVL", "tangent mode on a level without tangent targets");
+    let no_phases = || Error::corrupt("LEVL", "phase mode on a level without prediction phases");
+    // The mode byte's top bit makes the level unbinned; bits 4 to 6 are the slots left
+    // out of the stream.
+    let unbinned = unbinned(payload);
+    let zero = zero_slots(payload);
+    let (mode, payload) = match mode_of(payload).zip(payload.get(1..)) {
+        Some((0, rest)) => (Mode::Plain, rest),
+        Some((1, rest)) => (Mode::Framed, rest),
+        Some((2, rest)) => match targets {
+            Some(t) if t.len() == nd => (Mode::Tangent(t), rest),
+            _ => return Err(no_targets()),
+        },
+        Some((7, rest)) => match targets {
+            Some(t) if t.len() == nd => (Mode::TangentPhased(t), rest),
+            _ => return Err(no_targets()),
+        },
+        Some((4, rest)) => (Mode::Rotated, rest),
+        Some((6, rest)) => match &phasing {
+            Some(Phasing::Ready(p)) if p.codes.iter().all(|p| p.len() == nd) => {
+                (Mode::Phased, rest)
+            }
+            Some(Phasing::Cc(_)) if !sqrt2 => (Mode::Phased, rest),
+            _ => return Err(no_phases()),
+        },
+        Some((5, rest)) => match rest.split_first() {
+            Some((&w, rest)) if w >> 4 <= 8 && w & 15 <= 8 => (Mode::Shifted(w >> 4, w & 15), rest),
+            _ => return Err(Error::corrupt("LEVL", "bad shift weights")),
+        },
+        Some((8, rest)) if !sqrt2 => {
+            let (w, _, rest) = read_weights(rest, false)?;
+            (Mode::Corrected(w), rest)
+        }
+        Some((9, rest)) if !sqrt2 => match &phasing {
+            Some(Phasing::Cc(_)) => {
+                let (w, r, rest) = read_weights(rest, true)?;
+                (Mode::CorrectedPhased(w, r), rest)
+            }
+            _ => return Err(no_phases()),
+        },
+        Some((m, _)) => return Err(Error::corrupt("LEVL", format!("unknown level mode {m}"))),
+        None => return Err(Error::corrupt("LEVL", "empty level section")),
+    };
+    let framed = mode.framed();
+    let mut dec = Decoder::new(payload, "LEVL")?;
+    let mut m = models.ready(models.start(), mode);
+    models.last_phased = mode.phased();
+    let mags = &mut models.mags;
+    mags.resize(nv, [UNKNOWN; 3]);
+    mags.resize(nv + nd, [0; 3]);
+    let normals = if framed {
+        face_normals(level, x)
+    } else {
+        Vec::new()
+    };
+    for xs in x.iter_mut() {
+        xs.resize(nv + nd, 0);
+    }
+    // Modes 6 and 9: the phases, given, or a Catmull-Clark level's made as it is read:
+    // the edge points' from the coarse values now, the face points' from the fine edge
+    // points, so such a level is synthesised as it is read (see [`Phasing::Cc`]). Mode 9
+    // makes every face point's phases once its edge points are read, then reads the face
+    // points with the edge points' details in place (its corrections read details), and
+    // synthesises the level after, from the predictions it kept.
+    let corr_phased = matches!(mode, Mode::CorrectedPhased(..));
+    let phasing = phasing.filter(|_| matches!(mode, Mode::Phased) || corr_phased);
+    let ne = level.ne();
+    // Mode 9: every detail's prediction on each axis (the edge points' now, the face
+    // points' once the edge points are read), and its phase.
+    let mut preds: [Vec<i64>; 3] = Default::default();
+    let mut cc_phases = Phases::default();
+    // Mode 9 with joint rounding also reads the predictions' fractions.
+    let joint = matches!(mode, Mode::CorrectedPhased(_, Rounding::Joint));
+    // Mode 9: detail `i`'s prediction, phase and (joint rounding) fraction on one axis.
+    let keep =
+        |p: &crate::transform::Phaser<'_>, xk: &[i64], i: usize, ph: &mut Phases, k: usize| {
+            if joint {
+                let (c, q, f) = p.predict_frac(xk, i);
+                ph.codes[k].push(q);
+                ph.fracs[k].push(f);
+                c
+            } else {
+                let (c, q) = p.predict(xk, i);
+                ph.codes[k].push(q);
+                c
+            }
+        };
+    if let Some(Phasing::Cc(p)) = &phasing {
+        if corr_phased {
+            for k in 0..3 {
+                for e in 0..ne.min(nd) {
+                    let c = keep(p, &x[k], e, &mut cc_phases, k);
+                    preds[k].push(c);
+                }
+            }
+        } else {
+            cc_phases = p.phases(x, ne.min(nd), false);
+        }
+    }
+    for i in 0..nd {
+        // What a Catmull-Clark level in mode 6 adds to the detail: its prediction.
+        let mut fine = [0i64; 3];
+        match &phasing {
+            Some(Phasing::Cc(p)) if i == ne && corr_phased => {
+                // The face points' predictions from the fine edge points; then the edge
+                // points' details again.
+                for k in 0..3 {
+                    let xk = &mut x[k];
+                    for e in 0..ne {
+                        xk[nv + e] = xk[nv + e].wrapping_add(preds[k][e]);
+                    }
+                    for f in ne..nd {
+                        let c = keep(p, xk, f, &mut cc_phases, k);
+                        preds[k].push(c);
+                    }
+                    for e in 0..ne {
+                        xk[nv + e] = xk[nv + e].wrapping_sub(preds[k][e]);
+                    }
+                }
+            }
+            Some(Phasing::Cc(p)) if i == ne => synthesise_edges(p, level, x),
+            _ => {}
+        }
+        let (class, bins, fd) = contexts(level, mags, sqrt2, i);
+        let fr = if framed {
+            frame(level, &normals, fd)
+        } else {
+            None
+        };
+        let rotation = match (mode, fr) {
+            (Mode::Rotated | Mode::Shifted(..), Some((_, n))) => {
+                let shifted = matches!(mode, Mode::Shifted(..));
+                let f = RotFrame::new(level, x, sqrt2, fd, n, shifted);
+                Some((f.rot, f.pred(mode)))
+            }
+            _ => None,
+        };
+        let out_of_range = || Error::corrupt("LEVL", "detail out of range");
+        let mut joint_phases = None;
+        let offset = match mode {
+            Mode::CorrectedPhased(w, Rounding::Joint) => {
+                let n = correction_sums(level, x, &w, i);
+                let (c, q) =
+                    joint_correction(n, fracs_at(&cc_phases, i)).ok_or_else(out_of_range)?;
+                joint_phases = Some(q);
+                Some(c)
+            }
+            Mode::Corrected(w) | Mode::CorrectedPhased(w, _) => {
+                Some(correction(correction_sums(level, x, &w, i)).ok_or_else(out_of_range)?)
+            }
+            _ => mode.offset(i, fr),
+        };
+        let ph = match (joint_phases, &phasing, mode, offset) {
+            (Some(q), ..) => Phased::Axes(q),
+            (_, Some(Phasing::Ready(p)), ..) => Phased::Axes(phases_at(p, i)),
+            (_, Some(Phasing::Cc(_)), ..) if i < ne || corr_phased => {
+                Phased::Axes(phases_at(&cc_phases, i))
+            }
+            (_, Some(Phasing::Cc(p)), ..) => {
+                let mut q = [0u8; 3];
+                for k in 0..3 {
+                    (fine[k], q[k]) = p.predict(&x[k], i);
+                }
+                Phased::Axes(q)
+            }
+            (_, None, Mode::TangentPhased(t), Some(c)) => {
+                Phased::Tangent(TanTerms::new(level, x, i, t[i], c))
+            }
+            _ => Phased::No,
+        };
+        let (r, mg) = get(
+            &mut dec,
+            &mut m,
+            class,
+            bins,
+            fr.filter(|_| rotation.is_none()),
+            ph,
+            unbinned,
+            zero,
+        )?;
+        mags[nv + i] = mg;
+        let mut d = r;
+        if let Some((rot, pred)) = rotation {
+            d = in_range(Some(rot.inverse(in_range(plus(r, pred))?)))?;
+        }
+        if let Some(c) = offset {
+            d = in_range(plus(r, c))?;
+        }
+        for k in 0..3 {
+            x[k][nv + i] = d[k].wrapping_add(fine[k]);
+        }
+    }
+    match &phasing {
+        Some(Phasing::Cc(_)) if corr_phased => {
+            // Mode 9: the details plus their predictions.
+            for (xk, pk) in x.iter_mut().zip(&preds) {
+                for (v, &c) in xk[nv..].iter_mut().zip(pk) {
+                    *v = v.wrapping_add(c);
+                }
+            }
+        }
+        Some(Phasing::Cc(p)) if nd <= ne => synthesise_edges(p, level, x),
+        _ => {}
+    }
+    models.last = Some(m);
+    Ok(())
+}
+
+/// Synthesises a Catmull-Clark level's edge points `x[k][nv..nv + ne]` in place (their
+/// details plus predictions from the coarse values), for mode 6's face points.
+pub(super) fn synthesise_edges(
+    p: &crate::transform::Phaser<'_>,
+    level: &Level,
+    x: &mut [Vec<i64>; 3],
+) {
+    let nv = level.nv;
+    for xk in x.iter_mut() {
+        for e in 0..level.ne() {
+            // Predicted from the coarse values alone: unchanged as the edge points change.
+            let c = p.predict(xk, e).0;
+            xk[nv + e] = xk[nv + e].wrapping_add(c);
+        }
+    }
+}

@@ -1,0 +1,369 @@
+//! The LEVL encoder (SPEC.md 10): every open mode tried, the smallest kept.
+
+use super::*;
+
+/// Codes detail `d` (components in the order of frame `fr`, each with its neighbour bin
+/// `nbr[slot]`; phased as `ph` says); returns the magnitude classes of the coded values,
+/// or `None` when mode 7's shift is out of range.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn put(
+    enc: &mut Encoder,
+    m: &mut Models,
+    class: usize,
+    nbr: [usize; 3],
+    d: [i64; 3],
+    fr: Option<(usize, [i64; 3])>,
+    ph: Phased,
+    unbinned: bool,
+    zero: u8,
+) -> Option<[u8; 3]> {
+    let (order, n) = plan(fr);
+    let mut prev = 0;
+    let mut mags = [0u8; 3];
+    for (slot, &axis) in order.iter().enumerate() {
+        let pred = match (slot, n) {
+            (1 | 2, Some(n)) => predict(d[order[0]], n, order[0], axis),
+            _ => 0,
+        };
+        let mut v = d[axis] - pred;
+        let q = match (ph, n) {
+            (Phased::Axes(p), _) => Some(p[axis]),
+            (Phased::Tangent(t), Some(n)) if slot > 0 => {
+                let (s, q) = t.shift(n, order[0], axis, d[order[0]], pred)?;
+                v = v.checked_sub(s).filter(|v| v.abs() <= MAX_LIFTED)?;
+                Some(q)
+            }
+            _ => None,
+        };
+        if q.is_some_and(|q| q & 4 != 0) {
+            v = -v;
+        }
+        // A zero slot's values are left out: all 0, else not this coding.
+        if zero >> slot & 1 == 1 {
+            if v != 0 {
+                return None;
+            }
+            prev = 0;
+            continue;
+        }
+        let c = Ctx {
+            class,
+            slot,
+            prev,
+            nbr: nbr[slot],
+            bin: q.map(|q| (q & 3) as usize),
+            unbinned,
+        };
+        enc.int(m.model(c), v);
+        m.learn(c, v);
+        prev = class_of(v);
+        mags[slot] = prev as u8;
+    }
+    Some(mags)
+}
+
+/// Codes the details `x[k][nv..]` of one level (a sqrt(2) step when `sqrt2`). `coarse`
+/// holds the level's coarse values (what the decoder has when it reads this level).
+/// The payload starts with a mode byte, and the encoder keeps the mode that codes
+/// smallest (SPEC.md 10.2, 10.5). `None` (`models` then unusable) when the payload would
+/// take more than `limit` bytes in every mode: a caller that only wants a smaller coding
+/// than one it has stops early.
+#[allow(clippy::too_many_arguments)]
+pub fn encode(
+    level: &Level,
+    sqrt2: bool,
+    x: &[Vec<i64>; 3],
+    coarse: &[Vec<i64>; 3],
+    models: &mut LevelModels,
+    targets: Option<&[[i64; 3]]>,
+    phases: Option<&Phases>,
+    limit: usize,
+) -> Option<Vec<u8>> {
+    // The mode asked for this level, if any. Plain axes with or without phases (modes 0
+    // and 6) count as one: a plan made with a transform without phases leaves a
+    // transform with them free to use them, and the other way round. (Modes 2 and 7 are
+    // open to the same levels: a plan names the one to use.)
+    let only = models.only.as_mut().and_then(Iterator::next);
+    // A plan's unbinned flag is followed; without a plan the level's best mode is tried
+    // unbinned as well.
+    let plan_unbinned = only.map(|o| unbinned(&[o]));
+    let only = only.and_then(|o| mode_of(&[o]));
+    let plain = |m: u8| matches!(m, 0 | 6);
+    let open = |m: u8| only.is_none_or(|o| o == m || (plain(o) && plain(m)));
+    let mut modes = vec![Mode::Plain, Mode::Framed];
+    if let Some(t) = targets {
+        modes.push(Mode::Tangent(t));
+        modes.push(Mode::TangentPhased(t));
+    }
+    if phases.is_some() {
+        modes.push(Mode::Phased);
+    }
+    let mut prep = Prepared::default();
+    if !sqrt2 && (open(8) || open(9)) {
+        let made = corr_weights(level, x).and_then(|w| Some((w, corrections(level, x, &w)?)));
+        if let Some((w, c)) = made {
+            modes.push(Mode::Corrected(w));
+            if phases.is_some() {
+                modes.push(Mode::CorrectedPhased(w, Rounding::Apart));
+                modes.push(Mode::CorrectedPhased(w, Rounding::Joint));
+            }
+            prep.corrections = c;
+        }
+    }
+    let rotated = models.rotated && (open(4) || open(5));
+    if rotated {
+        modes.push(Mode::Rotated);
+        prep.normals = face_normals(level, coarse);
+        prep.frames = rot_frames(level, coarse, &prep.normals, sqrt2);
+        match shift_weights(level, x, &prep.frames) {
+            (0, 0) => {}
+            (a, b) => modes.push(Mode::Shifted(a, b)),
+        }
+    }
+    if modes.iter().any(|m| open(m.byte())) {
+        modes.retain(|m| open(m.byte()));
+    }
+    // The normals, once for every mode that reads them.
+    if prep.normals.is_empty() && modes.iter().any(|m| m.framed()) {
+        prep.normals = face_normals(level, coarse);
+    }
+    let start = models.start();
+    // The smallest mode's payload, with the magnitudes and models it leaves.
+    struct Tried {
+        mode: Vec<u8>,
+        body: Vec<u8>,
+        mags: Vec<[u8; 3]>,
+        models: Models,
+    }
+    // The previous level's mode is tried first: a mode is abandoned once its stream
+    // passes the best size so far, and the best is often the previous level's. Ties go
+    // to the first mode in `modes`' order whatever the order of trying.
+    let mut order: Vec<usize> = (0..modes.len()).collect();
+    if let Some(i) = modes
+        .iter()
+        .position(|m| Some(m.byte()) == models.prev_mode)
+    {
+        order.remove(i);
+        order.insert(0, i);
+    }
+    // Codes the level in mode `i` (unbinned or not) and keeps it in `best` if smaller.
+    // A stream longer than `cap` or than the best so far is abandoned; ties go to the
+    // first mode in `modes`' order whatever the order of trying.
+    let attempt = |best: &mut Option<(usize, Tried)>, i: usize, unbinned: bool, cap: usize| {
+        let mode = modes[i];
+        let mut bytes = mode.bytes();
+        if unbinned {
+            bytes[0] |= UNBINNED;
+        }
+        let head = bytes.len();
+        let room = best
+            .as_ref()
+            .map_or(cap, |(_, b)| (b.body.len() + b.mode.len()).min(cap))
+            .saturating_sub(head);
+        // Codes the level in this mode with zero slots `zero`.
+        let code = |zero: u8| {
+            let mut mg = models.mags.clone();
+            let mut m = models.ready(start.clone(), mode);
+            let body = encode_mode(
+                level, sqrt2, x, coarse, &prep, phases, &mut mg, mode, unbinned, &mut m, room, zero,
+            )?;
+            let mut mode_bytes = bytes.clone();
+            mode_bytes[0] |= zero << ZERO_SHIFT;
+            Some(Tried {
+                mode: mode_bytes,
+                body,
+                mags: mg,
+                models: m,
+            })
+        };
+        let Some(mut tried) = code(axis_zero_slots(level, sqrt2, x, mode, &prep, phases)) else {
+            return;
+        };
+        // A mode whose slots are not the axes (a frame's) shows its zero slots once coded,
+        // as a flat mesh's normal part: coded again without them, kept if smaller.
+        if mode.framed() {
+            let fine = &tried.mags[level.nv..];
+            let zero = (0..3)
+                .filter(|&s| fine.iter().all(|g| g[s] == 0))
+                .fold(0, |z, s| z | 1 << s);
+            if zero != 0 && !fine.is_empty() {
+                if let Some(t) = code(zero).filter(|t| t.body.len() <= tried.body.len()) {
+                    tried = t;
+                }
+            }
+        }
+        let size = tried.body.len() + head;
+        if best.as_ref().is_none_or(|(j, b)| {
+            let bs = b.body.len() + b.mode.len();
+            size < bs || (size == bs && i < *j)
+        }) {
+            *best = Some((i, tried));
+        }
+    };
+    // Without a plan, the open modes binned, then the best of them unbinned (kept only
+    // if strictly smaller). While that trial is to come, the binned ones are not cut at
+    // the limit: their best is the mode tried unbinned, which may fit where they do not.
+    let unbinned_trial = plan_unbinned.is_none();
+    let cap = if unbinned_trial { usize::MAX } else { limit };
+    let mut best: Option<(usize, Tried)> = None;
+    for i in order {
+        attempt(&mut best, i, plan_unbinned.unwrap_or(false), cap);
+    }
+    if let Some(j) = best.as_ref().map(|(j, _)| *j).filter(|_| unbinned_trial) {
+        attempt(&mut best, j, true, limit);
+    }
+    let best = best.map(|(i, t)| {
+        models.prev_mode = Some(modes[i].byte());
+        models.last_phased = modes[i].phased();
+        t
+    });
+    let Tried {
+        mode,
+        body,
+        mags,
+        models: m,
+    } = best?;
+    if mode.len() + body.len() > limit {
+        return None;
+    }
+    models.mags = mags;
+    models.last = Some(m);
+    let mut out = Vec::with_capacity(body.len() + 2);
+    out.extend_from_slice(&mode);
+    out.extend_from_slice(&body);
+    Some(out)
+}
+
+#[allow(clippy::too_many_arguments)]
+pub(super) fn encode_mode(
+    level: &Level,
+    sqrt2: bool,
+    x: &[Vec<i64>; 3],
+    coarse: &[Vec<i64>; 3],
+    prep: &Prepared,
+    phases: Option<&Phases>,
+    mags: &mut Vec<[u8; 3]>,
+    mode: Mode<'_>,
+    unbinned: bool,
+    m: &mut Models,
+    limit: usize,
+    zero: u8,
+) -> Option<Vec<u8>> {
+    let mut enc = Encoder::new();
+    let (nv, nd) = (level.nv, details(level, sqrt2));
+    // The rotated modes take their frames (normals included), the normal-frame modes
+    // the normals and modes 8 and 9 their corrections from `prep`, made once per level.
+    let rotated = matches!(mode, Mode::Rotated | Mode::Shifted(..));
+    let corrected = matches!(mode, Mode::Corrected(_) | Mode::CorrectedPhased(..));
+    let framed = mode.framed() && !rotated;
+    if (rotated && prep.frames.len() != nd)
+        || (corrected && prep.corrections.len() != nd)
+        || (framed && prep.normals.len() != level.nf())
+    {
+        return None;
+    }
+    let phased = matches!(mode, Mode::Phased | Mode::CorrectedPhased(..));
+    let phases = phases.filter(|_| phased);
+    if phased && !phases.is_some_and(|p| p.codes.iter().all(|p| p.len() == nd)) {
+        return None;
+    }
+    // Mode 9 with joint rounding rounds each correction with the prediction's fraction.
+    let joint = matches!(mode, Mode::CorrectedPhased(_, Rounding::Joint));
+    if joint && !phases.is_some_and(|p| p.fracs.iter().all(|p| p.len() == nd)) {
+        return None;
+    }
+    mags.resize(nv, [UNKNOWN; 3]);
+    mags.resize(nv + nd, [0; 3]);
+    for i in 0..nd {
+        let (class, bins, fd) = contexts(level, mags, sqrt2, i);
+        let mut d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
+        let fr = if framed {
+            frame(level, &prep.normals, fd)
+        } else {
+            None
+        };
+        let mut joint_phases = None;
+        let offset = match (corrected, phases) {
+            (true, Some(p)) if joint => {
+                let n = prep.corrections[i].map(i128::from);
+                let (c, q) = joint_correction(n, fracs_at(p, i))?;
+                joint_phases = Some(q);
+                Some(c)
+            }
+            (true, _) => Some(correction(prep.corrections[i].map(i128::from))?),
+            (false, _) => mode.offset(i, fr),
+        };
+        if let Some(c) = offset {
+            d = std::array::from_fn(|k| d[k] - c[k]);
+            if d.iter().any(|v| v.abs() > MAX_LIFTED) {
+                return None;
+            }
+        }
+        if let Some(f) = prep
+            .frames
+            .get(i)
+            .and_then(Option::as_ref)
+            .filter(|_| rotated)
+        {
+            let (r, pred) = (f.rot.forward(d), f.pred(mode));
+            if r.iter().any(|v| v.abs() > MAX_LIFTED) {
+                return None;
+            }
+            d = std::array::from_fn(|k| r[k] - pred[k]);
+            if d.iter().any(|v| v.abs() > MAX_LIFTED) {
+                return None;
+            }
+        }
+        let ph = match (joint_phases, mode, phases, fr) {
+            (Some(q), ..) => Phased::Axes(q),
+            (_, _, Some(p), _) => Phased::Axes(phases_at(p, i)),
+            (_, Mode::TangentPhased(t), _, Some(_)) => {
+                Phased::Tangent(TanTerms::new(level, coarse, i, t[i], offset?))
+            }
+            _ => Phased::No,
+        };
+        mags[nv + i] = put(&mut enc, m, class, bins, d, fr, ph, unbinned, zero)?;
+        if i % 64 == 63 && enc.written() > limit {
+            return None;
+        }
+    }
+    let body = enc.finish();
+    (body.len() <= limit).then_some(body)
+}
+
+/// The zero slots of a mode that codes the axes themselves (0, 6, 8 or 9): the axes
+/// whose details `x[k][nv..nv + nd]` are all 0 and stay 0 once corrected (modes 8 and 9;
+/// with joint rounding a prediction's fraction alone can make a correction). 0 for the
+/// other modes and on a level without details.
+pub(super) fn axis_zero_slots(
+    level: &Level,
+    sqrt2: bool,
+    x: &[Vec<i64>; 3],
+    mode: Mode<'_>,
+    prep: &Prepared,
+    phases: Option<&Phases>,
+) -> u8 {
+    let (nv, nd) = (level.nv, details(level, sqrt2));
+    if mode.framed() || nd == 0 {
+        return 0;
+    }
+    let corrected = matches!(mode, Mode::Corrected(_) | Mode::CorrectedPhased(..));
+    let joint = matches!(mode, Mode::CorrectedPhased(_, Rounding::Joint));
+    let mut zero = 0;
+    for k in 0..3 {
+        let fractions_round_to_0 = || {
+            phases.is_some_and(|p| {
+                p.fracs[k]
+                    .iter()
+                    .all(|&f| joint_correction([0; 3], [f, 0, 0]).is_some_and(|(c, _)| c[0] == 0))
+            })
+        };
+        if x[k][nv..nv + nd].iter().all(|&v| v == 0)
+            && (!corrected || prep.corrections.iter().all(|n| n[k] == 0))
+            && (!joint || fractions_round_to_0())
+        {
+            zero |= 1 << k;
+        }
+    }
+    zero
+}
