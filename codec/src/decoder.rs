@@ -267,8 +267,7 @@ fn synthesise_levels(
         // (Made before the details are decoded: while the coarse values alone are in
         // memory, which is smaller than making them after.)
         // Modes 6 and 9 read the predictions' phases (SPEC.md 10.6, 10.9).
-        let mode = levl::mode_of(payload);
-        let phased = matches!(mode, Some(6 | 9));
+        let phased = levl::reads_phases(payload);
         let (predictions, phases) = match lazy {
             true => {
                 let (p, ph) = sqrt2::predictions_with(&level, &x, phased);
@@ -278,7 +277,7 @@ fn synthesise_levels(
         };
         let plan = (is_sqrt2 && w == Wavelet::Sqrt2Sym).then(|| sqrt2::Plan::new(&level, w));
         // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
-        let tangent = matches!(mode, Some(2 | 7));
+        let tangent = levl::reads_targets(payload);
         let targets = (is_sqrt2 && tangent).then(|| match &predictions {
             Some(pr) => sqrt2::tangent_targets_from(&level, &x, pr),
             None => sqrt2::tangent_targets_from(&level, &x, &sqrt2::predictions(&level, &x)),

@@ -344,10 +344,7 @@ pub(crate) fn code_family(
     // models learnt in another frame: the best coding without the rotated modes
     // can be smaller in all. (Without a rotated level it would be this coding
     // again: the same modes win, the rotated ones coming last on ties.)
-    let rotated = p
-        .modes()
-        .iter()
-        .any(|&m| matches!(levl::mode_of(&[m]), Some(4 | 5)));
+    let rotated = p.modes().iter().any(|&m| levl::rotated(&[m]));
     if let (true, Transform::Wavelet(w)) = (rotated, p.header.transform) {
         let d = p.header.disc;
         try_code(&mut p, w, d, false);

@@ -91,6 +91,23 @@ pub fn joint(payload: &[u8]) -> bool {
     mode_of(payload) == Some(9) && payload.get(1).is_some_and(|m| m & JOINT != 0)
 }
 
+/// Whether a LEVL payload's mode reads its predictions' phases (modes 6 and 9, SPEC.md
+/// 10.6, 10.9): the decoder makes them before it reads the level.
+pub fn reads_phases(payload: &[u8]) -> bool {
+    matches!(mode_of(payload), Some(6 | 9))
+}
+
+/// Whether a LEVL payload's mode reads tangent targets (modes 2 and 7, SPEC.md 10.3,
+/// 10.7).
+pub fn reads_targets(payload: &[u8]) -> bool {
+    matches!(mode_of(payload), Some(2 | 7))
+}
+
+/// Whether a LEVL payload is in a rotated mode (4 or 5, SPEC.md 10.5).
+pub fn rotated(payload: &[u8]) -> bool {
+    matches!(mode_of(payload), Some(4 | 5))
+}
+
 /// What [`encode`] makes once per level for the modes that read it.
 #[derive(Default)]
 struct Prepared {
