@@ -51,15 +51,14 @@ impl AdaptiveModel {
     /// after one symbol.
     pub fn new(n: usize) -> Self {
         assert!((2..=4096).contains(&n), "alphabet size {n} out of range");
-        let first = FIRST_PERIOD;
         let mut m = AdaptiveModel {
             counts: vec![1; n],
             total: n as u32,
             cum: vec![0; n + 1],
             lut: [0; LUT_LEN + 1],
             stale: true,
-            until_rebuild: first,
-            period: first,
+            until_rebuild: FIRST_PERIOD,
+            period: FIRST_PERIOD,
         };
         m.rebuild();
         m
@@ -761,7 +760,7 @@ mod tests {
     fn tight_tails_save_bytes() {
         // 400 streams of 0 to 399 symbols from a pseudo-random source: the tight tail
         // saves on average between 1 and 4 bytes of constriction's sealing words.
-        let (mut legacy, mut tight) = (0, 0);
+        let (mut sealed, mut tight) = (0, 0);
         let stream = |n: u64| {
             let (mut e, mut m, mut x) = (Encoder::new(), AdaptiveModel::new(20), n);
             for _ in 0..n {
@@ -776,10 +775,10 @@ mod tests {
             let saved = 4 * stream(n).inner.into_compressed().unwrap_or_default().len();
             let ours = stream(n).finish();
             assert!(ours.len() <= saved, "{n} symbols: {} > {saved}", ours.len());
-            legacy += saved;
+            sealed += saved;
             tight += ours.len();
         }
-        let per_stream = (legacy - tight) as f64 / 400.0;
+        let per_stream = (sealed - tight) as f64 / 400.0;
         assert!((1.0..4.0).contains(&per_stream), "{per_stream}");
     }
 

@@ -375,8 +375,7 @@ pub fn decode(
 ) -> Result<Mesh> {
     // Density bounds (SPEC.md 2.6): no conforming stream carries more per byte.
     let room = payload.len() as u64 + 8;
-    let (per_face, per_corner) = (32768, 131072);
-    if vertices > 2048 * room || faces > per_face * room || corners > per_corner * room {
+    if vertices > 2048 * room || faces > 32768 * room || corners > 131072 * room {
         return Err(Error::corrupt(
             SECTION,
             format!(

@@ -1,6 +1,6 @@
 //! Coding one refinement level's details (SPEC.md 10): the edge points' details, then the
-//! face points', each as x, y, z with integer models chosen by class, axis, the previous
-//! axis's magnitude and the activity of the coarser neighbours.
+//! face points', each as three values with integer models chosen by class, slot, the
+//! previous value's magnitude and the magnitudes of the same slot at the neighbours.
 
 pub mod fit;
 
