@@ -30,7 +30,7 @@ pub use subwave_codec::io::{read_mesh, write_mesh, Format, RawMesh};
 pub use subwave_codec::{
     decode, encode, inspect, DecodeOptions, Decoded, DiscTransform, EncodeOptions, Encoded, Error,
     Family, FloatWidth, Header, Info, Limits, Mesh, Quantization, RawCoords, Result, SectionInfo,
-    Source, Transform, TransformChoice, ValueMap, Wavelet, FORMAT_VERSION, MAX_COORD,
+    Source, Transform, TransformChoice, Wavelet, FORMAT_VERSION, MAX_COORD,
 };
 
 /// A mesh file read and turned into integers.
@@ -67,7 +67,7 @@ pub fn load(bytes: &[u8], bits: Option<u8>) -> Result<Loaded> {
             "{why}: exact mode cannot keep this file's values; use --bits Q (1..=30) to quantise"
         )));
     }
-    let (positions, quantization) = subwave_codec::quant::integerize(&raw.coords, bits)?;
+    let (positions, quantization) = subwave_codec::integerize(&raw.coords, bits)?;
     let mut mesh = raw.topology;
     mesh.positions = positions;
     mesh.validate()?;
@@ -178,5 +178,6 @@ pub fn decode_into(bytes: &[u8], opts: &DecodeOptions, out: &mut Mesh) -> Result
     Ok(d)
 }
 
+#[cfg(feature = "internals")]
 #[doc(hidden)]
 pub mod fuzz_harness;

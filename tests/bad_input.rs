@@ -413,11 +413,30 @@ fn modes_a_level_cannot_have_are_corrupt() {
             assert!(p[0] <= 1);
             p[0] = mode;
         });
+        // The error names the level and where its section starts.
+        let offset = subwave_container::Container::parse(&b, &Limits::default())
+            .unwrap()
+            .sections
+            .iter()
+            .find(|s| s.kind == SectionKind::LEVEL)
+            .unwrap()
+            .offset;
         match subwave::decode_slice(&b) {
-            Err(Error::CorruptStream {
-                section: "LEVL",
-                what,
-            }) => assert!(what.contains(want), "mode {mode}: {what}"),
+            Err(e @ Error::CorruptLevel { level: 1, .. }) => {
+                let Error::CorruptLevel {
+                    offset: at, what, ..
+                } = &e
+                else {
+                    unreachable!()
+                };
+                assert_eq!(*at, offset, "mode {mode}");
+                assert!(what.contains(want), "mode {mode}: {what}");
+                let text = e.to_string();
+                assert!(
+                    text.contains("level 1") && text.contains(&format!("byte {offset}")),
+                    "{text}"
+                );
+            }
             other => panic!("mode {mode}: expected a corrupt level, got {other:?}"),
         }
     }
@@ -495,7 +514,7 @@ fn joint_rounding_levels_need_their_flag() {
         p[0] = p[0] & 0xf0 | 8
     }] {
         match subwave::decode_slice(&with_level(&b, level, edit)) {
-            Err(Error::CorruptStream { what, .. }) => {
+            Err(Error::CorruptLevel { what, level: l, .. }) if l as usize == level + 1 => {
                 assert!(what.contains("bad correction weights"), "{what}")
             }
             other => panic!("expected bad weights, got {other:?}"),
@@ -620,7 +639,9 @@ fn polar_headers_that_do_not_fit_their_base_mesh_are_refused() {
     ];
     for (what, edit) in cases {
         match subwave::decode_slice(&polar_with_header(edit)) {
-            Err(Error::Container(_)) | Err(Error::CorruptStream { .. }) => {}
+            Err(Error::Container(_))
+            | Err(Error::CorruptStream { .. })
+            | Err(Error::CorruptLevel { .. }) => {}
             other => panic!("{what}: expected a malformed or corrupt container, got {other:?}"),
         }
     }

@@ -187,13 +187,13 @@ fn hostile_value_maps_are_refused() {
         other => panic!("{what}: expected a corrupt container, got {other:?}"),
     };
     // A map of one value per axis: ranks past its end.
-    let one = subwave::ValueMap {
+    let one = subwave_codec::sections::vmap::ValueMap {
         axes: [Some(vec![7]), Some(vec![7]), Some(vec![7])],
     };
     bad(&with_vmap(&enc, &one.encode()), "ranks outside the map");
     // More values than vertices.
     let nv = m.mesh.vertex_count() as i64;
-    let many = subwave::ValueMap {
+    let many = subwave_codec::sections::vmap::ValueMap {
         axes: [Some((0..=nv).collect()), None, None],
     };
     bad(&with_vmap(&enc, &many.encode()), "too many values");

@@ -3,12 +3,14 @@
 use crate::error::{Error, Result};
 use crate::mesh::{Mesh, MAX_COORD};
 use crate::quant::Quantization;
-use crate::sections::head::{Family, Header, Transform};
+use crate::sections::head::{Header, Transform};
 use crate::sections::vmap::ValueMap;
 use crate::sections::{base, levl, ordr};
+use crate::topology::Family;
 use crate::topology::{self, Level, Topo};
-use crate::transform::polar::{self};
-use crate::transform::{self, fit, sqrt2, Wavelet};
+use crate::transform::fit;
+use crate::transform::level::{Direction, LevelTransform, Scheme};
+use crate::transform::Wavelet;
 use crate::Limits;
 use subwave_container::{Container, SectionKind};
 
@@ -199,6 +201,33 @@ fn check_finest_counts(h: &Header, topo: &Topo) -> Result<()> {
     Ok(())
 }
 
+/// Which base vertices are a polar hierarchy's poles (the same at every level, SPEC.md
+/// 8.6; empty for the other families); every face at a pole must be a triangle.
+fn pole_flags(h: &Header, base: &Topo) -> Result<Vec<bool>> {
+    let mut pole = vec![
+        false;
+        if h.family == Family::Polar {
+            base.nv
+        } else {
+            0
+        }
+    ];
+    for &p in &h.poles {
+        *pole
+            .get_mut(p as usize)
+            .ok_or_else(|| Error::corrupt("HEAD", "a pole is not a base vertex"))? = true;
+    }
+    if !pole.is_empty() {
+        for f in 0..base.nf() {
+            let face = base.face(f);
+            if face.len() != 3 && face.iter().any(|&v| pole[v as usize]) {
+                return Err(Error::corrupt("BASE", "a face at a pole is not a triangle"));
+            }
+        }
+    }
+    Ok(pole)
+}
+
 /// Rebuilds levels 1..=`upto` from the base mesh (SPEC.md 8-10).
 fn synthesise_levels(
     c: &Container<'_>,
@@ -210,151 +239,128 @@ fn synthesise_levels(
     let mut topo = Topo::new(base.vertex_count());
     topo.idx = base.faces;
     topo.starts = base.face_starts;
-    let mut x: [Vec<i64>; 3] =
-        std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect());
-    let mut models = levl::LevelModels::new();
-    let is_sqrt2 = h.family == Family::Sqrt2;
-    // Polar hierarchies: which vertices are poles (the same at every level, SPEC.md 8.6);
-    // every face at a pole must be a triangle.
-    let mut pole = vec![
-        false;
-        if h.family == Family::Polar {
-            topo.nv
-        } else {
-            0
-        }
-    ];
-    for &p in &h.poles {
-        *pole
-            .get_mut(p as usize)
-            .ok_or_else(|| Error::corrupt("HEAD", "a pole is not a base vertex"))? = true;
-    }
-    if !pole.is_empty() {
-        for f in 0..topo.nf() {
-            let face = topo.face(f);
-            if face.len() != 3 && face.iter().any(|&v| pole[v as usize]) {
-                return Err(Error::corrupt("BASE", "a face at a pole is not a triangle"));
-            }
-        }
-    }
-    // A sqrt(2) or Catmull-Clark level's successor, derived from it (cheaper than from
-    // its fine faces).
+    let mut s = Synthesis {
+        h,
+        scheme: Scheme {
+            family: h.family,
+            wavelet: w,
+            poles: &h.poles,
+            disc: h.disc,
+        },
+        x: std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect()),
+        models: levl::LevelModels::new(),
+        pole: pole_flags(h, &topo)?,
+    };
+    // A level's successor, derived from it (cheaper than from its fine faces).
     let mut next: Option<Level> = None;
     for l in 0..upto as usize {
-        let mut level = match next.take() {
+        let level = match next.take() {
             Some(n) => n,
             None => Level::new(&topo)?,
         };
-        // Refuse a refinement larger than the header's finest mesh before building it.
-        let (fine_nv, fine_faces) = if is_sqrt2 {
-            (topology::sqrt2::fine_nv(&level), level.ne())
-        } else {
-            (level.fine_nv(), level.fine_faces_with(&pole))
-        };
-        check_refinement_size(h, fine_nv, fine_faces)?;
-        if is_sqrt2 && !topology::sqrt2::closed(&level) {
-            return Err(Error::corrupt("BASE", "a sqrt(2) level with a boundary"));
-        }
-        let payload = c.sections[2 + l].payload;
-        // sqrt2-lazy: the face points' predictions, from the coarse values, serve the
-        // tangent targets and the synthesis; sqrt2-sym takes a plan, ir2w a pass of its
-        // own after the details.
-        let lazy = is_sqrt2 && w == Wavelet::Sqrt2Lazy;
-        // Only sqrt2-sym (SPEC.md 9.8) reads the per-vertex lists.
-        if is_sqrt2 && w != Wavelet::Sqrt2Sym {
-            level.free_vertex_adjacency();
-        }
-        // (Made before the details are decoded: while the coarse values alone are in
-        // memory, which is smaller than making them after.)
-        // Modes 6 and 9 read the predictions' phases (SPEC.md 10.6, 10.9).
-        let phased = levl::reads_phases(payload);
-        let (predictions, phases) = match lazy {
-            true => {
-                let (p, ph) = sqrt2::predictions_with(&level, &x, phased);
-                (Some(p), ph)
-            }
-            false => (None, None),
-        };
-        let plan = (is_sqrt2 && w == Wavelet::Sqrt2Sym).then(|| sqrt2::Plan::new(&level, w));
-        // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
-        let tangent = levl::reads_targets(payload);
-        let targets = (is_sqrt2 && tangent).then(|| match &predictions {
-            Some(pr) => sqrt2::tangent_targets_from(&level, &x, pr),
-            None => sqrt2::tangent_targets_from(&level, &x, &sqrt2::predictions(&level, &x)),
-        });
-        // A Catmull-Clark level's stencils, for its phases and its synthesis.
-        let st = (!is_sqrt2).then(|| transform::Stencils::new(&level, w));
-        let phaser = match &st {
-            Some(st) if phased && h.poles.is_empty() => transform::Phaser::new(&level, w, st),
-            _ => None,
-        };
-        let phasing = match (&phases, &phaser) {
-            (Some(p), _) => Some(levl::Phasing::Ready(p)),
-            (None, Some(p)) => Some(levl::Phasing::Cc(p)),
-            (None, None) => None,
-        };
-        levl::decode(
-            payload,
-            &level,
-            is_sqrt2,
-            &mut x,
-            &mut models,
-            targets.as_deref(),
-            phasing,
-        )?;
-        // A Catmull-Clark level in mode 6 or 9 is synthesised as it is read.
-        let synthesised = phaser.is_some();
-        drop(phaser);
-        if l + 1 == upto as usize {
-            // The last level read: its magnitudes serve no later level.
-            models = levl::LevelModels::new();
-        }
-        if is_sqrt2 && w == Wavelet::Ir2w {
-            sqrt2::ir2w_synthesise(&level, &mut x);
-        } else if is_sqrt2 {
-            if let Some(plan) = &plan {
-                for xs in x.iter_mut() {
-                    plan.synthesise(xs);
-                }
-            }
-            // sqrt2-lazy predicts from the coarse values as decoded.
-            for (xs, pk) in x.iter_mut().zip(predictions.iter().flatten()) {
-                sqrt2::apply_predictions(xs, level.nv, pk, false);
-            }
-        } else if !synthesised {
-            let (discs, owned) = polar::discs(&level, &h.poles, l as u32, h.disc);
-            let st = st.unwrap_or_else(|| transform::Stencils::new(&level, w));
-            for xs in x.iter_mut() {
-                transform::synthesise_with(&level, w, &st, xs, &owned);
-                for d in discs.iter().rev() {
-                    polar::synthesise(d, h.disc, xs);
-                }
-            }
-        }
-        if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
-            return Err(Error::corrupt("LEVL", "reconstructed value out of range"));
-        }
-        if is_sqrt2 && l + 1 < upto as usize {
+        let section = &c.sections[2 + l];
+        let last = l + 1 == upto as usize;
+        let level = s
+            .level(level, l, section.payload, last)
+            .map_err(|e| e.in_level(l + 1, section.offset))?;
+        match s.scheme.family {
             // Only sqrt2-sym reads the per-vertex lists: the others' levels are made
             // without them.
-            next = Some(topology::sqrt2::next_level(level, w == Wavelet::Sqrt2Sym)?);
-        } else if is_sqrt2 {
+            Family::Sqrt2 if !last => {
+                next = Some(topology::sqrt2::next_level(level, w == Wavelet::Sqrt2Sym)?);
+            }
             // The finest topology needs only the level's edges: its other arrays go first.
-            topo = topology::sqrt2::fine_owned(level);
-        } else if pole.is_empty() && l + 1 < upto as usize {
+            Family::Sqrt2 => topo = topology::sqrt2::fine_owned(level),
             // A Catmull-Clark level's successor, derived from it (no edge lookups).
-            next = Some(level.next());
-        } else {
-            topo = level.fine_with(&pole);
-            if !pole.is_empty() {
-                pole.resize(topo.nv, false);
+            _ if s.pole.is_empty() && !last => next = Some(level.next()),
+            _ => {
+                topo = level.fine_with(&s.pole);
+                if !s.pole.is_empty() {
+                    s.pole.resize(topo.nv, false);
+                }
             }
         }
     }
     if upto == h.levels {
         check_finest_counts(h, &topo)?;
     }
-    // A coarser level's values carry 1/gain of the geometry per level still above it.
+    coarse_mesh(h, w, upto, &s.x, topo)
+}
+
+/// The decoder's state between levels.
+struct Synthesis<'h> {
+    h: &'h Header,
+    scheme: Scheme<'h>,
+    /// Per axis, the values decoded so far (the coarse values of the next level).
+    x: [Vec<i64>; 3],
+    models: levl::LevelModels,
+    /// Polar hierarchies: which vertices are poles.
+    pole: Vec<bool>,
+}
+
+impl Synthesis<'_> {
+    /// Reads level `l`'s details from `payload` and synthesises the level's fine
+    /// values (SPEC.md 9, 10). Returns the level for its successor.
+    fn level(&mut self, mut level: Level, l: usize, payload: &[u8], last: bool) -> Result<Level> {
+        let family = self.scheme.family;
+        // Refuse a refinement larger than the header's finest mesh before building it.
+        let (nv, nf) = (
+            family.fine_nv(&level),
+            family.fine_faces(&level, &self.pole),
+        );
+        check_refinement_size(self.h, nv, nf)?;
+        if family == Family::Sqrt2 && !topology::sqrt2::closed(&level) {
+            return Err(Error::corrupt("BASE", "a sqrt(2) level with a boundary"));
+        }
+        // Only sqrt2-sym (SPEC.md 9.8) reads the per-vertex lists.
+        if family == Family::Sqrt2 && self.scheme.wavelet != Wavelet::Sqrt2Sym {
+            level.free_vertex_adjacency();
+        }
+        let x = &mut self.x;
+        // Made before the details are decoded: while the coarse values alone are in
+        // memory, which is smaller than making them after. Modes 6 and 9 read the
+        // predictions' phases (SPEC.md 10.6, 10.9).
+        let phased = levl::reads_phases(payload);
+        let t = LevelTransform::new(&self.scheme, &level, l, x, Direction::Synthesis, phased);
+        // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
+        let targets = levl::reads_targets(payload)
+            .then(|| t.tangent_targets(&level, x))
+            .flatten();
+        let phaser = phased.then(|| t.phaser(&level)).flatten();
+        let phasing = match (t.phases(), &phaser) {
+            (Some(p), _) => Some(levl::Phasing::Ready(p)),
+            (None, Some(p)) => Some(levl::Phasing::Cc(p)),
+            (None, None) => None,
+        };
+        let models = &mut self.models;
+        levl::decode(
+            payload,
+            &level,
+            family,
+            x,
+            models,
+            targets.as_deref(),
+            phasing,
+        )?;
+        if last {
+            // The last level read: its magnitudes serve no later level.
+            *models = levl::LevelModels::new();
+        }
+        // A Catmull-Clark level in mode 6 or 9 is synthesised as it is read.
+        if phaser.is_none() {
+            t.synthesise(&level, x);
+        }
+        drop(t);
+        if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
+            return Err(Error::corrupt("LEVL", "reconstructed value out of range"));
+        }
+        Ok(level)
+    }
+}
+
+/// The mesh of level `upto` from its values `x` and topology: a coarser level's values
+/// carry 1/gain of the geometry per level still above it.
+fn coarse_mesh(h: &Header, w: Wavelet, upto: u8, x: &[Vec<i64>; 3], topo: Topo) -> Result<Mesh> {
     let gain: i64 = match w {
         Wavelet::Bicubic => 4,
         Wavelet::Biquintic => 16,
@@ -394,10 +400,10 @@ fn synthesise_fit(c: &Container<'_>, h: &Header, base: Mesh, bits: u8, upto: u8)
         let level = Level::new(&topo)?;
         check_refinement_size(h, level.fine_nv(), level.fine_faces_with(&[]))?;
         if l + 1 < h.levels as usize && !c.sections[2 + l].payload.is_empty() {
-            return Err(Error::corrupt(
-                "LEVL",
-                "a fit's level other than the finest holds data",
-            ));
+            return Err(
+                Error::corrupt("LEVL", "a fit's level other than the finest holds data")
+                    .in_level(l + 1, c.sections[2 + l].offset),
+            );
         }
         for xs in x.iter_mut() {
             fit::subdivide(&level, xs);
@@ -406,8 +412,9 @@ fn synthesise_fit(c: &Container<'_>, h: &Header, base: Mesh, bits: u8, upto: u8)
     }
     if upto == h.levels {
         check_finest_counts(h, &topo)?;
-        let payload = c.sections[1 + upto as usize].payload;
-        levl::fit::decode_residuals(payload, &mut x, bits, MAX_COORD)?;
+        let s = &c.sections[1 + upto as usize];
+        levl::fit::decode_residuals(s.payload, &mut x, bits, MAX_COORD)
+            .map_err(|e| e.in_level(upto as usize, s.offset))?;
     } else {
         // A coarser level: the control mesh's refinement, rounded to the grid.
         let half = (1i64 << bits) >> 1;

@@ -30,6 +30,17 @@ pub enum Error {
         /// What is wrong.
         what: String,
     },
+    /// A level's section (LEVL) contradicts itself: which level (1 = the first above the
+    /// base mesh) and where its section starts in the container.
+    #[error("corrupt LEVL data in level {level} (section at byte {offset}): {what}")]
+    CorruptLevel {
+        /// The level, 1-based.
+        level: u8,
+        /// The byte offset of the level's section in the container.
+        offset: u64,
+        /// What is wrong.
+        what: String,
+    },
     /// The container uses a feature this build does not have.
     #[error("unsupported: {0}")]
     Unsupported(String),
@@ -43,6 +54,22 @@ impl Error {
         Error::CorruptStream {
             section,
             what: what.into(),
+        }
+    }
+
+    /// This error, if it is a LEVL stream's corruption, as one in level `level`'s
+    /// section (starting at byte `offset` of the container).
+    pub(crate) fn in_level(self, level: usize, offset: u64) -> Self {
+        match self {
+            Error::CorruptStream {
+                section: "LEVL",
+                what,
+            } => Error::CorruptLevel {
+                level: level.min(u8::MAX as usize) as u8,
+                offset,
+                what,
+            },
+            e => e,
         }
     }
 }

@@ -5,21 +5,43 @@
 // Numeric kernels index several arrays (axes, positions, weights) in lockstep.
 #![allow(clippy::needless_range_loop)]
 
-pub mod entropy;
+/// Declares the stages: private to the crate, public with the `internals` feature (for
+/// the fuzz harness, the benches and the tests that reach inside, as ruzstd's
+/// `fuzz_exports`; not a stable API).
+macro_rules! stages {
+    ($($(#[$doc:meta])* $name:ident;)*) => {$(
+        $(#[$doc])*
+        #[cfg(feature = "internals")]
+        pub mod $name;
+        $(#[$doc])*
+        #[cfg(not(feature = "internals"))]
+        mod $name;
+    )*};
+}
+
+stages! {
+    /// Adaptive models and the range coder (SPEC.md 4).
+    entropy;
+    /// The integer mesh.
+    mesh;
+    /// Exact and grid quantisation (SPEC.md 3).
+    quant;
+    /// One module per container section (SPEC.md 5-10).
+    sections;
+    /// Coarse adjacency, refinement and hierarchy recovery (SPEC.md 6.2, 8).
+    topology;
+    /// The wavelet transforms, one folder per family (SPEC.md 9).
+    transform;
+}
 pub mod error;
 pub mod io;
-pub mod mesh;
-pub mod quant;
-pub mod sections;
-pub mod topology;
-pub mod transform;
 
 pub use error::{Error, Result};
 pub use mesh::{Mesh, MAX_COORD};
-pub use quant::{FloatWidth, Quantization, RawCoords};
-pub use sections::head::{Family, Header, Source, Transform};
-pub use sections::vmap::ValueMap;
+pub use quant::{integerize, FloatWidth, Quantization, RawCoords};
+pub use sections::head::{Header, Source, Transform};
 pub use subwave_container::{Limits, FORMAT_VERSION};
+pub use topology::Family;
 pub use transform::polar::DiscTransform;
 pub use transform::Wavelet;
 

@@ -237,6 +237,7 @@ impl TextCoords {
     }
 
     /// Whether no vertex was pushed.
+    #[cfg(feature = "internals")]
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

@@ -11,12 +11,13 @@ use crate::error::{Error, Result};
 use crate::info::{section_info, SectionInfo};
 use crate::mesh::Mesh;
 use crate::quant::Quantization;
-use crate::sections::head::{Family, Header, Source, Transform};
+use crate::sections::head::{Header, Source, Transform};
 use crate::sections::vmap::ValueMap;
 use crate::sections::{base, levl, ordr};
-use crate::topology::{self, Canonical, Topo};
-use crate::transform::polar::{self, DiscTransform};
-use crate::transform::{self, fit, sqrt2, Wavelet};
+use crate::topology::{self, Canonical, Family, Topo};
+use crate::transform::level::{Direction, LevelTransform, Scheme};
+use crate::transform::polar::DiscTransform;
+use crate::transform::{fit, Wavelet};
 use subwave_container::{ContainerWriter, SectionKind};
 
 /// Which transform to use on a hierarchy.
@@ -217,122 +218,151 @@ fn encode_with(
 ) -> Result<Encoded> {
     let mut flat_h = flat_header(mesh, q, opts);
     flat_h.has_value_map = vmap.is_some();
+    let best = if opts.max_levels > 0 {
+        best_hierarchy(mesh, opts, &flat_h)?
+    } else {
+        None
+    };
+    let (payloads, order) = match best {
+        Some((p, canon)) => (p, canon.order),
+        None => best_flat(mesh, opts, &flat_h),
+    };
+    let (bytes, sections) = write_container(&payloads, vmap)?;
+    let header = payloads.header;
+    Ok(Encoded {
+        bytes,
+        order,
+        header,
+        sections,
+    })
+}
+
+/// The hierarchy coding that codes `mesh` smallest, with the canonical hierarchy it was
+/// made from; `None` when no hierarchy is found.
+fn best_hierarchy(
+    mesh: &Mesh,
+    opts: &EncodeOptions,
+    flat_h: &Header,
+) -> Result<Option<(Payloads, Canonical)>> {
     let mut topo = Topo::new(mesh.vertex_count());
     topo.idx = mesh.faces.clone();
     topo.starts = mesh.face_starts.clone();
-    // The best hierarchy coding, and the canonical hierarchy it was made from.
     let mut best: Option<Payloads> = None;
     let mut chosen: Option<Canonical> = None;
-    if opts.max_levels > 0 {
-        let (want_cc, want_sqrt2) = match opts.transform {
-            TransformChoice::Auto => (true, true),
-            TransformChoice::Fixed(w) => (!w.is_sqrt2(), w.is_sqrt2()),
-            TransformChoice::Fit => (true, false),
-        };
-        let fit_only = opts.transform == TransformChoice::Fit;
-        let max = opts.max_levels as usize;
-        // The base mesh's faces in the order of the connectivity coder's gates, unless
-        // the input's order is kept: then as recovered, which makes the order cheap.
-        let gates = !opts.keep_order;
-        // Per family: its candidate hierarchies, the transform that compares them, and
-        // the family's other transforms (tried on the better candidate with `auto`).
-        let mut families: Vec<(Vec<Canonical>, Wavelet, &[Wavelet])> = Vec::new();
-        if want_cc {
-            let mut canons = Vec::new();
-            for rec in topology::cc::recover_all(mesh.vertex_count(), &topo, max) {
-                canons.push(topology::canonicalise(&rec, gates)?);
-            }
-            // Polar levels take the Catmull-Clark transforms (SPEC.md 8.6).
-            canons.extend(topology::polar::recover_all(
-                mesh.vertex_count(),
-                &topo,
-                max,
-                gates,
-            ));
-            // The subdivision fit, on each candidate whose finest level is near a
-            // subdivision (every candidate when asked for by name).
-            let try_fit = matches!(opts.transform, TransformChoice::Auto | TransformChoice::Fit);
-            for canon in canons.iter().filter(|_| try_fit) {
-                let pos = canonical_positions(mesh, canon);
-                if let Some(mut p) = code_fit(canon, &pos, &flat_h, &FIT_BITS, !fit_only) {
-                    if opts.keep_order {
-                        let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
-                        p.order = Some(order_section(&canon.order, faces, rotations));
-                    }
-                    if best.as_ref().is_none_or(|b| p.size() < b.size()) {
-                        best = Some(p);
-                        chosen = Some(canon.clone());
-                    }
+    let (want_cc, want_sqrt2) = match opts.transform {
+        TransformChoice::Auto => (true, true),
+        TransformChoice::Fixed(w) => (!w.is_sqrt2(), w.is_sqrt2()),
+        TransformChoice::Fit => (true, false),
+    };
+    let fit_only = opts.transform == TransformChoice::Fit;
+    let max = opts.max_levels as usize;
+    // The base mesh's faces in the order of the connectivity coder's gates, unless
+    // the input's order is kept: then as recovered, which makes the order cheap.
+    let gates = !opts.keep_order;
+    // Per family: its candidate hierarchies, the transform that compares them, and
+    // the family's other transforms (tried on the better candidate with `auto`).
+    let mut families: Vec<(Vec<Canonical>, Wavelet, &[Wavelet])> = Vec::new();
+    if want_cc {
+        let mut canons = Vec::new();
+        for rec in topology::cc::recover_all(mesh.vertex_count(), &topo, max) {
+            canons.push(topology::canonicalise(&rec, gates)?);
+        }
+        // Polar levels take the Catmull-Clark transforms (SPEC.md 8.6).
+        canons.extend(topology::polar::recover_all(
+            mesh.vertex_count(),
+            &topo,
+            max,
+            gates,
+        ));
+        // The subdivision fit, on each candidate whose finest level is near a
+        // subdivision (every candidate when asked for by name).
+        let try_fit = matches!(opts.transform, TransformChoice::Auto | TransformChoice::Fit);
+        for canon in canons.iter().filter(|_| try_fit) {
+            let pos = canonical_positions(mesh, canon);
+            if let Some(mut p) = code_fit(canon, &pos, flat_h, &FIT_BITS, !fit_only) {
+                if opts.keep_order {
+                    let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
+                    p.order = Some(order_section(&canon.order, faces, rotations));
+                }
+                if best.as_ref().is_none_or(|b| p.size() < b.size()) {
+                    best = Some(p);
+                    chosen = Some(canon.clone());
                 }
             }
-            // A mesh and its dual can both be the base: compare them with one transform.
-            if !fit_only {
-                families.push((canons, Wavelet::Bicubic, &Wavelet::ALL));
-            }
         }
-        if want_sqrt2 {
-            let canons: Vec<Canonical> = topology::sqrt2::recover(&topo, max)
-                .and_then(|rec| topology::sqrt2::canonicalise(&rec, &topo, gates).ok())
-                .into_iter()
-                .collect();
-            families.push((canons, Wavelet::Sqrt2Lazy, &Wavelet::SQRT2));
-        }
-        // The families code apart; on several threads at once, each with its share.
-        families.retain(|(canons, ..)| !canons.is_empty());
-        let threads = opts.threads.max(1);
-        let share = (threads / families.len().max(1)).max(1);
-        // Each family is taken once, by the thread that codes it (on one thread, in
-        // order).
-        let jobs: Vec<_> = families
-            .into_iter()
-            .map(|f| std::sync::Mutex::new(Some(f)))
-            .collect();
-        let coded = par_map(&jobs, threads, |job| {
-            let taken = job.lock().map(|mut j| j.take()).ok().flatten();
-            let (canons, first, others) = taken.expect("each family is coded once");
-            code_family(mesh, opts, &flat_h, canons, first, others, share)
-        });
-        for family in coded {
-            let Some((p, canon)) = family? else {
-                continue;
-            };
-            if best.as_ref().is_none_or(|b| p.size() < b.size()) {
-                best = Some(p);
-                chosen = Some(canon);
-            }
+        // A mesh and its dual can both be the base: compare them with one transform.
+        if !fit_only {
+            families.push((canons, Wavelet::Bicubic, &Wavelet::ALL));
         }
     }
-    let (payloads, order) = match (best, chosen) {
-        (Some(p), Some(canon)) => (p, canon.order),
-        _ => {
-            // Faces as the connectivity coder's gates visit them (rotated to start at
-            // their gate); when the order is kept, also in the input's order and
-            // breadth-first, whichever codes smaller with the ORDR section. Vertices in
-            // order of first use (SPEC.md 6.1).
-            let mut best_flat: Option<(Payloads, Vec<u32>)> = None;
-            let nf = mesh.face_count();
-            let mut candidates = vec![topology::gates::gate_order(&mesh.face_starts, &mesh.faces)];
-            if opts.keep_order {
-                candidates.push(((0..nf as u32).collect(), vec![0; nf]));
-                candidates.push((base::face_order(mesh), vec![0; nf]));
-            }
-            for (forder, rot) in candidates {
-                let by_faces = base::permute_faces_rotated(mesh, &forder, &rot);
-                let order = base::canonical_order(&by_faces);
-                let p = Payloads {
-                    header: flat_h.clone(),
-                    base: base::encode(&base::permute(&by_faces, &order)),
-                    levels: Vec::new(),
-                    order: opts.keep_order.then(|| order_section(&order, forder, rot)),
-                };
-                if best_flat.as_ref().is_none_or(|b| p.size() < b.0.size()) {
-                    best_flat = Some((p, order));
-                }
-            }
-            best_flat.expect("at least one candidate")
+    if want_sqrt2 {
+        let canons: Vec<Canonical> = topology::sqrt2::recover(&topo, max)
+            .and_then(|rec| topology::sqrt2::canonicalise(&rec, &topo, gates).ok())
+            .into_iter()
+            .collect();
+        families.push((canons, Wavelet::Sqrt2Lazy, &Wavelet::SQRT2));
+    }
+    // The families code apart; on several threads at once, each with its share.
+    families.retain(|(canons, ..)| !canons.is_empty());
+    let threads = opts.threads.max(1);
+    let share = (threads / families.len().max(1)).max(1);
+    // Each family is taken once, by the thread that codes it (on one thread, in
+    // order).
+    let jobs: Vec<_> = families
+        .into_iter()
+        .map(|f| std::sync::Mutex::new(Some(f)))
+        .collect();
+    let coded = par_map(&jobs, threads, |job| {
+        let taken = job.lock().map(|mut j| j.take()).ok().flatten();
+        let (canons, first, others) = taken.expect("each family is coded once");
+        code_family(mesh, opts, flat_h, canons, first, others, share)
+    });
+    for family in coded {
+        let Some((p, canon)) = family? else {
+            continue;
+        };
+        if best.as_ref().is_none_or(|b| p.size() < b.size()) {
+            best = Some(p);
+            chosen = Some(canon);
         }
-    };
-    let header = payloads.header.clone();
+    }
+    Ok(best.zip(chosen))
+}
+
+/// The flat coding (no levels): faces as the connectivity coder's gates visit them
+/// (rotated to start at their gate); when the order is kept, also in the input's order
+/// and breadth-first, whichever codes smaller with the ORDR section. Vertices in order
+/// of first use (SPEC.md 6.1).
+fn best_flat(mesh: &Mesh, opts: &EncodeOptions, flat_h: &Header) -> (Payloads, Vec<u32>) {
+    let mut best_flat: Option<(Payloads, Vec<u32>)> = None;
+    let nf = mesh.face_count();
+    let mut candidates = vec![topology::gates::gate_order(&mesh.face_starts, &mesh.faces)];
+    if opts.keep_order {
+        candidates.push(((0..nf as u32).collect(), vec![0; nf]));
+        candidates.push((base::face_order(mesh), vec![0; nf]));
+    }
+    for (forder, rot) in candidates {
+        let by_faces = base::permute_faces_rotated(mesh, &forder, &rot);
+        let order = base::canonical_order(&by_faces);
+        let p = Payloads {
+            header: flat_h.clone(),
+            base: base::encode(&base::permute(&by_faces, &order)),
+            levels: Vec::new(),
+            order: opts.keep_order.then(|| order_section(&order, forder, rot)),
+        };
+        if best_flat.as_ref().is_none_or(|b| p.size() < b.0.size()) {
+            best_flat = Some((p, order));
+        }
+    }
+    best_flat.expect("at least one candidate")
+}
+
+/// The container of a coding: its sections in order (SPEC.md 2.4), and what each is.
+fn write_container(
+    payloads: &Payloads,
+    vmap: Option<&ValueMap>,
+) -> Result<(Vec<u8>, Vec<SectionInfo>)> {
+    let header = &payloads.header;
     let transform = header.transform;
     let mut w = ContainerWriter::new();
     let mut sections = Vec::new();
@@ -362,12 +392,7 @@ fn encode_with(
     let bytes = w.finish();
     let end = subwave_container::section_overhead(0);
     sections.push(section_info(SectionKind::END, end, transform, &[]));
-    Ok(Encoded {
-        bytes,
-        order,
-        header,
-        sections,
-    })
+    Ok((bytes, sections))
 }
 
 #[cfg(test)]

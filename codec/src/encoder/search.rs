@@ -25,52 +25,30 @@ pub(crate) fn code_hierarchy(
     // sqrt(2) levels: their tangent targets (SPEC.md 10.3), from the same coarse values;
     // sqrt2-lazy levels: their predictions' phases (10.6).
     let mut targets: Vec<Option<Vec<[i64; 3]>>> = vec![None; canon.levels.len()];
-    let mut phases: Vec<Option<transform::phase::Phases>> = vec![None; canon.levels.len()];
+    let mut phases: Vec<Option<crate::transform::phase::Phases>> = vec![None; canon.levels.len()];
+    let scheme = Scheme {
+        family: canon.family,
+        wavelet: w,
+        poles: &canon.poles,
+        disc,
+    };
     for (l, level) in canon.levels.iter().enumerate().rev() {
         // As the decoder: sqrt2-lazy keeps the coarse values, so one prediction per
         // face serves the analysis and the tangent targets; the other sqrt(2)
-        // transforms take a plan.
-        let predictions = (canon.sqrt2 && w == Wavelet::Sqrt2Lazy).then(|| {
-            let (p, ph) = sqrt2::predictions_with(level, &x, true);
-            phases[l] = ph;
-            p
-        });
-        let plan = (canon.sqrt2 && predictions.is_none()).then(|| sqrt2::Plan::new(level, w));
-        if let Some(p) = &predictions {
-            let n = topology::sqrt2::fine_nv(level);
-            for (xs, pk) in x.iter_mut().zip(p) {
-                sqrt2::apply_predictions(&mut xs[..n], level.nv, pk, true);
-            }
-        } else if let Some(plan) = &plan {
-            let n = topology::sqrt2::fine_nv(level);
-            for xs in x.iter_mut() {
-                plan.analyse(&mut xs[..n]);
-            }
-        } else {
-            // Polar levels: the poles' discs first, then the rest (SPEC.md 9.9).
-            let n = level.fine_nv();
-            let (discs, owned) = polar::discs(level, &canon.poles, l as u32, disc);
-            let st = transform::Stencils::new(level, w);
-            // Predict-only transforms: the phases of mode 6 (SPEC.md 10.6), from the fine
-            // values (the decoder makes them as it reads the level).
-            if canon.poles.is_empty() {
-                if let Some(p) = transform::Phaser::new(level, w, &st) {
-                    phases[l] = Some(p.phases(&x, level.ne() + level.nf(), true));
-                }
-            }
-            for xs in x.iter_mut() {
-                for d in &discs {
-                    polar::analyse(d, disc, &mut xs[..n]);
-                }
-                transform::analyse_with(level, w, &st, &mut xs[..n], &owned);
-            }
-        }
-        coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
-        targets[l] = match (&predictions, &plan) {
-            (Some(p), _) => Some(sqrt2::tangent_targets_from(level, &coarse[l], p)),
-            (None, Some(plan)) => Some(sqrt2::tangent_targets(level, plan, &coarse[l])),
-            (None, None) => None,
+        // transforms take a plan; polar levels code the poles' discs first (SPEC.md 9.9).
+        let mut t = LevelTransform::new(&scheme, level, l, &x, Direction::Analysis, true);
+        // The phases of modes 6 and 9 (SPEC.md 10.6): sqrt2-lazy's from its predictions,
+        // a predict-only Catmull-Clark level's from the fine values (the decoder makes
+        // them as it reads the level).
+        phases[l] = match t.take_phases() {
+            Some(p) => Some(p),
+            None => t
+                .phaser(level)
+                .map(|p| p.phases(&x, level.ne() + level.nf(), true)),
         };
+        t.analyse(level, canon.family.fine_nv(level), &mut x);
+        coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
+        targets[l] = t.tangent_targets(level, &coarse[l]);
     }
     if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
         return None;
@@ -83,8 +61,8 @@ pub(crate) fn code_hierarchy(
     let mut room = bound.checked_sub(base_bytes.len())?;
     let mut level_bytes = Vec::with_capacity(canon.levels.len());
     for (((l, c), t), ph) in canon.levels.iter().zip(&coarse).zip(&targets).zip(&phases) {
-        let (s2, t) = (canon.sqrt2, t.as_deref());
-        let b = levl::encode(l, s2, &x, c, &mut models, t, ph.as_ref(), room)?;
+        let t = t.as_deref();
+        let b = levl::encode(l, canon.family, &x, c, &mut models, t, ph.as_ref(), room)?;
         room -= b.len();
         level_bytes.push(b);
     }
@@ -120,13 +98,7 @@ pub(crate) fn hierarchy_base(
     header.base_faces = canon.base.nf() as u64;
     header.base_corners = canon.base.idx.len() as u64;
     header.levels = canon.levels.len() as u8;
-    header.family = if canon.sqrt2 {
-        Family::Sqrt2
-    } else if !canon.poles.is_empty() {
-        Family::Polar
-    } else {
-        Family::Cc
-    };
+    header.family = canon.family;
     header.poles = canon.poles.clone();
     (header, base::encode(&base))
 }
@@ -215,26 +187,18 @@ pub(crate) fn code_fit(
     best
 }
 
-/// The best coding of one family's candidate hierarchies (SPEC.md 8: Catmull-Clark and
-/// polar, or sqrt(2)) and the hierarchy it codes: every candidate with the family's
-/// first transform, then, with `auto`, the family's `others` ranked on the best
-/// candidate, the ranking's winner coded in every mode, and a coding without the
-/// rotated modes. `threads` (at least 1) may code the ranking's transforms at once; the
-/// result is the same for every count.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn code_family(
+/// A hierarchy's coding, the hierarchy, and the mesh's positions in its canonical order.
+type Candidate = (Payloads, Canonical, [Vec<i64>; 3]);
+
+/// Of a family's candidate hierarchies, the one that codes smallest with transform
+/// `first`: its coding and its positions in canonical order.
+fn best_candidate(
     mesh: &Mesh,
     opts: &EncodeOptions,
     flat_h: &Header,
     canons: Vec<Canonical>,
-    auto_first: Wavelet,
-    others: &[Wavelet],
-    threads: usize,
-) -> Result<Option<(Payloads, Canonical)>> {
-    let first = match opts.transform {
-        TransformChoice::Auto | TransformChoice::Fit => auto_first,
-        TransformChoice::Fixed(w) => w,
-    };
+    first: Wavelet,
+) -> Result<Option<Candidate>> {
     let mut fam_best: Option<(Payloads, Canonical, [Vec<i64>; 3])> = None;
     for canon in canons {
         let pos = canonical_positions(mesh, &canon);
@@ -258,6 +222,30 @@ pub(crate) fn code_family(
             }
         }
     }
+    Ok(fam_best)
+}
+
+/// The best coding of one family's candidate hierarchies (SPEC.md 8: Catmull-Clark and
+/// polar, or sqrt(2)) and the hierarchy it codes: every candidate with the family's
+/// first transform, then, with `auto`, the family's `others` ranked on the best
+/// candidate, the ranking's winner coded in every mode, and a coding without the
+/// rotated modes. `threads` (at least 1) may code the ranking's transforms at once; the
+/// result is the same for every count.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn code_family(
+    mesh: &Mesh,
+    opts: &EncodeOptions,
+    flat_h: &Header,
+    canons: Vec<Canonical>,
+    auto_first: Wavelet,
+    others: &[Wavelet],
+    threads: usize,
+) -> Result<Option<(Payloads, Canonical)>> {
+    let first = match opts.transform {
+        TransformChoice::Auto | TransformChoice::Fit => auto_first,
+        TransformChoice::Fixed(w) => w,
+    };
+    let fam_best = best_candidate(mesh, opts, flat_h, canons, first)?;
     let Some((mut p, canon, pos)) = fam_best else {
         return Ok(None);
     };

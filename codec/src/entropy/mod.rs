@@ -77,11 +77,13 @@ impl AdaptiveModel {
     }
 
     /// Alphabet size.
+    #[cfg(feature = "internals")]
     pub fn len(&self) -> usize {
         self.counts.len()
     }
 
     /// Always false: models have at least two symbols.
+    #[cfg(feature = "internals")]
     pub fn is_empty(&self) -> bool {
         false
     }

@@ -5,32 +5,11 @@ use subwave_container::{ByteReader, ByteWriter, Limits};
 use crate::error::{Error, Result};
 use crate::quant::{FloatWidth, Quantization};
 use crate::transform::polar::DiscTransform;
+use crate::topology::Family;
 use crate::transform::Wavelet;
 
-/// Which subdivision family the levels follow.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Family {
-    /// No subdivision structure: a base mesh with zero levels.
-    None,
-    /// Catmull-Clark (1-to-4) refinement.
-    Cc,
-    /// sqrt(2) refinement.
-    Sqrt2,
-    /// Catmull-Clark with polar structures.
-    Polar,
-}
-
+/// The family's code in the header (SPEC.md 5).
 impl Family {
-    /// The name `info` prints.
-    pub fn name(self) -> &'static str {
-        match self {
-            Family::None => "none",
-            Family::Cc => "cc",
-            Family::Sqrt2 => "sqrt2",
-            Family::Polar => "polar",
-        }
-    }
-
     fn code(self) -> u8 {
         match self {
             Family::None => 0,
@@ -260,74 +239,8 @@ impl Header {
                 )))
             }
         };
-        let at = r.offset();
-        let transform = match r.u8("transform")? {
-            0 => Transform::None,
-            FIT_CODE => {
-                let at = r.offset();
-                let bits = r.u8("fit precision")?;
-                if bits > crate::transform::fit::MAX_EXTRA_BITS {
-                    return Err(malformed(
-                        at,
-                        format!("a fit with {bits} extra bits, at most 16"),
-                    ));
-                }
-                Transform::Fit { bits }
-            }
-            t => match Wavelet::from_code(t) {
-                Some(w) => Transform::Wavelet(w),
-                _ => {
-                    return Err(Error::Unsupported(format!(
-                        "transform code {t} (byte {at})"
-                    )))
-                }
-            },
-        };
-        let at = r.offset();
-        let quantization = match r.u8("quantisation kind")? {
-            0 => {
-                let decimals = r.u8("decimals")?;
-                if decimals > crate::quant::MAX_DECIMALS {
-                    return Err(malformed(at, format!("{decimals} decimals, at most 18")));
-                }
-                Quantization::Decimal { decimals }
-            }
-            1 => {
-                let width = match r.u8("float width")? {
-                    32 => FloatWidth::F32,
-                    64 => FloatWidth::F64,
-                    w => return Err(malformed(at, format!("float width {w}"))),
-                };
-                let e = r.varint_signed("float exponent")?;
-                if !(-1100..=1100).contains(&e) {
-                    return Err(malformed(at, format!("float exponent {e}")));
-                }
-                Quantization::Float {
-                    width,
-                    exponent: e as i32,
-                }
-            }
-            2 => {
-                let bits = r.u8("grid bits")?;
-                if !(1..=30).contains(&bits) {
-                    return Err(malformed(at, format!("grid of {bits} bits")));
-                }
-                let mut origin = [0f32; 3];
-                for o in &mut origin {
-                    *o = f32::from_bits(r.u32_le("grid origin")?);
-                }
-                let step = f32::from_bits(r.u32_le("grid step")?);
-                if !step.is_finite() || origin.iter().any(|o| !o.is_finite()) {
-                    return Err(malformed(at, "grid origin or step is not finite"));
-                }
-                Quantization::Grid { bits, origin, step }
-            }
-            k => {
-                return Err(Error::Unsupported(format!(
-                    "quantisation kind {k} (byte {at})"
-                )))
-            }
-        };
+        let transform = read_transform(&mut r)?;
+        let quantization = read_quantization(&mut r)?;
         let source = Source::from_code(r.u8("source format")?);
         let at = r.offset();
         let flags = r.varint("flags")?;
@@ -337,35 +250,12 @@ impl Header {
                 "header flags {flags:#x} (byte {at})"
             )));
         }
-        // Polar hierarchies: the poles, as gaps (SPEC.md 5).
-        let mut poles = Vec::new();
-        let mut disc = DiscTransform::None;
-        if family == Family::Polar && levels > 0 {
-            let n = r.varint("pole count")?;
-            if n == 0 || n > base_vertices {
-                return Err(malformed(
-                    r.offset(),
-                    format!("{n} poles for {base_vertices} base vertices"),
-                ));
-            }
-            let mut next = 0u64;
-            for _ in 0..n {
-                let p = next.saturating_add(r.varint("pole")?);
-                if p >= base_vertices {
-                    return Err(malformed(
-                        r.offset(),
-                        format!("pole {p} is not a base vertex"),
-                    ));
-                }
-                poles.push(p as u32);
-                next = p + 1;
-            }
-            let at = r.offset();
-            let code = r.u8("disc transform")?;
-            disc = DiscTransform::from_code(code).ok_or_else(|| {
-                Error::Unsupported(format!("disc transform code {code} (byte {at})"))
-            })?;
-        }
+        // Polar hierarchies: the poles, as gaps, and the discs' transform (SPEC.md 5).
+        let (poles, disc) = if family == Family::Polar && levels > 0 {
+            read_poles(&mut r, base_vertices)?
+        } else {
+            (Vec::new(), DiscTransform::None)
+        };
         r.finish("the header")?;
         let h = Header {
             vertices,
@@ -488,4 +378,110 @@ impl Header {
 
 fn malformed(offset: u64, what: impl Into<String>) -> Error {
     subwave_container::Error::malformed(offset, what).into()
+}
+
+/// The header's transform (SPEC.md 5).
+fn read_transform(r: &mut ByteReader<'_>) -> Result<Transform> {
+    let at = r.offset();
+    Ok(match r.u8("transform")? {
+        0 => Transform::None,
+        FIT_CODE => {
+            let at = r.offset();
+            let bits = r.u8("fit precision")?;
+            if bits > crate::transform::fit::MAX_EXTRA_BITS {
+                return Err(malformed(
+                    at,
+                    format!("a fit with {bits} extra bits, at most 16"),
+                ));
+            }
+            Transform::Fit { bits }
+        }
+        t => match Wavelet::from_code(t) {
+            Some(w) => Transform::Wavelet(w),
+            _ => {
+                return Err(Error::Unsupported(format!(
+                    "transform code {t} (byte {at})"
+                )))
+            }
+        },
+    })
+}
+
+/// The header's quantisation (SPEC.md 5, 3).
+fn read_quantization(r: &mut ByteReader<'_>) -> Result<Quantization> {
+    let at = r.offset();
+    Ok(match r.u8("quantisation kind")? {
+        0 => {
+            let decimals = r.u8("decimals")?;
+            if decimals > crate::quant::MAX_DECIMALS {
+                return Err(malformed(at, format!("{decimals} decimals, at most 18")));
+            }
+            Quantization::Decimal { decimals }
+        }
+        1 => {
+            let width = match r.u8("float width")? {
+                32 => FloatWidth::F32,
+                64 => FloatWidth::F64,
+                w => return Err(malformed(at, format!("float width {w}"))),
+            };
+            let e = r.varint_signed("float exponent")?;
+            if !(-1100..=1100).contains(&e) {
+                return Err(malformed(at, format!("float exponent {e}")));
+            }
+            Quantization::Float {
+                width,
+                exponent: e as i32,
+            }
+        }
+        2 => {
+            let bits = r.u8("grid bits")?;
+            if !(1..=30).contains(&bits) {
+                return Err(malformed(at, format!("grid of {bits} bits")));
+            }
+            let mut origin = [0f32; 3];
+            for o in &mut origin {
+                *o = f32::from_bits(r.u32_le("grid origin")?);
+            }
+            let step = f32::from_bits(r.u32_le("grid step")?);
+            if !step.is_finite() || origin.iter().any(|o| !o.is_finite()) {
+                return Err(malformed(at, "grid origin or step is not finite"));
+            }
+            Quantization::Grid { bits, origin, step }
+        }
+        k => {
+            return Err(Error::Unsupported(format!(
+                "quantisation kind {k} (byte {at})"
+            )))
+        }
+    })
+}
+
+/// A polar hierarchy's poles, as gaps, and its discs' transform (SPEC.md 5).
+fn read_poles(r: &mut ByteReader<'_>, base_vertices: u64) -> Result<(Vec<u32>, DiscTransform)> {
+    let n = r.varint("pole count")?;
+    if n == 0 || n > base_vertices {
+        return Err(malformed(
+            r.offset(),
+            format!("{n} poles for {base_vertices} base vertices"),
+        ));
+    }
+    let mut poles = Vec::new();
+    let mut next = 0u64;
+    for _ in 0..n {
+        let p = next.saturating_add(r.varint("pole")?);
+        if p >= base_vertices {
+            return Err(malformed(
+                r.offset(),
+                format!("pole {p} is not a base vertex"),
+            ));
+        }
+        poles.push(p as u32);
+        next = p + 1;
+    }
+    let at = r.offset();
+    let code = r.u8("disc transform")?;
+    let disc = DiscTransform::from_code(code).ok_or_else(|| {
+        Error::Unsupported(format!("disc transform code {code} (byte {at})"))
+    })?;
+    Ok((poles, disc))
 }

@@ -48,6 +48,7 @@ impl Chain {
 
 /// Finds the deepest Catmull-Clark hierarchy of at most `max_levels` levels. Faces are
 /// `topo.face(f)` over vertex numbers `< nv`. Returns `None` when there is no level.
+#[cfg(any(test, feature = "internals"))]
 pub fn recover(nv: usize, topo: &Topo, max_levels: usize) -> Option<Recovered> {
     recover_all(nv, topo, max_levels).into_iter().next()
 }

@@ -9,6 +9,53 @@ pub mod sqrt2;
 
 use crate::error::{Error, Result};
 
+/// Which subdivision family the levels follow.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Family {
+    /// No subdivision structure: a base mesh with zero levels.
+    None,
+    /// Catmull-Clark (1-to-4) refinement.
+    Cc,
+    /// sqrt(2) refinement.
+    Sqrt2,
+    /// Catmull-Clark with polar structures.
+    Polar,
+}
+
+impl Family {
+    /// The name `info` prints.
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::None => "none",
+            Family::Cc => "cc",
+            Family::Sqrt2 => "sqrt2",
+            Family::Polar => "polar",
+        }
+    }
+
+    /// The fine vertex count of one of its levels (coarse vertices first).
+    pub(crate) fn fine_nv(self, level: &Level) -> usize {
+        match self {
+            Family::Sqrt2 => sqrt2::fine_nv(level),
+            _ => level.fine_nv(),
+        }
+    }
+
+    /// How many details one of its levels has: one per edge and face of a Catmull-Clark
+    /// or polar level, one per face of a sqrt(2) step.
+    pub(crate) fn details(self, level: &Level) -> usize {
+        self.fine_nv(level) - level.nv
+    }
+
+    /// The fine face count of one of its levels (`pole`: the polar levels' poles).
+    pub(crate) fn fine_faces(self, level: &Level, pole: &[bool]) -> usize {
+        match self {
+            Family::Sqrt2 => level.ne(),
+            _ => level.fine_faces_with(pole),
+        }
+    }
+}
+
 /// "No such face / edge".
 pub const NONE: u32 = u32::MAX;
 
@@ -91,11 +138,13 @@ impl PairMap {
     }
 
     /// Number of entries.
+    #[cfg(feature = "internals")]
     pub fn len(&self) -> usize {
         self.len
     }
 
     /// Whether the map is empty.
+    #[cfg(feature = "internals")]
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
@@ -528,8 +577,9 @@ pub struct Canonical {
     pub fine: Topo,
     /// `order[c]` = the input number of canonical vertex `c` (finest level).
     pub order: Vec<u32>,
-    /// The levels are sqrt(2) steps ([`crate::topology::sqrt2`]), not Catmull-Clark ones.
-    pub sqrt2: bool,
+    /// Which refinement the levels follow: Catmull-Clark, polar (Catmull-Clark with
+    /// poles) or sqrt(2) steps ([`crate::topology::sqrt2`]).
+    pub family: Family,
     /// Polar hierarchies (SPEC.md 8.6): the poles in canonical numbers, increasing;
     /// empty for every other hierarchy.
     pub poles: Vec<u32>,
@@ -647,7 +697,11 @@ pub fn canonicalise(rec: &Recovered, gates: bool) -> Result<Canonical> {
         levels,
         fine: cur,
         order,
-        sqrt2: false,
+        family: if poles.is_empty() {
+            Family::Cc
+        } else {
+            Family::Polar
+        },
         poles,
     })
 }

@@ -18,6 +18,7 @@ use super::{canonicalise, Canonical, FaceIndex, PairMap, Recovered, Topo};
 /// The deepest polar hierarchy of at most `max_levels` levels of `topo` (vertex numbers
 /// `< nv`), canonicalised and checked against `topo`; `None` if the mesh has no pole or
 /// no polar level.
+#[cfg(any(test, feature = "internals"))]
 pub fn recover(nv: usize, topo: &Topo, max_levels: usize) -> Option<Canonical> {
     recover_all(nv, topo, max_levels, true).into_iter().next()
 }

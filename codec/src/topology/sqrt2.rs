@@ -399,7 +399,7 @@ pub fn canonicalise(rec: &Recovered, input: &Topo, gates: bool) -> Result<Canoni
         levels,
         fine: cur,
         order,
-        sqrt2: true,
+        family: super::Family::Sqrt2,
         poles: Vec::new(),
     })
 }

@@ -7,6 +7,7 @@
 //! and rounding can cost compression, never losslessness.
 
 pub mod fit;
+pub(crate) mod level;
 pub mod phase;
 pub mod polar;
 pub mod sqrt2;
@@ -119,7 +120,7 @@ impl Wavelet {
     /// Analysis steps in order of computation (Table 1 of Bertram et al., integer
     /// variant of their section 4.3); empty for `DyadicSym`, which has its own steps,
     /// and for the sqrt(2) transforms ([`crate::transform::sqrt2`]).
-    pub fn steps(self) -> &'static [Step] {
+    pub(crate) fn steps(self) -> &'static [Step] {
         use Kind::{S, W};
         match self {
             Wavelet::DyadicSym
@@ -531,6 +532,7 @@ fn step<T: Sample>(level: &Level, x: &mut [T], s: Step, forward: bool, skip: &[b
 
 /// Analysis of one level, in place: `x` holds the fine values (`level.fine_nv()`); after
 /// it, `x[..nv]` are the coarse values and the rest the details.
+#[cfg(any(test, feature = "internals"))]
 pub fn analyse<T: Sample>(level: &Level, w: Wavelet, x: &mut [T]) {
     analyse_except(level, w, x, &[]);
 }
@@ -538,6 +540,7 @@ pub fn analyse<T: Sample>(level: &Level, w: Wavelet, x: &mut [T]) {
 /// [`analyse`] leaving the fine values `i` with `skip[i]` unchanged (they are read as
 /// they are; indices past the end of `skip` are not skipped). Polar levels skip their
 /// pole discs, which the polar transform codes (SPEC.md 9.9).
+#[cfg(any(test, feature = "internals"))]
 pub fn analyse_except<T: Sample>(level: &Level, w: Wavelet, x: &mut [T], skip: &[bool]) {
     analyse_with(level, w, &Stencils::new(level, w), x, skip);
 }
@@ -579,11 +582,13 @@ pub fn analyse_with<T: Sample>(
 }
 
 /// Synthesis of one level, in place: the exact inverse of [`analyse`].
+#[cfg(any(test, feature = "internals"))]
 pub fn synthesise<T: Sample>(level: &Level, w: Wavelet, x: &mut [T]) {
     synthesise_except(level, w, x, &[]);
 }
 
 /// The exact inverse of [`analyse_except`] with the same `skip`.
+#[cfg(any(test, feature = "internals"))]
 pub fn synthesise_except<T: Sample>(level: &Level, w: Wavelet, x: &mut [T], skip: &[bool]) {
     synthesise_with(level, w, &Stencils::new(level, w), x, skip);
 }

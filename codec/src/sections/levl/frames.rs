@@ -347,13 +347,13 @@ impl RotFrame {
     pub(super) fn new(
         level: &Level,
         coarse: &[Vec<i64>; 3],
-        sqrt2: bool,
+        family: Family,
         fd: usize,
         n: [i64; 3],
         offset: bool,
     ) -> Self {
         let rot = Rotation::new(n, tangent_ref(level, coarse, fd));
-        let offset = if offset && !sqrt2 && fd < level.ne() {
+        let offset = if offset && family != Family::Sqrt2 && fd < level.ne() {
             edge_offset(level, coarse, fd).map(|v| rot.forward(v))
         } else {
             None
@@ -381,13 +381,13 @@ pub(super) fn rot_frames(
     level: &Level,
     coarse: &[Vec<i64>; 3],
     normals: &[[i128; 3]],
-    sqrt2: bool,
+    family: Family,
 ) -> Vec<Option<RotFrame>> {
-    let ne = if sqrt2 { level.ne() } else { 0 };
-    (0..details(level, sqrt2))
+    let ne = if family == Family::Sqrt2 { level.ne() } else { 0 };
+    (0..family.details(level))
         .map(|i| {
             let fd = ne + i;
-            frame(level, normals, fd).map(|(_, n)| RotFrame::new(level, coarse, sqrt2, fd, n, true))
+            frame(level, normals, fd).map(|(_, n)| RotFrame::new(level, coarse, family, fd, n, true))
         })
         .collect()
 }

@@ -22,7 +22,7 @@ use crate::entropy::{class_of, Decoder, Encoder, IntModel};
 
 use crate::error::{Error, Result};
 
-use crate::topology::Level;
+use crate::topology::{Family, Level};
 
 use crate::transform::phase::{phase, Phases, FRAC_DIV};
 
@@ -118,17 +118,6 @@ struct Prepared {
     /// Modes 8 and 9's correction numerators, per detail (from the level's one set of
     /// weights).
     corrections: Vec<[i64; 3]>,
-}
-
-/// The details of a level, in coding order: `(count, first fine index)`; Catmull-Clark
-/// levels code their edge points, then their face points, sqrt(2) levels their face
-/// points (SPEC.md 10.1).
-fn details(level: &Level, sqrt2: bool) -> usize {
-    if sqrt2 {
-        level.nf()
-    } else {
-        level.ne() + level.nf()
-    }
 }
 
 /// How a level's details are coded (SPEC.md 10.2, 10.3).

@@ -242,7 +242,7 @@ pub(super) fn seeded(shared: &IntModel) -> IntModel {
 /// edge points, a sqrt(2) face's corners) count twice, an edge's earlier edges at its
 /// ends once; the bin is the weighted mean magnitude, doubled and rounded, at most 14,
 /// or 15 with no neighbour.
-pub(super) fn slot_bins(level: &Level, mags: &[[u8; 3]], sqrt2: bool, i: usize) -> [usize; 3] {
+pub(super) fn slot_bins(level: &Level, mags: &[[u8; 3]], family: Family, i: usize) -> [usize; 3] {
     let nv = level.nv;
     let mut sum = [0u32; 3];
     let mut w = 0u32;
@@ -254,7 +254,7 @@ pub(super) fn slot_bins(level: &Level, mags: &[[u8; 3]], sqrt2: bool, i: usize) 
             w += weight;
         }
     };
-    if sqrt2 {
+    if family == Family::Sqrt2 {
         for &v in level.coarse.face(i) {
             add(mags[v as usize], 2);
         }
@@ -293,13 +293,13 @@ pub(super) fn slot_bins(level: &Level, mags: &[[u8; 3]], sqrt2: bool, i: usize) 
 pub(super) fn contexts(
     level: &Level,
     mags: &[[u8; 3]],
-    sqrt2: bool,
+    family: Family,
     i: usize,
 ) -> (usize, [usize; 3], usize) {
     let ne = level.ne();
-    let (class, fd) = match (sqrt2, i < ne) {
+    let (class, fd) = match (family == Family::Sqrt2, i < ne) {
         (true, _) => (1, ne + i),
         (false, edge) => (!edge as usize, i),
     };
-    (class, slot_bins(level, mags, sqrt2, i), fd)
+    (class, slot_bins(level, mags, family, i), fd)
 }

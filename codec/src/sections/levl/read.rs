@@ -71,13 +71,13 @@ pub(super) fn get(
 pub fn decode(
     payload: &[u8],
     level: &Level,
-    sqrt2: bool,
+    family: Family,
     x: &mut [Vec<i64>; 3],
     models: &mut LevelModels,
     targets: Option<&[[i64; 3]]>,
     phasing: Option<Phasing<'_>>,
 ) -> Result<()> {
-    let (nv, nd) = (level.nv, details(level, sqrt2));
+    let (nv, nd) = (level.nv, family.details(level));
     // Density bound (SPEC.md 2.6), checked before the level's arrays are sized.
     if nd as u64 > 2048 * (payload.len() as u64 + 8) {
         return Err(Error::corrupt(
@@ -85,49 +85,11 @@ pub fn decode(
             format!("{} bytes cannot hold {} details", payload.len(), nd),
         ));
     }
-    let no_targets = || Error::corrupt("LEVL", "tangent mode on a level without tangent targets");
-    let no_phases = || Error::corrupt("LEVL", "phase mode on a level without prediction phases");
     // The mode byte's top bit makes the level unbinned; bits 4 to 6 are the slots left
     // out of the stream.
     let unbinned = unbinned(payload);
     let zero = zero_slots(payload);
-    let (mode, payload) = match mode_of(payload).zip(payload.get(1..)) {
-        Some((0, rest)) => (Mode::Plain, rest),
-        Some((1, rest)) => (Mode::Framed, rest),
-        Some((2, rest)) => match targets {
-            Some(t) if t.len() == nd => (Mode::Tangent(t), rest),
-            _ => return Err(no_targets()),
-        },
-        Some((7, rest)) => match targets {
-            Some(t) if t.len() == nd => (Mode::TangentPhased(t), rest),
-            _ => return Err(no_targets()),
-        },
-        Some((4, rest)) => (Mode::Rotated, rest),
-        Some((6, rest)) => match &phasing {
-            Some(Phasing::Ready(p)) if p.codes.iter().all(|p| p.len() == nd) => {
-                (Mode::Phased, rest)
-            }
-            Some(Phasing::Cc(_)) if !sqrt2 => (Mode::Phased, rest),
-            _ => return Err(no_phases()),
-        },
-        Some((5, rest)) => match rest.split_first() {
-            Some((&w, rest)) if w >> 4 <= 8 && w & 15 <= 8 => (Mode::Shifted(w >> 4, w & 15), rest),
-            _ => return Err(Error::corrupt("LEVL", "bad shift weights")),
-        },
-        Some((8, rest)) if !sqrt2 => {
-            let (w, _, rest) = read_weights(rest, false)?;
-            (Mode::Corrected(w), rest)
-        }
-        Some((9, rest)) if !sqrt2 => match &phasing {
-            Some(Phasing::Cc(_)) => {
-                let (w, r, rest) = read_weights(rest, true)?;
-                (Mode::CorrectedPhased(w, r), rest)
-            }
-            _ => return Err(no_phases()),
-        },
-        Some((m, _)) => return Err(Error::corrupt("LEVL", format!("unknown level mode {m}"))),
-        None => return Err(Error::corrupt("LEVL", "empty level section")),
-    };
+    let (mode, payload) = read_mode(payload, family, nd, targets, phasing.as_ref())?;
     let framed = mode.framed();
     let mut dec = Decoder::new(payload, "LEVL")?;
     let mut m = models.ready(models.start(), mode);
@@ -154,61 +116,20 @@ pub fn decode(
     let ne = level.ne();
     // Mode 9: every detail's prediction on each axis (the edge points' now, the face
     // points' once the edge points are read), and its phase.
-    let mut preds: [Vec<i64>; 3] = Default::default();
-    let mut cc_phases = Phases::default();
     // Mode 9 with joint rounding also reads the predictions' fractions.
     let joint = matches!(mode, Mode::CorrectedPhased(_, Rounding::Joint));
-    // Mode 9: detail `i`'s prediction, phase and (joint rounding) fraction on one axis.
-    let keep =
-        |p: &crate::transform::Phaser<'_>, xk: &[i64], i: usize, ph: &mut Phases, k: usize| {
-            if joint {
-                let (c, q, f) = p.predict_frac(xk, i);
-                ph.codes[k].push(q);
-                ph.fracs[k].push(f);
-                c
-            } else {
-                let (c, q) = p.predict(xk, i);
-                ph.codes[k].push(q);
-                c
-            }
-        };
-    if let Some(Phasing::Cc(p)) = &phasing {
-        if corr_phased {
-            for k in 0..3 {
-                for e in 0..ne.min(nd) {
-                    let c = keep(p, &x[k], e, &mut cc_phases, k);
-                    preds[k].push(c);
-                }
-            }
-        } else {
-            cc_phases = p.phases(x, ne.min(nd), false);
-        }
-    }
+    let (mut preds, mut cc_phases) = edge_predictions(phasing.as_ref(), corr_phased, x, ne.min(nd), joint);
     for i in 0..nd {
         // What a Catmull-Clark level in mode 6 adds to the detail: its prediction.
         let mut fine = [0i64; 3];
         match &phasing {
             Some(Phasing::Cc(p)) if i == ne && corr_phased => {
-                // The face points' predictions from the fine edge points; then the edge
-                // points' details again.
-                for k in 0..3 {
-                    let xk = &mut x[k];
-                    for e in 0..ne {
-                        xk[nv + e] = xk[nv + e].wrapping_add(preds[k][e]);
-                    }
-                    for f in ne..nd {
-                        let c = keep(p, xk, f, &mut cc_phases, k);
-                        preds[k].push(c);
-                    }
-                    for e in 0..ne {
-                        xk[nv + e] = xk[nv + e].wrapping_sub(preds[k][e]);
-                    }
-                }
+                face_predictions(p, level, nd, x, &mut preds, &mut cc_phases, joint)
             }
             Some(Phasing::Cc(p)) if i == ne => synthesise_edges(p, level, x),
             _ => {}
         }
-        let (class, bins, fd) = contexts(level, mags, sqrt2, i);
+        let (class, bins, fd) = contexts(level, mags, family, i);
         let fr = if framed {
             frame(level, &normals, fd)
         } else {
@@ -217,26 +138,12 @@ pub fn decode(
         let rotation = match (mode, fr) {
             (Mode::Rotated | Mode::Shifted(..), Some((_, n))) => {
                 let shifted = matches!(mode, Mode::Shifted(..));
-                let f = RotFrame::new(level, x, sqrt2, fd, n, shifted);
+                let f = RotFrame::new(level, x, family, fd, n, shifted);
                 Some((f.rot, f.pred(mode)))
             }
             _ => None,
         };
-        let out_of_range = || Error::corrupt("LEVL", "detail out of range");
-        let mut joint_phases = None;
-        let offset = match mode {
-            Mode::CorrectedPhased(w, Rounding::Joint) => {
-                let n = correction_sums(level, x, &w, i);
-                let (c, q) =
-                    joint_correction(n, fracs_at(&cc_phases, i)).ok_or_else(out_of_range)?;
-                joint_phases = Some(q);
-                Some(c)
-            }
-            Mode::Corrected(w) | Mode::CorrectedPhased(w, _) => {
-                Some(correction(correction_sums(level, x, &w, i)).ok_or_else(out_of_range)?)
-            }
-            _ => mode.offset(i, fr),
-        };
+        let (offset, joint_phases) = detail_offset(level, x, mode, i, fr, &cc_phases)?;
         let ph = match (joint_phases, &phasing, mode, offset) {
             (Some(q), ..) => Phased::Axes(q),
             (_, Some(Phasing::Ready(p)), ..) => Phased::Axes(phases_at(p, i)),
@@ -277,20 +184,189 @@ pub fn decode(
             x[k][nv + i] = d[k].wrapping_add(fine[k]);
         }
     }
-    match &phasing {
-        Some(Phasing::Cc(_)) if corr_phased => {
-            // Mode 9: the details plus their predictions.
-            for (xk, pk) in x.iter_mut().zip(&preds) {
+    if let Some(Phasing::Cc(p)) = &phasing {
+        finish_cc(p, level, x, corr_phased.then_some(&preds));
+    }
+    models.last = Some(m);
+    Ok(())
+}
+
+/// The level's mode from its mode byte and the mode's parameters, checked against what
+/// the level has (tangent targets, phases), and the rest of the payload: the stream.
+fn read_mode<'a, 't>(
+    payload: &'a [u8],
+    family: Family,
+    nd: usize,
+    targets: Option<&'t [[i64; 3]]>,
+    phasing: Option<&Phasing<'_>>,
+) -> Result<(Mode<'t>, &'a [u8])> {
+    let no_targets = || Error::corrupt("LEVL", "tangent mode on a level without tangent targets");
+    let no_phases = || Error::corrupt("LEVL", "phase mode on a level without prediction phases");
+    Ok(match mode_of(payload).zip(payload.get(1..)) {
+        Some((0, rest)) => (Mode::Plain, rest),
+        Some((1, rest)) => (Mode::Framed, rest),
+        Some((2, rest)) => match targets {
+            Some(t) if t.len() == nd => (Mode::Tangent(t), rest),
+            _ => return Err(no_targets()),
+        },
+        Some((7, rest)) => match targets {
+            Some(t) if t.len() == nd => (Mode::TangentPhased(t), rest),
+            _ => return Err(no_targets()),
+        },
+        Some((4, rest)) => (Mode::Rotated, rest),
+        Some((6, rest)) => match phasing {
+            Some(Phasing::Ready(p)) if p.codes.iter().all(|p| p.len() == nd) => {
+                (Mode::Phased, rest)
+            }
+            Some(Phasing::Cc(_)) if family != Family::Sqrt2 => (Mode::Phased, rest),
+            _ => return Err(no_phases()),
+        },
+        Some((5, rest)) => match rest.split_first() {
+            Some((&w, rest)) if w >> 4 <= 8 && w & 15 <= 8 => (Mode::Shifted(w >> 4, w & 15), rest),
+            _ => return Err(Error::corrupt("LEVL", "bad shift weights")),
+        },
+        Some((8, rest)) if family != Family::Sqrt2 => {
+            let (w, _, rest) = read_weights(rest, false)?;
+            (Mode::Corrected(w), rest)
+        }
+        Some((9, rest)) if family != Family::Sqrt2 => match phasing {
+            Some(Phasing::Cc(_)) => {
+                let (w, r, rest) = read_weights(rest, true)?;
+                (Mode::CorrectedPhased(w, r), rest)
+            }
+            _ => return Err(no_phases()),
+        },
+        Some((m, _)) => return Err(Error::corrupt("LEVL", format!("unknown level mode {m}"))),
+        None => return Err(Error::corrupt("LEVL", "empty level section")),
+    })
+}
+/// Modes 6 and 9 on a Catmull-Clark level, before its details are read: the phases of
+/// its first `n` details (the edge points') from the coarse values, and for mode 9
+/// (`corrected`) their predictions on each axis.
+fn edge_predictions(
+    phasing: Option<&Phasing<'_>>,
+    corrected: bool,
+    x: &[Vec<i64>; 3],
+    n: usize,
+    joint: bool,
+) -> ([Vec<i64>; 3], Phases) {
+    let mut preds: [Vec<i64>; 3] = Default::default();
+    let mut phases = Phases::default();
+    match phasing {
+        Some(Phasing::Cc(p)) if corrected => {
+            for k in 0..3 {
+                for e in 0..n {
+                    let c = keep(p, &x[k], e, &mut phases, k, joint);
+                    preds[k].push(c);
+                }
+            }
+        }
+        Some(Phasing::Cc(p)) => phases = p.phases(x, n, false),
+        _ => {}
+    }
+    (preds, phases)
+}
+
+/// Modes 6 and 9 on a Catmull-Clark level, after its details are read: mode 9 adds the
+/// predictions `preds` it kept to every detail; mode 6 synthesises the edge points if
+/// the level had no face point (it synthesised them before its first face point).
+fn finish_cc(
+    p: &crate::transform::Phaser<'_>,
+    level: &Level,
+    x: &mut [Vec<i64>; 3],
+    preds: Option<&[Vec<i64>; 3]>,
+) {
+    let nv = level.nv;
+    match preds {
+        Some(preds) => {
+            for (xk, pk) in x.iter_mut().zip(preds) {
                 for (v, &c) in xk[nv..].iter_mut().zip(pk) {
                     *v = v.wrapping_add(c);
                 }
             }
         }
-        Some(Phasing::Cc(p)) if nd <= ne => synthesise_edges(p, level, x),
-        _ => {}
+        None if x[0].len() - nv <= level.ne() => synthesise_edges(p, level, x),
+        None => {}
     }
-    models.last = Some(m);
-    Ok(())
+}
+
+/// The phases of a detail's correction rounded together with its prediction (mode 9,
+/// joint rounding), per axis.
+type Joint = [u8; 3];
+
+/// Mode 9, detail `i`'s prediction on one axis, its phase and (joint rounding) fraction
+/// kept in `ph`.
+fn keep(
+    p: &crate::transform::Phaser<'_>,
+    xk: &[i64],
+    i: usize,
+    ph: &mut Phases,
+    k: usize,
+    joint: bool,
+) -> i64 {
+    if joint {
+        let (c, q, f) = p.predict_frac(xk, i);
+        ph.codes[k].push(q);
+        ph.fracs[k].push(f);
+        c
+    } else {
+        let (c, q) = p.predict(xk, i);
+        ph.codes[k].push(q);
+        c
+    }
+}
+
+/// Mode 9, once a level's edge points are read: the face points' predictions from the
+/// fine edge points (their details plus `preds`), kept in `preds` with their phases;
+/// then the edge points hold their details again.
+fn face_predictions(
+    p: &crate::transform::Phaser<'_>,
+    level: &Level,
+    nd: usize,
+    x: &mut [Vec<i64>; 3],
+    preds: &mut [Vec<i64>; 3],
+    phases: &mut Phases,
+    joint: bool,
+) {
+    let (nv, ne) = (level.nv, level.ne());
+    for k in 0..3 {
+        let xk = &mut x[k];
+        for e in 0..ne {
+            xk[nv + e] = xk[nv + e].wrapping_add(preds[k][e]);
+        }
+        for f in ne..nd {
+            let c = keep(p, xk, f, phases, k, joint);
+            preds[k].push(c);
+        }
+        for e in 0..ne {
+            xk[nv + e] = xk[nv + e].wrapping_sub(preds[k][e]);
+        }
+    }
+}
+
+/// What detail `i` of a level in `mode` adds to its coded value (SPEC.md 10.4, 10.8,
+/// 10.9), and with joint rounding the phases its correction gives.
+fn detail_offset(
+    level: &Level,
+    x: &[Vec<i64>; 3],
+    mode: Mode<'_>,
+    i: usize,
+    fr: Option<(usize, [i64; 3])>,
+    cc_phases: &Phases,
+) -> Result<(Option<[i64; 3]>, Option<Joint>)> {
+    let out_of_range = || Error::corrupt("LEVL", "detail out of range");
+    Ok(match mode {
+        Mode::CorrectedPhased(w, Rounding::Joint) => {
+            let n = correction_sums(level, x, &w, i);
+            let (c, q) = joint_correction(n, fracs_at(cc_phases, i)).ok_or_else(out_of_range)?;
+            (Some(c), Some(q))
+        }
+        Mode::Corrected(w) | Mode::CorrectedPhased(w, _) => (
+            Some(correction(correction_sums(level, x, &w, i)).ok_or_else(out_of_range)?),
+            None,
+        ),
+        _ => (mode.offset(i, fr), None),
+    })
 }
 
 /// Synthesises a Catmull-Clark level's edge points `x[k][nv..nv + ne]` in place (their

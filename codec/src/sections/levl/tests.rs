@@ -12,7 +12,7 @@ fn encode_fresh(
     coarse: &[Vec<i64>; 3],
     models: &mut LevelModels,
 ) -> Vec<u8> {
-    encode(level, false, x, coarse, models, None, None, usize::MAX).unwrap()
+    encode(level, Family::Cc, x, coarse, models, None, None, usize::MAX).unwrap()
 }
 
 /// [`super::decode`] of one level from fresh models: the coarse values with the level
@@ -20,14 +20,14 @@ fn encode_fresh(
 fn decode_fresh(
     bytes: &[u8],
     level: &Level,
-    sqrt2: bool,
+    family: Family,
     coarse: &[Vec<i64>; 3],
     targets: Option<&[[i64; 3]]>,
     phasing: Option<Phasing<'_>>,
 ) -> Result<[Vec<i64>; 3]> {
     let mut y = coarse.clone();
     let mut models = LevelModels::new();
-    decode(bytes, level, sqrt2, &mut y, &mut models, targets, phasing)?;
+    decode(bytes, level, family, &mut y, &mut models, targets, phasing)?;
     Ok(y)
 }
 
@@ -82,7 +82,7 @@ fn slot_bins_weigh_ends_twice_and_earlier_edge_points_once() {
     let (nv, ne) = (level.nv, level.ne());
     let mut mags = vec![[UNKNOWN; 3]; nv + ne];
     // No magnitudes anywhere yet: the "no neighbour" bin.
-    assert_eq!(slot_bins(&level, &mags, false, 0), [6; 3]);
+    assert_eq!(slot_bins(&level, &mags, Family::Cc, 0), [6; 3]);
     for m in &mut mags[..nv] {
         *m = [2, 0, 9];
     }
@@ -109,13 +109,13 @@ fn slot_bins_weigh_ends_twice_and_earlier_edge_points_once() {
         let w = 4 + c;
         let want = [2u32, 0, 9].map(|m| bin((4 * m + 4 * c + w / 2) / w));
         assert_eq!(
-            slot_bins(&level, &mags, false, e),
+            slot_bins(&level, &mags, Family::Cc, e),
             want.map(|b| b as usize),
             "edge {e}"
         );
     }
     // A face point: its edge points only.
-    assert_eq!(slot_bins(&level, &mags, false, ne), [2; 3]);
+    assert_eq!(slot_bins(&level, &mags, Family::Cc, ne), [2; 3]);
 }
 
 /// A context model's first use starts from what its class and component learnt in
@@ -201,7 +201,7 @@ fn per_slot_contexts_follow_which_component_is_large() {
         models.only = Some(vec![plan].into_iter());
         let bytes = encode_fresh(&level, &x, &coarse, &mut models);
         assert_eq!(bytes[0], plan);
-        let y = decode_fresh(&bytes, &level, false, &coarse, None, None).unwrap();
+        let y = decode_fresh(&bytes, &level, Family::Cc, &coarse, None, None).unwrap();
         assert_eq!(y, x, "plan {plan:#x} round trip");
         sizes.push(bytes.len());
     }
@@ -329,14 +329,14 @@ fn body_within(
 ) -> Option<Vec<u8>> {
     let normals = face_normals(level, coarse);
     let prep = Prepared {
-        frames: rot_frames(level, coarse, &normals, false),
+        frames: rot_frames(level, coarse, &normals, Family::Cc),
         normals,
         ..Default::default()
     };
     let mut m = Models::new();
     let mut mags = Vec::new();
     encode_mode(
-        level, false, x, coarse, &prep, None, &mut mags, mode, false, &mut m, limit, 0,
+        level, Family::Cc, x, coarse, &prep, None, &mut mags, mode, false, &mut m, limit, 0,
     )
 }
 
@@ -346,7 +346,7 @@ fn code_in_mode(level: &Level, coarse: &[Vec<i64>; 3], x: &[Vec<i64>; 3], mode: 
     let body = body_in_mode(level, coarse, x, mode).expect("in range");
     let mut payload = mode.bytes();
     payload.extend_from_slice(&body);
-    let y = decode_fresh(&payload, level, false, coarse, None, None);
+    let y = decode_fresh(&payload, level, Family::Cc, coarse, None, None);
     assert_eq!(&y.unwrap(), x, "round trip");
     payload.len()
 }
@@ -373,7 +373,7 @@ fn rotated_modes_round_trip() {
             };
         }
     }
-    let frames = rot_frames(&level, &coarse, &face_normals(&level, &coarse), false);
+    let frames = rot_frames(&level, &coarse, &face_normals(&level, &coarse), Family::Cc);
     let out_of_range = frames.iter().enumerate().any(|(i, f)| {
         f.as_ref().is_some_and(|f| {
             let d = std::array::from_fn(|k| x[k][level.nv + i]);
@@ -410,7 +410,7 @@ fn follow_faces(level: &Level, coarse: &[Vec<i64>; 3], x: &mut [Vec<i64>; 3]) {
 fn shifted_mode_predicts_edge_points_that_follow_their_faces() {
     let (level, coarse, mut x) = rotated_fixture(4);
     follow_faces(&level, &coarse, &mut x);
-    let frames = rot_frames(&level, &coarse, &face_normals(&level, &coarse), false);
+    let frames = rot_frames(&level, &coarse, &face_normals(&level, &coarse), Family::Cc);
     assert_eq!(shift_weights(&level, &x, &frames), (4, 4));
     let plain = code_in_mode(&level, &coarse, &x, Mode::Rotated);
     let shifted = code_in_mode(&level, &coarse, &x, Mode::Shifted(4, 4));
@@ -451,7 +451,7 @@ fn planned_modes_are_the_ones_coded() {
             models.only.as_ref().map(|o| o.as_slice()),
             Some(&[plan][..])
         );
-        let y = decode_fresh(&bytes, &level, false, &coarse, None, None);
+        let y = decode_fresh(&bytes, &level, Family::Cc, &coarse, None, None);
         assert_eq!(y.unwrap(), x, "planned {plan}");
     }
 }
@@ -459,13 +459,13 @@ fn planned_modes_are_the_ones_coded() {
 /// A level coded in `mode` alone from fresh models, with its mode byte.
 fn forced(
     level: &Level,
-    sqrt2: bool,
+    family: Family,
     x: &[Vec<i64>; 3],
     coarse: &[Vec<i64>; 3],
     phases: Option<&Phases>,
     mode: Mode<'_>,
 ) -> Vec<u8> {
-    forced_zero(level, sqrt2, x, coarse, phases, mode, None)
+    forced_zero(level, family, x, coarse, phases, mode, None)
 }
 
 /// A Catmull-Clark level with phases coded by [`encode`] as a hierarchy's first
@@ -478,13 +478,13 @@ fn encode_phased_fresh(
 ) -> Vec<u8> {
     let mut models = LevelModels::new();
     let ph = Some(phases);
-    encode(level, false, x, coarse, &mut models, None, ph, usize::MAX).unwrap()
+    encode(level, Family::Cc, x, coarse, &mut models, None, ph, usize::MAX).unwrap()
 }
 
 /// [`forced`] with the zero slots `zero` where given, else the ones the encoder finds.
 fn forced_zero(
     level: &Level,
-    sqrt2: bool,
+    family: Family,
     x: &[Vec<i64>; 3],
     coarse: &[Vec<i64>; 3],
     phases: Option<&Phases>,
@@ -502,10 +502,10 @@ fn forced_zero(
         corrections,
         ..Default::default()
     };
-    let zero = zero.unwrap_or_else(|| axis_zero_slots(level, sqrt2, x, mode, &prep, phases));
+    let zero = zero.unwrap_or_else(|| axis_zero_slots(level, family, x, mode, &prep, phases));
     let body = encode_mode(
         level,
-        sqrt2,
+        family,
         x,
         coarse,
         &prep,
@@ -613,12 +613,12 @@ fn phase_mode_round_trips_on_catmull_clark_levels() {
         let st = Stencils::new(&level, w);
         let p = Phaser::new(&level, w, &st).unwrap();
         let phases = p.phases(&fine, nd, true);
-        let bytes = forced(&level, false, &x, &coarse, Some(&phases), Mode::Phased);
+        let bytes = forced(&level, Family::Cc, &x, &coarse, Some(&phases), Mode::Phased);
         let ph = Some(Phasing::Cc(&p));
-        let y = decode_fresh(&bytes, &level, false, &coarse, None, ph);
+        let y = decode_fresh(&bytes, &level, Family::Cc, &coarse, None, ph);
         // Read with the decoder's phases, the level comes back synthesised.
         assert_eq!(y.unwrap(), fine, "{w:?}");
-        let err = decode_fresh(&bytes, &level, false, &coarse, None, None);
+        let err = decode_fresh(&bytes, &level, Family::Cc, &coarse, None, None);
         assert!(err.unwrap_err().to_string().contains("phase"), "{w:?}");
     }
 }
@@ -645,10 +645,10 @@ fn tangent_phase_mode_round_trips_on_sqrt2_levels() {
         }
         v
     });
-    let two = forced(&level, true, &x, &coarse, None, Mode::Tangent(&targets));
+    let two = forced(&level, Family::Sqrt2, &x, &coarse, None, Mode::Tangent(&targets));
     let seven = forced(
         &level,
-        true,
+        Family::Sqrt2,
         &x,
         &coarse,
         None,
@@ -660,7 +660,7 @@ fn tangent_phase_mode_round_trips_on_sqrt2_levels() {
         (&two, Some(&targets[..]), true),
         (&seven, None, false),
     ] {
-        let r = decode_fresh(bytes, &level, true, &coarse, targets, None);
+        let r = decode_fresh(bytes, &level, Family::Sqrt2, &coarse, targets, None);
         assert_eq!(r.is_ok(), ok);
         if ok {
             assert_eq!(r.unwrap(), x);
@@ -704,7 +704,7 @@ fn rotated_modes_need_valid_weights() {
     let run = |head: &[u8]| {
         let mut payload = head.to_vec();
         payload.extend_from_slice(&body);
-        decode_fresh(&payload, &level, false, &coarse, None, None)
+        decode_fresh(&payload, &level, Family::Cc, &coarse, None, None)
     };
     assert_eq!(run(&[5, 0x25]).unwrap(), x);
     for head in [&[5u8, 0x95][..], &[5, 0x29], &[3], &[6]] {
@@ -712,7 +712,7 @@ fn rotated_modes_need_valid_weights() {
         assert!(err.contains("LEVL"), "{head:?}: {err}");
     }
     // Mode 5 without its weights.
-    let err = decode_fresh(&[5], &level, false, &coarse, None, None).unwrap_err();
+    let err = decode_fresh(&[5], &level, Family::Cc, &coarse, None, None).unwrap_err();
     assert!(err.to_string().contains("shift weights"), "{err}");
 }
 
@@ -824,12 +824,12 @@ fn corrected_mode_round_trips_and_pays_where_details_correlate() {
     let mut models = LevelModels::new();
     let bytes = encode_fresh(&level, &x, &coarse, &mut models);
     assert_eq!(mode_of(&bytes), Some(8));
-    let plain = forced(&level, false, &x, &coarse, None, Mode::Plain);
+    let plain = forced(&level, Family::Cc, &x, &coarse, None, Mode::Plain);
     assert!(bytes.len() < plain.len(), "{} {}", bytes.len(), plain.len());
     // As the encoder chose, and with the generating weights.
-    let gen_bytes = forced(&level, false, &x, &coarse, None, Mode::Corrected(gen));
+    let gen_bytes = forced(&level, Family::Cc, &x, &coarse, None, Mode::Corrected(gen));
     for b in [bytes, gen_bytes] {
-        let y = decode_fresh(&b, &level, false, &coarse, None, None);
+        let y = decode_fresh(&b, &level, Family::Cc, &coarse, None, None);
         assert_eq!(y.unwrap(), x);
     }
 }
@@ -845,13 +845,13 @@ fn corrected_mode_needs_valid_weights_and_a_catmull_clark_level() {
     });
     let coarse: [Vec<i64>; 3] = std::array::from_fn(|_| vec![0; nv]);
     let w: Weights = [[[0, 0], [0, 0], [-10, 5]], [[64, -64], [0, 0], [0, 0]]];
-    let bytes = forced(&level, false, &x, &coarse, None, Mode::Corrected(w));
+    let bytes = forced(&level, Family::Cc, &x, &coarse, None, Mode::Corrected(w));
     assert_eq!(&bytes[..6], &[8, 0b1100, 246, 5, 64, 192]);
     let body = &bytes[6..];
     let run = |head: &[u8]| {
         let mut payload = head.to_vec();
         payload.extend_from_slice(body);
-        decode_fresh(&payload, &level, false, &coarse, None, None)
+        decode_fresh(&payload, &level, Family::Cc, &coarse, None, None)
     };
     assert_eq!(run(&bytes[..6]).unwrap(), x);
     for head in [
@@ -866,7 +866,7 @@ fn corrected_mode_needs_valid_weights_and_a_catmull_clark_level() {
     }
     // Weights cut short.
     for cut in 1..6 {
-        let err = decode_fresh(&bytes[..cut], &level, false, &coarse, None, None);
+        let err = decode_fresh(&bytes[..cut], &level, Family::Cc, &coarse, None, None);
         assert!(err.unwrap_err().to_string().contains("LEVL"), "{cut}");
     }
     // A sqrt(2) level has no mode 8.
@@ -875,8 +875,8 @@ fn corrected_mode_needs_valid_weights_and_a_catmull_clark_level() {
     let sx: [Vec<i64>; 3] = std::array::from_fn(|_| vec![0; sq.nv + sq.nf()]);
     let sc: [Vec<i64>; 3] = std::array::from_fn(|_| vec![0; sq.nv]);
     let mut payload = vec![8, 0];
-    payload.extend(forced(&sq, true, &sx, &sc, None, Mode::Plain).split_off(1));
-    let err = decode_fresh(&payload, &sq, true, &sc, None, None).unwrap_err();
+    payload.extend(forced(&sq, Family::Sqrt2, &sx, &sc, None, Mode::Plain).split_off(1));
+    let err = decode_fresh(&payload, &sq, Family::Sqrt2, &sc, None, None).unwrap_err();
     assert!(err.to_string().contains("unknown level mode 8"), "{err}");
     // A correction beyond a detail's bound is corrupt, not a panic or a wrap.
     let mut big = x.clone();
@@ -903,16 +903,16 @@ fn corrected_phased_mode_round_trips_on_catmull_clark_levels() {
         let phases = p.phases(&fine, nd, true);
         let wts: Weights = [[[-12, 6], [5, -3], [64, -64]], [[-4, 9], [0, 0], [-64, 64]]];
         let mode = Mode::CorrectedPhased(wts, Rounding::Apart);
-        let bytes = forced(&level, false, &x, &coarse, Some(&phases), mode);
+        let bytes = forced(&level, Family::Cc, &x, &coarse, Some(&phases), mode);
         assert_eq!(bytes[0], 9);
-        let y = decode_fresh(&bytes, &level, false, &coarse, None, Some(Phasing::Cc(&p)));
+        let y = decode_fresh(&bytes, &level, Family::Cc, &coarse, None, Some(Phasing::Cc(&p)));
         assert_eq!(y.unwrap(), fine, "{w:?}");
-        let err = decode_fresh(&bytes, &level, false, &coarse, None, None).unwrap_err();
+        let err = decode_fresh(&bytes, &level, Family::Cc, &coarse, None, None).unwrap_err();
         assert!(err.to_string().contains("phase"), "{w:?}: {err}");
         // The same weights unphased (mode 8) is another stream.
-        let plain = forced(&level, false, &x, &coarse, None, Mode::Corrected(wts));
+        let plain = forced(&level, Family::Cc, &x, &coarse, None, Mode::Corrected(wts));
         assert_ne!(plain[1..], bytes[1..]);
-        let y = decode_fresh(&plain, &level, false, &coarse, None, None);
+        let y = decode_fresh(&plain, &level, Family::Cc, &coarse, None, None);
         assert_eq!(y.unwrap(), x, "{w:?}");
     }
 }
@@ -986,10 +986,10 @@ fn zero_slots_leave_out_axes_whose_values_are_all_0() {
         let phased = mode.phased();
         let read = |bytes: &[u8]| {
             let ph = phased.then_some(Phasing::Cc(&p));
-            decode_fresh(bytes, &level, false, &coarse, None, ph)
+            decode_fresh(bytes, &level, Family::Cc, &coarse, None, ph)
         };
         let want = if phased { &fine } else { &x };
-        let at = |z| forced_zero(&level, false, &x, &coarse, Some(&phases), mode, z);
+        let at = |z| forced_zero(&level, Family::Cc, &x, &coarse, Some(&phases), mode, z);
         let (with, without) = (at(None), at(Some(0)));
         assert_eq!(with[0], 0x30 | name, "mode {name}");
         assert_eq!(without[0], name, "mode {name}");
@@ -1021,7 +1021,7 @@ fn zero_slots_leave_out_axes_whose_values_are_all_0() {
     assert_eq!(bytes[0] & 0x70, 0x30);
     let mode = mode_of(&bytes).unwrap();
     let ph = matches!(mode, 6 | 9).then_some(Phasing::Cc(&p));
-    let y = decode_fresh(&bytes, &level, false, &coarse, None, ph).unwrap();
+    let y = decode_fresh(&bytes, &level, Family::Cc, &coarse, None, ph).unwrap();
     assert_eq!(&y, if matches!(mode, 6 | 9) { &fine } else { &x });
 }
 
@@ -1048,7 +1048,7 @@ fn zero_slots_leave_out_a_flat_levels_normal_part() {
         models.only = Some(vec![mode].into_iter());
         let bytes = encode_fresh(&level, &x, &coarse, &mut models);
         assert_eq!(bytes[0], 0x10 | mode, "mode {mode}");
-        let y = decode_fresh(&bytes, &level, false, &coarse, None, None);
+        let y = decode_fresh(&bytes, &level, Family::Cc, &coarse, None, None);
         assert_eq!(y.unwrap(), x, "mode {mode}");
         // The same mode with the slot coded.
         let with_slot = 1 + body_in_mode(&level, &coarse, &x, m).unwrap().len();
@@ -1096,7 +1096,7 @@ fn joint_rounding_pays_where_values_follow_prediction_plus_correction() {
         let phases = p.phases(&fine, nd, true);
         let at = |r: Rounding| {
             let mode = Mode::CorrectedPhased(gen, r);
-            forced(&level, false, &x, &coarse, Some(&phases), mode)
+            forced(&level, Family::Cc, &x, &coarse, Some(&phases), mode)
         };
         let (joint, apart) = (at(Rounding::Joint), at(Rounding::Apart));
         assert_eq!(joint[..2], [9, 0b111111 | JOINT]);
@@ -1108,7 +1108,7 @@ fn joint_rounding_pays_where_values_follow_prediction_plus_correction() {
         );
         let read = |bytes: &[u8]| {
             let ph = Some(Phasing::Cc(&p));
-            decode_fresh(bytes, &level, false, &coarse, None, ph)
+            decode_fresh(bytes, &level, Family::Cc, &coarse, None, ph)
         };
         assert_eq!(read(&joint).unwrap(), fine, "{w:?}");
         assert_eq!(read(&apart).unwrap(), fine, "{w:?}");
@@ -1162,7 +1162,7 @@ fn unbinned_levels_pay_where_neighbours_tell_nothing() {
         let mut models = LevelModels::new();
         let bytes = encode_fresh(&level, x, &coarse, &mut models);
         assert_eq!(unbinned(&bytes), want, "mode byte {:#x}", bytes[0]);
-        let y = decode_fresh(&bytes, &level, false, &coarse, None, None);
+        let y = decode_fresh(&bytes, &level, Family::Cc, &coarse, None, None);
         assert_eq!(&y.unwrap(), x);
         // The other choice, as a plan: larger, and exact too.
         let mut models = LevelModels::new();
@@ -1170,12 +1170,12 @@ fn unbinned_levels_pay_where_neighbours_tell_nothing() {
         let other = encode_fresh(&level, x, &coarse, &mut models);
         assert_eq!(other[0], bytes[0] ^ UNBINNED);
         assert!(other.len() > bytes.len(), "{} {}", other.len(), bytes.len());
-        let y = decode_fresh(&other, &level, false, &coarse, None, None);
+        let y = decode_fresh(&other, &level, Family::Cc, &coarse, None, None);
         assert_eq!(&y.unwrap(), x);
         // Read with the flag flipped: an error or other details.
         let mut flipped = bytes.clone();
         flipped[0] ^= UNBINNED;
-        let y = decode_fresh(&flipped, &level, false, &coarse, None, None);
+        let y = decode_fresh(&flipped, &level, Family::Cc, &coarse, None, None);
         assert!(y.map_or(true, |y| &y != x));
     }
     // The mode without the flag.

@@ -71,7 +71,7 @@ pub(super) fn put(
 #[allow(clippy::too_many_arguments)]
 pub fn encode(
     level: &Level,
-    sqrt2: bool,
+    family: Family,
     x: &[Vec<i64>; 3],
     coarse: &[Vec<i64>; 3],
     models: &mut LevelModels,
@@ -90,43 +90,8 @@ pub fn encode(
     let only = only.and_then(|o| mode_of(&[o]));
     let plain = |m: u8| matches!(m, 0 | 6);
     let open = |m: u8| only.is_none_or(|o| o == m || (plain(o) && plain(m)));
-    let mut modes = vec![Mode::Plain, Mode::Framed];
-    if let Some(t) = targets {
-        modes.push(Mode::Tangent(t));
-        modes.push(Mode::TangentPhased(t));
-    }
-    if phases.is_some() {
-        modes.push(Mode::Phased);
-    }
-    let mut prep = Prepared::default();
-    if !sqrt2 && (open(8) || open(9)) {
-        let made = corr_weights(level, x).and_then(|w| Some((w, corrections(level, x, &w)?)));
-        if let Some((w, c)) = made {
-            modes.push(Mode::Corrected(w));
-            if phases.is_some() {
-                modes.push(Mode::CorrectedPhased(w, Rounding::Apart));
-                modes.push(Mode::CorrectedPhased(w, Rounding::Joint));
-            }
-            prep.corrections = c;
-        }
-    }
     let rotated = models.rotated && (open(4) || open(5));
-    if rotated {
-        modes.push(Mode::Rotated);
-        prep.normals = face_normals(level, coarse);
-        prep.frames = rot_frames(level, coarse, &prep.normals, sqrt2);
-        match shift_weights(level, x, &prep.frames) {
-            (0, 0) => {}
-            (a, b) => modes.push(Mode::Shifted(a, b)),
-        }
-    }
-    if modes.iter().any(|m| open(m.byte())) {
-        modes.retain(|m| open(m.byte()));
-    }
-    // The normals, once for every mode that reads them.
-    if prep.normals.is_empty() && modes.iter().any(|m| m.framed()) {
-        prep.normals = face_normals(level, coarse);
-    }
+    let (modes, prep) = candidates(level, family, x, coarse, targets, phases, rotated, open);
     let start = models.start();
     // The smallest mode's payload, with the magnitudes and models it leaves.
     struct Tried {
@@ -138,14 +103,7 @@ pub fn encode(
     // The previous level's mode is tried first: a mode is abandoned once its stream
     // passes the best size so far, and the best is often the previous level's. Ties go
     // to the first mode in `modes`' order whatever the order of trying.
-    let mut order: Vec<usize> = (0..modes.len()).collect();
-    if let Some(i) = modes
-        .iter()
-        .position(|m| Some(m.byte()) == models.prev_mode)
-    {
-        order.remove(i);
-        order.insert(0, i);
-    }
+    let order = trial_order(&modes, models.prev_mode);
     // Codes the level in mode `i` (unbinned or not) and keeps it in `best` if smaller.
     // A stream longer than `cap` or than the best so far is abandoned; ties go to the
     // first mode in `modes`' order whatever the order of trying.
@@ -165,7 +123,7 @@ pub fn encode(
             let mut mg = models.mags.clone();
             let mut m = models.ready(start.clone(), mode);
             let body = encode_mode(
-                level, sqrt2, x, coarse, &prep, phases, &mut mg, mode, unbinned, &mut m, room, zero,
+                level, family, x, coarse, &prep, phases, &mut mg, mode, unbinned, &mut m, room, zero,
             )?;
             let mut mode_bytes = bytes.clone();
             mode_bytes[0] |= zero << ZERO_SHIFT;
@@ -176,7 +134,7 @@ pub fn encode(
                 models: m,
             })
         };
-        let Some(mut tried) = code(axis_zero_slots(level, sqrt2, x, mode, &prep, phases)) else {
+        let Some(mut tried) = code(axis_zero_slots(level, family, x, mode, &prep, phases)) else {
             return;
         };
         // A mode whose slots are not the axes (a frame's) shows its zero slots once coded,
@@ -234,10 +192,77 @@ pub fn encode(
     Some(out)
 }
 
+/// The modes a level can be coded in (those `open` to it, if any is), and what they
+/// read beside the details: corrections, normals, rotated frames.
+#[allow(clippy::too_many_arguments)]
+fn candidates<'t>(
+    level: &Level,
+    family: Family,
+    x: &[Vec<i64>; 3],
+    coarse: &[Vec<i64>; 3],
+    targets: Option<&'t [[i64; 3]]>,
+    phases: Option<&Phases>,
+    rotated: bool,
+    open: impl Fn(u8) -> bool,
+) -> (Vec<Mode<'t>>, Prepared) {
+    let mut modes = vec![Mode::Plain, Mode::Framed];
+    if let Some(t) = targets {
+        modes.push(Mode::Tangent(t));
+        modes.push(Mode::TangentPhased(t));
+    }
+    if phases.is_some() {
+        modes.push(Mode::Phased);
+    }
+    let mut prep = Prepared::default();
+    if family != Family::Sqrt2 && (open(8) || open(9)) {
+        let made = corr_weights(level, x).and_then(|w| Some((w, corrections(level, x, &w)?)));
+        if let Some((w, c)) = made {
+            modes.push(Mode::Corrected(w));
+            if phases.is_some() {
+                modes.push(Mode::CorrectedPhased(w, Rounding::Apart));
+                modes.push(Mode::CorrectedPhased(w, Rounding::Joint));
+            }
+            prep.corrections = c;
+        }
+    }
+    if rotated {
+        modes.push(Mode::Rotated);
+        prep.normals = face_normals(level, coarse);
+        prep.frames = rot_frames(level, coarse, &prep.normals, family);
+        match shift_weights(level, x, &prep.frames) {
+            (0, 0) => {}
+            (a, b) => modes.push(Mode::Shifted(a, b)),
+        }
+    }
+    if modes.iter().any(|m| open(m.byte())) {
+        modes.retain(|m| open(m.byte()));
+    }
+    // The normals, once for every mode that reads them.
+    if prep.normals.is_empty() && modes.iter().any(|m| m.framed()) {
+        prep.normals = face_normals(level, coarse);
+    }
+    (modes, prep)
+}
+
+/// The order modes are tried in: the previous level's mode first (a mode is abandoned
+/// once its stream passes the best size so far, and the best is often the previous
+/// level's), then the rest in `modes`' order.
+fn trial_order(modes: &[Mode<'_>], prev: Option<u8>) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..modes.len()).collect();
+    if let Some(i) = modes
+        .iter()
+        .position(|m| Some(m.byte()) == prev)
+    {
+        order.remove(i);
+        order.insert(0, i);
+    }
+    order
+}
+
 #[allow(clippy::too_many_arguments)]
 pub(super) fn encode_mode(
     level: &Level,
-    sqrt2: bool,
+    family: Family,
     x: &[Vec<i64>; 3],
     coarse: &[Vec<i64>; 3],
     prep: &Prepared,
@@ -250,7 +275,7 @@ pub(super) fn encode_mode(
     zero: u8,
 ) -> Option<Vec<u8>> {
     let mut enc = Encoder::new();
-    let (nv, nd) = (level.nv, details(level, sqrt2));
+    let (nv, nd) = (level.nv, family.details(level));
     // The rotated modes take their frames (normals included), the normal-frame modes
     // the normals and modes 8 and 9 their corrections from `prep`, made once per level.
     let rotated = matches!(mode, Mode::Rotated | Mode::Shifted(..));
@@ -275,7 +300,7 @@ pub(super) fn encode_mode(
     mags.resize(nv, [UNKNOWN; 3]);
     mags.resize(nv + nd, [0; 3]);
     for i in 0..nd {
-        let (class, bins, fd) = contexts(level, mags, sqrt2, i);
+        let (class, bins, fd) = contexts(level, mags, family, i);
         let mut d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
         let fr = if framed {
             frame(level, &prep.normals, fd)
@@ -337,13 +362,13 @@ pub(super) fn encode_mode(
 /// other modes and on a level without details.
 pub(super) fn axis_zero_slots(
     level: &Level,
-    sqrt2: bool,
+    family: Family,
     x: &[Vec<i64>; 3],
     mode: Mode<'_>,
     prep: &Prepared,
     phases: Option<&Phases>,
 ) -> u8 {
-    let (nv, nd) = (level.nv, details(level, sqrt2));
+    let (nv, nd) = (level.nv, family.details(level));
     if mode.framed() || nd == 0 {
         return 0;
     }

@@ -5,6 +5,7 @@
 //! joined to a Catmull-Clark transform outside it. [`crate::transform::polar::reference`] holds the
 //! floating-point reference.
 
+#[cfg(any(test, feature = "reference"))]
 pub mod reference;
 pub mod tables;
 

@@ -11,13 +11,15 @@
 //! other: synthesis undoes analysis exactly for any weights. The exception is
 //! `sqrt2-sym`'s 16/13 scaling, an injective rounding inverted exactly (SPEC.md 9.8).
 
+mod rings;
+#[cfg(any(test, feature = "reference"))]
 pub mod solve;
 pub mod tables;
 
 use crate::topology::{Level, Topo, NONE};
 use crate::transform::phase::{phase, Phases};
 use crate::transform::{Sample, Wavelet};
-use solve::Rings;
+use rings::Rings;
 
 /// Largest valence with its own weights in the frozen tables.
 pub const TABLE_MAX: usize = 16;
