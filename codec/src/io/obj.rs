@@ -22,22 +22,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         let mut line: &str = raw;
         // A trailing backslash continues the statement on the next line.
         if line.trim_end().ends_with('\\') {
-            joined.clear();
-            let mut cur = line;
-            loop {
-                let t = cur.trim_end();
-                if let Some(stripped) = t.strip_suffix('\\') {
-                    joined.push_str(stripped);
-                    joined.push(' ');
-                    match lines.next() {
-                        Some((_, next)) => cur = next,
-                        None => break,
-                    }
-                } else {
-                    joined.push_str(cur);
-                    break;
-                }
-            }
+            join_continued(raw, &mut lines, &mut joined);
             line = &joined;
         }
         let line = line.split('#').next().unwrap_or("");
@@ -67,44 +52,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                 }
             }
             "f" | "fo" => {
-                face.clear();
-                for t in tok {
-                    let mut parts = t.split('/');
-                    let vi = parts.next().unwrap_or("");
-                    if let Some(vt) = parts.next() {
-                        if !vt.is_empty() {
-                            dropped.insert("texture coordinates".to_string());
-                        }
-                    }
-                    if parts.next().is_some_and(|vn| !vn.is_empty()) {
-                        dropped.insert("normals".to_string());
-                    }
-                    let i: i64 = vi.parse().map_err(|_| {
-                        syntax("OBJ", lineno, format!("'{t}' is not a vertex reference"))
-                    })?;
-                    let idx = if i > 0 {
-                        i - 1
-                    } else if i < 0 {
-                        coords.len() as i64 + i
-                    } else {
-                        -1
-                    };
-                    if idx < 0 || idx >= u32::MAX as i64 {
-                        return Err(syntax(
-                            "OBJ",
-                            lineno,
-                            format!("vertex reference {i} is out of range"),
-                        ));
-                    }
-                    face.push(idx as u32);
-                }
-                if face.len() < 3 {
-                    return Err(syntax(
-                        "OBJ",
-                        lineno,
-                        format!("face has {} corners; faces need at least 3", face.len()),
-                    ));
-                }
+                read_face(tok, lineno, coords.len(), &mut face, &mut dropped)?;
                 topo.push_face(&face);
             }
             "vt" => {
@@ -144,6 +92,81 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         dropped,
         inexact,
     })
+}
+
+/// A statement continued by trailing backslashes, joined into `joined`.
+fn join_continued<'a>(
+    first: &'a str,
+    lines: &mut impl Iterator<Item = (usize, &'a str)>,
+    joined: &mut String,
+) {
+    joined.clear();
+    let mut cur = first;
+    loop {
+        let t = cur.trim_end();
+        if let Some(stripped) = t.strip_suffix('\\') {
+            joined.push_str(stripped);
+            joined.push(' ');
+            match lines.next() {
+                Some((_, next)) => cur = next,
+                None => break,
+            }
+        } else {
+            joined.push_str(cur);
+            break;
+        }
+    }
+}
+
+/// An `f` statement's corners (`v`, `v/vt`, `v/vt/vn`, `v//vn`; negative numbers count
+/// back from the `nv` vertices so far) into `face`, noting texture coordinates and
+/// normals as dropped.
+fn read_face<'a>(
+    tok: impl Iterator<Item = &'a str>,
+    lineno: usize,
+    nv: usize,
+    face: &mut Vec<u32>,
+    dropped: &mut BTreeSet<String>,
+) -> Result<()> {
+    face.clear();
+    for t in tok {
+        let mut parts = t.split('/');
+        let vi = parts.next().unwrap_or("");
+        if let Some(vt) = parts.next() {
+            if !vt.is_empty() {
+                dropped.insert("texture coordinates".to_string());
+            }
+        }
+        if parts.next().is_some_and(|vn| !vn.is_empty()) {
+            dropped.insert("normals".to_string());
+        }
+        let i: i64 = vi
+            .parse()
+            .map_err(|_| syntax("OBJ", lineno, format!("'{t}' is not a vertex reference")))?;
+        let idx = if i > 0 {
+            i - 1
+        } else if i < 0 {
+            nv as i64 + i
+        } else {
+            -1
+        };
+        if idx < 0 || idx >= u32::MAX as i64 {
+            return Err(syntax(
+                "OBJ",
+                lineno,
+                format!("vertex reference {i} is out of range"),
+            ));
+        }
+        face.push(idx as u32);
+    }
+    if face.len() < 3 {
+        return Err(syntax(
+            "OBJ",
+            lineno,
+            format!("face has {} corners; faces need at least 3", face.len()),
+        ));
+    }
+    Ok(())
 }
 
 fn line_of(bytes: &[u8], offset: usize) -> usize {

@@ -22,27 +22,8 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         .next()
         .ok_or_else(|| Error::MeshFile("OFF file is empty".into()))?;
     let mut tok = first.split_ascii_whitespace();
-    let kw = tok.next().unwrap_or("");
-    let prefix = kw
-        .strip_suffix("OFF")
-        .ok_or_else(|| syntax("OFF", ln, format!("expected an OFF keyword, found '{kw}'")))?;
     let mut dropped = BTreeSet::new();
-    let mut extra_per_vertex = 0usize;
-    let mut rest = prefix;
-    for (p, n, what) in [
-        ("ST", 2, "texture coordinates"),
-        ("C", 4, "vertex colors"),
-        ("N", 3, "normals"),
-    ] {
-        if let Some(r) = rest.strip_prefix(p) {
-            rest = r;
-            extra_per_vertex += n;
-            dropped.insert(what.to_string());
-        }
-    }
-    if !rest.is_empty() {
-        return Err(Error::Unsupported(format!("OFF variant '{kw}'")));
-    }
+    let extra_per_vertex = keyword(tok.next().unwrap_or(""), ln, &mut dropped)?;
     let mut header: Vec<&str> = tok.collect();
     if header.first() == Some(&"BINARY") {
         return Err(Error::Unsupported("binary OFF".into()));
@@ -101,36 +82,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         let (n, l) = lines
             .next()
             .ok_or_else(|| Error::MeshFile(format!("OFF file ends after {i} of {nf} faces")))?;
-        let mut t = l.split_ascii_whitespace();
-        let k: usize = t
-            .next()
-            .and_then(|s| s.parse().ok())
-            .ok_or_else(|| syntax("OFF", n, "bad face corner count"))?;
-        if k < 3 {
-            return Err(syntax(
-                "OFF",
-                n,
-                format!("face has {k} corners; faces need at least 3"),
-            ));
-        }
-        face.clear();
-        for _ in 0..k {
-            let idx: u32 = t
-                .next()
-                .and_then(|s| s.parse().ok())
-                .filter(|&x: &u32| (x as usize) < nv)
-                .ok_or_else(|| {
-                    syntax(
-                        "OFF",
-                        n,
-                        format!("face needs {k} vertex indices below {nv}"),
-                    )
-                })?;
-            face.push(idx);
-        }
-        if t.next().is_some() {
-            dropped.insert("face colors".to_string());
-        }
+        read_face(l, n, nv, &mut face, &mut dropped)?;
         topo.push_face(&face);
     }
     let (coords, inexact) = coords.finish();
@@ -141,6 +93,72 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         dropped,
         inexact,
     })
+}
+
+/// The OFF keyword (`[ST][C][N]OFF`): how many values each vertex line has after its
+/// position, noting those attributes as dropped.
+fn keyword(kw: &str, ln: usize, dropped: &mut BTreeSet<String>) -> Result<usize> {
+    let prefix = kw
+        .strip_suffix("OFF")
+        .ok_or_else(|| syntax("OFF", ln, format!("expected an OFF keyword, found '{kw}'")))?;
+    let mut extra_per_vertex = 0usize;
+    let mut rest = prefix;
+    for (p, n, what) in [
+        ("ST", 2, "texture coordinates"),
+        ("C", 4, "vertex colors"),
+        ("N", 3, "normals"),
+    ] {
+        if let Some(r) = rest.strip_prefix(p) {
+            rest = r;
+            extra_per_vertex += n;
+            dropped.insert(what.to_string());
+        }
+    }
+    if !rest.is_empty() {
+        return Err(Error::Unsupported(format!("OFF variant '{kw}'")));
+    }
+    Ok(extra_per_vertex)
+}
+
+/// One face line (`k v1 .. vk [colour]`), its vertices (below `nv`) into `face`.
+fn read_face(
+    l: &str,
+    n: usize,
+    nv: usize,
+    face: &mut Vec<u32>,
+    dropped: &mut BTreeSet<String>,
+) -> Result<()> {
+    let mut t = l.split_ascii_whitespace();
+    let k: usize = t
+        .next()
+        .and_then(|s| s.parse().ok())
+        .ok_or_else(|| syntax("OFF", n, "bad face corner count"))?;
+    if k < 3 {
+        return Err(syntax(
+            "OFF",
+            n,
+            format!("face has {k} corners; faces need at least 3"),
+        ));
+    }
+    face.clear();
+    for _ in 0..k {
+        let idx: u32 = t
+            .next()
+            .and_then(|s| s.parse().ok())
+            .filter(|&x: &u32| (x as usize) < nv)
+            .ok_or_else(|| {
+                syntax(
+                    "OFF",
+                    n,
+                    format!("face needs {k} vertex indices below {nv}"),
+                )
+            })?;
+        face.push(idx);
+    }
+    if t.next().is_some() {
+        dropped.insert("face colors".to_string());
+    }
+    Ok(())
 }
 
 pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Result<()> {

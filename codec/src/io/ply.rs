@@ -232,6 +232,72 @@ fn parse_header(bytes: &[u8]) -> Result<(Mode, Vec<Element>, usize)> {
     Ok((mode.ok_or_else(|| err("no format line"))?, elements, body))
 }
 
+/// Checks an element's header against the file: its records fit in the `remaining`
+/// bytes, a vertex element (the only one, unless `have_vertices`) has x, y and z, a face
+/// element a vertex index list. Notes what subwave does not keep as dropped.
+fn check_element(
+    el: &Element,
+    mode: Mode,
+    remaining: usize,
+    have_vertices: bool,
+    dropped: &mut BTreeSet<String>,
+) -> Result<()> {
+    // Every record needs at least this many bytes; refuse counts the file cannot hold
+    // before allocating for them.
+    let min_record: usize = el
+        .props
+        .iter()
+        .map(|p| match (mode, p) {
+            (Mode::Ascii, _) => 2,
+            (_, Prop::Scalar(_, s)) => s.size(),
+            (_, Prop::List(_, c, _)) => c.size(),
+        })
+        .sum::<usize>()
+        .max(1);
+    if el.count.saturating_mul(min_record as u64) > remaining as u64 {
+        return Err(err(format!(
+            "element '{}' declares {} records, more than the {} bytes left can hold",
+            el.name, el.count, remaining
+        )));
+    }
+    let is_vertex = el.name == "vertex";
+    let is_face = el.name == "face";
+    let axis_of = |name: &str| ["x", "y", "z"].iter().position(|a| *a == name);
+    if is_vertex {
+        if have_vertices {
+            return Err(err("two vertex elements"));
+        }
+        for a in ["x", "y", "z"] {
+            if !el
+                .props
+                .iter()
+                .any(|p| matches!(p, Prop::Scalar(n, _) if n == a))
+            {
+                return Err(err(format!("vertex element has no '{a}' property")));
+            }
+        }
+    } else if is_face {
+        if !el.props.iter().any(
+            |p| matches!(p, Prop::List(n, _, _) if n == "vertex_indices" || n == "vertex_index"),
+        ) {
+            return Err(err("face element has no vertex_indices list"));
+        }
+    } else {
+        dropped.insert(format!("'{}' elements", el.name));
+    }
+    for p in &el.props {
+        let name = match p {
+            Prop::Scalar(n, _) | Prop::List(n, _, _) => n,
+        };
+        let used = (is_vertex && axis_of(name).is_some() && matches!(p, Prop::Scalar(..)))
+            || (is_face && (name == "vertex_indices" || name == "vertex_index"));
+        if (is_vertex || is_face) && !used {
+            dropped.insert(format!("{} property '{name}'", el.name));
+        }
+    }
+    Ok(())
+}
+
 pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     let (mode, elements, body_start) = parse_header(bytes)?;
     let mut body = Body {
@@ -246,61 +312,14 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     let mut topo = Mesh::new();
     let mut face = Vec::new();
     for el in &elements {
-        // Every record needs at least this many bytes; refuse counts the file cannot hold
-        // before allocating for them.
-        let min_record: usize = el
-            .props
-            .iter()
-            .map(|p| match (mode, p) {
-                (Mode::Ascii, _) => 2,
-                (_, Prop::Scalar(_, s)) => s.size(),
-                (_, Prop::List(_, c, _)) => c.size(),
-            })
-            .sum::<usize>()
-            .max(1);
-        if el.count.saturating_mul(min_record as u64) > body.remaining() as u64 {
-            return Err(err(format!(
-                "element '{}' declares {} records, more than the {} bytes left can hold",
-                el.name,
-                el.count,
-                body.remaining()
-            )));
-        }
+        check_element(el, mode, body.remaining(), have_vertices, &mut dropped)?;
         let is_vertex = el.name == "vertex";
         let is_face = el.name == "face";
         let axis_of = |name: &str| ["x", "y", "z"].iter().position(|a| *a == name);
         if is_vertex {
-            if have_vertices {
-                return Err(err("two vertex elements"));
-            }
             have_vertices = true;
-            for a in ["x", "y", "z"] {
-                if !el
-                    .props
-                    .iter()
-                    .any(|p| matches!(p, Prop::Scalar(n, _) if n == a))
-                {
-                    return Err(err(format!("vertex element has no '{a}' property")));
-                }
-            }
             if mode != Mode::Ascii {
                 nums.reserve(el.count as usize);
-            }
-        } else if is_face {
-            if !el.props.iter().any(|p| matches!(p, Prop::List(n, _, _) if n == "vertex_indices" || n == "vertex_index")) {
-                return Err(err("face element has no vertex_indices list"));
-            }
-        } else {
-            dropped.insert(format!("'{}' elements", el.name));
-        }
-        for p in &el.props {
-            let name = match p {
-                Prop::Scalar(n, _) | Prop::List(n, _, _) => n,
-            };
-            let used = (is_vertex && axis_of(name).is_some() && matches!(p, Prop::Scalar(..)))
-                || (is_face && (name == "vertex_indices" || name == "vertex_index"));
-            if (is_vertex || is_face) && !used {
-                dropped.insert(format!("{} property '{name}'", el.name));
             }
         }
         for _ in 0..el.count {
@@ -319,31 +338,10 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                         }
                     }
                     Prop::List(name, cty, ity) => {
-                        let n = body.int(*cty, "list count")?;
-                        if n < 0
-                            || (n as u64).saturating_mul(if mode == Mode::Ascii {
-                                2
-                            } else {
-                                ity.size() as u64
-                            }) > body.remaining() as u64
-                        {
-                            return Err(err(format!("list of {n} items does not fit in the file")));
-                        }
                         let want = is_face
                             && !took_list
                             && (name == "vertex_indices" || name == "vertex_index");
-                        if want {
-                            face.clear();
-                        }
-                        for _ in 0..n {
-                            let i = body.int(*ity, "vertex index")?;
-                            if want {
-                                if !(0..u32::MAX as i64).contains(&i) {
-                                    return Err(err(format!("vertex index {i} is out of range")));
-                                }
-                                face.push(i as u32);
-                            }
-                        }
+                        read_list(&mut body, *cty, *ity, want.then_some(&mut face))?;
                         if want {
                             took_list = true;
                             if face.len() < 3 {
@@ -386,6 +384,37 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         },
         dropped,
     })
+}
+
+/// One list property's items; with `face`, kept as vertex indices.
+fn read_list(
+    body: &mut Body<'_>,
+    cty: Scalar,
+    ity: Scalar,
+    mut face: Option<&mut Vec<u32>>,
+) -> Result<()> {
+    let n = body.int(cty, "list count")?;
+    let item = if body.mode == Mode::Ascii {
+        2
+    } else {
+        ity.size() as u64
+    };
+    if n < 0 || (n as u64).saturating_mul(item) > body.remaining() as u64 {
+        return Err(err(format!("list of {n} items does not fit in the file")));
+    }
+    if let Some(f) = face.as_deref_mut() {
+        f.clear();
+    }
+    for _ in 0..n {
+        let i = body.int(ity, "vertex index")?;
+        if let Some(f) = face.as_deref_mut() {
+            if !(0..u32::MAX as i64).contains(&i) {
+                return Err(err(format!("vertex index {i} is out of range")));
+            }
+            f.push(i as u32);
+        }
+    }
+    Ok(())
 }
 
 fn to_coords(nums: &[[Num; 3]]) -> Result<RawCoords> {

@@ -354,6 +354,61 @@ pub(super) fn candidates(t: &Topo) -> Vec<Coarsening> {
     out
 }
 
+/// The coarse face of face point `fp`, from the fine quads around it (`quads`): its
+/// corners in order into `ring` and the edge points between them, returned (edge point
+/// `i` joins corners `i` and `i + 1`); `None` unless the quads make one closed fan of at
+/// least three with distinct corners and edge points.
+fn face_ring(
+    t: &Topo,
+    quads: &[u32],
+    fp: u32,
+    is_v: &dyn Fn(u32) -> bool,
+    is_f: &dyn Fn(u32) -> bool,
+    fan: &mut Vec<(u32, u32, u32)>,
+    ring: &mut Vec<u32>,
+) -> Option<Vec<u32>> {
+    fan.clear();
+    for &q in quads {
+        let quad = t.face(q as usize);
+        let i = quad.iter().position(|&x| x == fp)?;
+        let (a, v, b) = (quad[(i + 1) % 4], quad[(i + 2) % 4], quad[(i + 3) % 4]);
+        if !is_v(v) || is_v(a) || is_f(a) || is_v(b) || is_f(b) {
+            return None;
+        }
+        fan.push((a, v, b));
+    }
+    let k = fan.len();
+    if k < 3 {
+        return None;
+    }
+    // Walk the fan: the quad after (a, v, b) is the one whose a is this b.
+    ring.clear();
+    let mut edges_of_face: Vec<u32> = Vec::with_capacity(k);
+    let mut cur = 0usize;
+    for _ in 0..k {
+        let (_, v, b) = fan[cur];
+        ring.push(v);
+        edges_of_face.push(b);
+        let next = fan.iter().position(|&(a2, _, _)| a2 == b)?;
+        cur = next;
+    }
+    if cur != 0 {
+        return None;
+    }
+    // Every quad of the fan visited once: the ring's edge points are distinct.
+    let mut sorted = edges_of_face.clone();
+    sorted.sort_unstable();
+    if sorted.windows(2).any(|w| w[0] == w[1]) {
+        return None;
+    }
+    let mut corners = ring.clone();
+    corners.sort_unstable();
+    if corners.windows(2).any(|w| w[0] == w[1]) {
+        return None;
+    }
+    Some(edges_of_face)
+}
+
 /// Builds and checks the coarse mesh for one labeling.
 fn build(
     t: &Topo,
@@ -377,46 +432,9 @@ fn build(
         if !is_f(fp) {
             continue;
         }
-        fan.clear();
-        for &q in &vq[vq_starts[fp as usize] as usize..vq_starts[fp as usize + 1] as usize] {
-            let quad = t.face(q as usize);
-            let i = quad.iter().position(|&x| x == fp)?;
-            let (a, v, b) = (quad[(i + 1) % 4], quad[(i + 2) % 4], quad[(i + 3) % 4]);
-            if !is_v(v) || is_v(a) || is_f(a) || is_v(b) || is_f(b) {
-                return None;
-            }
-            fan.push((a, v, b));
-        }
-        let k = fan.len();
-        if k < 3 {
-            return None;
-        }
-        // Walk the fan: the quad after (a, v, b) is the one whose a is this b.
-        ring.clear();
-        let mut edges_of_face: Vec<u32> = Vec::with_capacity(k);
-        let mut cur = 0usize;
-        for _ in 0..k {
-            let (_, v, b) = fan[cur];
-            ring.push(v);
-            edges_of_face.push(b);
-            let next = fan.iter().position(|&(a2, _, _)| a2 == b)?;
-            cur = next;
-        }
-        if cur != 0 {
-            return None;
-        }
-        // Every quad of the fan visited once: the ring's edge points are distinct.
-        let mut sorted = edges_of_face.clone();
-        sorted.sort_unstable();
-        if sorted.windows(2).any(|w| w[0] == w[1]) {
-            return None;
-        }
+        let edges_of_face = face_ring(t, &vq[vq_starts[fp as usize] as usize..vq_starts[fp as usize + 1] as usize], fp, is_v, is_f, &mut fan, &mut ring)?;
+        let k = ring.len();
         visited_quads += k;
-        let mut corners = ring.clone();
-        corners.sort_unstable();
-        if corners.windows(2).any(|w| w[0] == w[1]) {
-            return None;
-        }
         let mut face = Vec::with_capacity(k);
         for &v in &ring {
             if coarse_id[v as usize] == NONE {

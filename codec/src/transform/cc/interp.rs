@@ -1,0 +1,474 @@
+//! interp4 (SPEC.md 9.11, Kobbelt's 4-point rule on quads) and interp6 (9.12, the
+//! 6-point Deslauriers-Dubuc rule): their stencils, predictions and phases.
+
+use super::*;
+use crate::transform::round_div;
+
+/// interp4's stencils (SPEC.md 9.11): per edge its two ends' beyond vertices, per quad
+/// face the beyond edge of each of its edges ([`NONE`] where there is none; non-quads
+/// take the lazy rule and no stencil). With `six` (interp6, 9.12) also the vertices and
+/// edges beyond those.
+#[derive(Clone)]
+pub(super) struct Interp4 {
+    pub(super) six: bool,
+    pub(super) edge: Vec<[u32; 2]>,
+    pub(super) face: Vec<[u32; 4]>,
+    /// interp6: per edge the vertices beyond its ends' beyond vertices.
+    pub(super) edge2: Vec<[u32; 2]>,
+    /// interp6: per quad face, per edge the edge beyond its beyond edge.
+    pub(super) face2: Vec<[u32; 4]>,
+}
+
+/// Per edge and side k (the face `edge_faces[e][k]`): the edge's slot in that face when
+/// it is a quad (the edge runs from corner slot to corner slot + 1), `u8::MAX` otherwise.
+fn quad_slots(level: &Level) -> Vec<[u8; 2]> {
+    let mut slot = vec![[u8::MAX; 2]; level.ne()];
+    for f in 0..level.nf() {
+        let fe = level.f_edges(f);
+        if fe.len() == 4 {
+            for (i, &e) in fe.iter().enumerate() {
+                let e = e as usize;
+                slot[e][(level.edge_faces[e][0] as usize != f) as usize] = i as u8;
+            }
+        }
+    }
+    slot
+}
+
+impl Interp4 {
+    /// The stencils of `level`, from one pass over the faces that records each edge's
+    /// slot in the quads beside it, so that no edge end searches its faces. The tables
+    /// are those that `beyond_vertex` and `beyond_edge` give at every edge end and face
+    /// edge (the test's `Interp4::reference`).
+    pub(super) fn new(level: &Level, six: bool) -> Interp4 {
+        let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
+        let slot = quad_slots(level);
+        // The slot of edge e in the quad on its side k, and that quad.
+        let quad_slot = |e: usize, k: usize| {
+            let i = slot[e][k];
+            (i != u8::MAX).then(|| (level.edge_faces[e][k] as usize, i as usize))
+        };
+        let on_boundary: Vec<bool> = (0..nv)
+            .map(|v| level.v_edges(v).iter().any(|&e| level.is_boundary(e as usize)))
+            .collect();
+        let mut edge = Vec::with_capacity(ne);
+        let mut via = Vec::with_capacity(if six { ne } else { 0 });
+        for e in 0..ne {
+            let boundary = level.is_boundary(e);
+            // An interior edge's other edge at each end in each quad beside it (NONE
+            // beside a face that is not a quad): at the corner the edge starts from in
+            // that quad the edge before it, at the other the edge after it.
+            let mut side = [[NONE; 2]; 2];
+            if !boundary {
+                for k in 0..2 {
+                    if let Some((g, i)) = quad_slot(e, k) {
+                        let fe = level.f_edges(g);
+                        let first = (level.edges[e][0] != level.coarse.face(g)[i]) as usize;
+                        side[first][k] = fe[(i + 3) % 4];
+                        side[1 - first][k] = fe[(i + 1) % 4];
+                    }
+                }
+            }
+            let mut found = [(NONE, NONE); 2];
+            for (end, &a) in level.edges[e].iter().enumerate() {
+                let a = a as usize;
+                let edges = level.v_edges(a);
+                found[end] = if boundary {
+                    let (nb, be) = level.boundary_edges(a);
+                    if nb != 2 || edges.len() != 3 {
+                        continue;
+                    }
+                    let other = if be[0] as usize == e { be[1] } else { be[0] };
+                    (level.other_end(other, a), other)
+                } else {
+                    let side = side[end];
+                    if on_boundary[a] || edges.len() != 4 || side.contains(&NONE) {
+                        continue;
+                    }
+                    match edges
+                        .iter()
+                        .copied()
+                        .find(|&x| x as usize != e && !side.contains(&x))
+                    {
+                        Some(opp) => (level.other_end(opp, a), opp),
+                        None => continue,
+                    }
+                };
+            }
+            edge.push(found.map(|b| b.0));
+            if six {
+                via.push(found.map(|b| b.1));
+            }
+        }
+        // Quad f's edge i: the quad on its other side and the slot opposite it there.
+        let beyond = |f: usize, i: usize| {
+            let e = level.f_edges(f)[i] as usize;
+            let [f1, f2] = level.edge_faces[e];
+            if f2 == NONE {
+                return None;
+            }
+            quad_slot(e, (f1 as usize == f) as usize).map(|(g, j)| (g, (j + 2) % 4))
+        };
+        let mut face = Vec::with_capacity(nf);
+        let mut quad = Vec::with_capacity(if six { nf } else { 0 });
+        for f in 0..nf {
+            let mut y = [NONE; 4];
+            let mut h = [NONE; 4];
+            if level.f_edges(f).len() == 4 {
+                for i in 0..4 {
+                    if let Some((g, j)) = beyond(f, i) {
+                        y[i] = level.f_edges(g)[j];
+                        h[i] = g as u32;
+                    }
+                }
+            }
+            face.push(y);
+            if six {
+                quad.push(h);
+            }
+        }
+        let (mut edge2, mut face2) = (Vec::new(), Vec::new());
+        if six {
+            // Edge e's beyond vertex b at an end, reached by edge g: b's beyond vertex on
+            // g (b is g's end other than e's).
+            edge2.reserve(ne);
+            for (e, b) in edge.iter().enumerate() {
+                edge2.push(std::array::from_fn(|end| match (b[end], via[e][end]) {
+                    (NONE, _) => NONE,
+                    (b, g) => edge[g as usize][(level.edges[g as usize][0] != b) as usize],
+                }));
+            }
+            // Face f's beyond edge y of an edge, in quad h at slot j: the beyond edge of
+            // h's edge y.
+            face2.reserve(nf);
+            for f in 0..nf {
+                face2.push(std::array::from_fn(|i| match face[f][i] {
+                    NONE => NONE,
+                    _ => beyond(f, i).map_or(NONE, |(h, j)| face[h][j]),
+                }));
+            }
+        }
+        Interp4 {
+            six,
+            edge,
+            face,
+            edge2,
+            face2,
+        }
+    }
+
+    /// interp6's far tables from the beyond tables, as SPEC.md 9.12 defines them: per
+    /// edge end, the beyond vertex's own beyond vertex on the edge `via` that leads to
+    /// it; per quad edge, the beyond edge's own beyond edge in the quad it lies in.
+    #[cfg(test)]
+    fn far(
+        level: &Level,
+        edge: &[[u32; 2]],
+        via: &[[u32; 2]],
+        face: &[[u32; 4]],
+        quad: &[[u32; 4]],
+    ) -> (Vec<[u32; 2]>, Vec<[u32; 4]>) {
+        // Edge e's beyond vertex b at an end, reached by edge g: b's beyond vertex on g.
+        let edge2 = (0..edge.len())
+            .map(|e| {
+                std::array::from_fn(|end| {
+                    let (b, g) = (edge[e][end], via[e][end] as usize);
+                    let at = (b != NONE).then(|| level.edges[g].iter().position(|&v| v == b));
+                    at.flatten().map_or(NONE, |j| edge[g][j])
+                })
+            })
+            .collect();
+        // Face f's beyond edge y of an edge, in quad h: the beyond edge of h's edge y.
+        let face2 = (0..face.len())
+            .map(|f| {
+                std::array::from_fn(|i| {
+                    let (y, h) = (face[f][i], quad[f][i] as usize);
+                    let at = (y != NONE).then(|| level.f_edges(h).iter().position(|&x| x == y));
+                    at.flatten().map_or(NONE, |j| face[h][j])
+                })
+            })
+            .collect();
+        (edge2, face2)
+    }
+
+    /// The stencils straight from their definitions, [`beyond_vertex`] at every edge end
+    /// and [`beyond_edge`] at every quad edge: what [`Interp4::new`] must equal.
+    #[cfg(test)]
+    pub(super) fn reference(level: &Level, six: bool) -> Interp4 {
+        // The found items' first and second parts as tables, NONE where none was found.
+        fn split<const N: usize>(found: &[[Option<(usize, usize)>; N]]) -> [Vec<[u32; N]>; 2] {
+            let some = |v: Option<usize>| v.map_or(NONE, |v| v as u32);
+            [0, 1].map(|part| {
+                found
+                    .iter()
+                    .map(|f| f.map(|b| some(b.map(|b| if part == 0 { b.0 } else { b.1 }))))
+                    .collect()
+            })
+        }
+        let (ne, nf) = (level.ne(), level.nf());
+        let found: Vec<[Option<(usize, usize)>; 2]> = (0..ne)
+            .map(|e| level.edges[e].map(|a| beyond_vertex(level, e, a as usize)))
+            .collect();
+        let [edge, via] = split(&found);
+        let found: Vec<[Option<(usize, usize)>; 4]> = (0..nf)
+            .map(|f| {
+                let fe = level.f_edges(f);
+                match fe.len() {
+                    4 => std::array::from_fn(|i| beyond_edge(level, f, fe[i])),
+                    _ => [None; 4],
+                }
+            })
+            .collect();
+        let [face, quad] = split(&found);
+        let (edge2, face2) = if six {
+            Self::far(level, &edge, &via, &face, &quad)
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        Interp4 {
+            six,
+            edge,
+            face,
+            edge2,
+            face2,
+        }
+    }
+}
+
+/// Edge point `e`'s prediction from the coarse values: `[(-x_a' + 9 x_a + 9 x_b - x_b') /
+/// 16]` with both beyond vertices, else `[(x_a + x_b) / 2]`.
+#[inline]
+pub(super) fn interp4_edge<T: Sample>(level: &Level, st: &Interp4, x: &[T], e: usize, narrow: bool) -> T {
+    let (s, d) = interp4_edge_sum(level, st, x, e, narrow);
+    T::round(s, d)
+}
+
+/// [`interp4_edge`] before its rounding: the sum and its divisor.
+#[inline(always)]
+pub(super) fn interp4_edge_sum<T: Sample>(
+    level: &Level,
+    st: &Interp4,
+    x: &[T],
+    e: usize,
+    narrow: bool,
+) -> (T::Acc, i128) {
+    let [a, b] = level.edges[e];
+    let (a, b) = (a as usize, b as usize);
+    if st.six {
+        let ([a2, b2], [a3, b3]) = (st.edge[e], st.edge2[e]);
+        if a3 != NONE && b3 != NONE {
+            // Both far vertices imply both beyond vertices.
+            let (a2, b2, a3, b3) = (a2 as usize, b2 as usize, a3 as usize, b3 as usize);
+            let t = [(a, 150), (b, 150), (a2, -25), (b2, -25), (a3, 3), (b3, 3)];
+            return (T::sum_terms(x, t, narrow), 256);
+        }
+    }
+    match st.edge[e] {
+        [a2, b2] if a2 != NONE && b2 != NONE => {
+            let t = [(a, 9), (b, 9), (a2 as usize, -1), (b2 as usize, -1)];
+            (T::sum_terms(x, t, narrow), 16)
+        }
+        _ => (T::sum_terms(x, [(a, 1), (b, 1)], narrow), 2),
+    }
+}
+
+/// Face point `f`'s prediction from its coarse corners and the fine edge points: for a
+/// quad, the sum over its two pairs of opposite edges (m, m') of `-y + 9 m + 9 m' - y'`
+/// with both beyond edge points y, y', else `8 (m + m')`, over 32; for other faces the
+/// lazy rule `[(2 sum of edge points - sum of corners) / k]`.
+#[inline]
+pub(super) fn interp4_face<T: Sample>(level: &Level, st: &Interp4, x: &[T], f: usize, narrow: bool) -> T {
+    let (s, d) = interp4_face_sum(level, st, x, f, narrow);
+    T::round(s, d)
+}
+
+/// [`interp4_face`] before its rounding: the sum and its divisor.
+#[inline(always)]
+pub(super) fn interp4_face_sum<T: Sample>(
+    level: &Level,
+    st: &Interp4,
+    x: &[T],
+    f: usize,
+    narrow: bool,
+) -> (T::Acc, i128) {
+    let e0 = level.nv;
+    let fe = level.f_edges(f);
+    if fe.len() == 4 {
+        // Each pair of opposite edges by the widest rule it has: interp6's 6-point rule
+        // over 256, else the 4-point rule over 16, else the mean; interp6 scales the
+        // narrower two to 256 (by `k` = 16) so both pairs share the divisor 512.
+        let beyond = st.face[f];
+        let (k, div) = if st.six { (16, 512) } else { (1, 32) };
+        let mut s = T::Acc::default();
+        for d in 0..2 {
+            let (m, m2) = (e0 + fe[d] as usize, e0 + fe[d + 2] as usize);
+            let (y, y2) = (beyond[d], beyond[d + 2]);
+            let far = st.face2.get(f).map_or([NONE; 2], |z| [z[d], z[d + 2]]);
+            if far.iter().all(|&z| z != NONE) {
+                // A far edge implies its beyond edge.
+                let (y, y2) = (e0 + y as usize, e0 + y2 as usize);
+                let (z, z2) = (e0 + far[0] as usize, e0 + far[1] as usize);
+                let t = [(m, 150), (m2, 150), (y, -25), (y2, -25), (z, 3), (z2, 3)];
+                s += T::sum_terms(x, t, narrow);
+            } else if y != NONE && y2 != NONE {
+                let (y, y2) = (e0 + y as usize, e0 + y2 as usize);
+                let t = [(m, 9 * k), (m2, 9 * k), (y, -k), (y2, -k)];
+                s += T::sum_terms(x, t, narrow);
+            } else {
+                s += T::sum_terms(x, [(m, 8 * k), (m2, 8 * k)], narrow);
+            }
+        }
+        return (s, div);
+    }
+    let mut s = T::Acc::default();
+    for &e in fe {
+        s += x[e0 + e as usize].weighted(2);
+    }
+    for &v in level.coarse.face(f) {
+        s += x[v as usize].weighted(-1);
+    }
+    (s, fe.len() as i128)
+}
+
+/// The predictions of a predict-only Catmull-Clark transform (lazy, interp4 or interp6) on one
+/// level and their phases (SPEC.md 10.6), which mode 6 reads. Its edge points are
+/// predicted from the coarse values, its face points also from the fine edge points.
+pub struct Phaser<'a> {
+    level: &'a Level,
+    interp4: Option<std::borrow::Cow<'a, Interp4>>,
+}
+
+impl<'a> Phaser<'a> {
+    /// The phaser of `w` on `level` with its stencils `st`; `None` for a transform with
+    /// an update step (no phases).
+    pub fn new(level: &'a Level, w: Wavelet, st: &'a Stencils) -> Option<Phaser<'a>> {
+        match w {
+            Wavelet::Lazy => Some(Phaser {
+                level,
+                interp4: None,
+            }),
+            Wavelet::Interp4 | Wavelet::Interp6 => Some(Phaser {
+                level,
+                interp4: Some(st.interp4(level, w == Wavelet::Interp6)),
+            }),
+            _ => None,
+        }
+    }
+
+    /// The phases of details `0..n` on the three axes of `x` (for face points, the
+    /// values must hold the fine edge points), and with `fracs` their fractions
+    /// (SPEC.md 10.9).
+    pub fn phases(
+        &self,
+        x: &[Vec<i64>; 3],
+        n: usize,
+        fracs: bool,
+    ) -> crate::transform::phase::Phases {
+        let mut p = crate::transform::phase::Phases::default();
+        for k in 0..3 {
+            for i in 0..n {
+                if fracs {
+                    let (_, q, f) = self.predict_frac(&x[k], i);
+                    p.codes[k].push(q);
+                    p.fracs[k].push(f);
+                } else {
+                    p.codes[k].push(self.predict(&x[k], i).1);
+                }
+            }
+        }
+        p
+    }
+
+    /// Detail `i`'s (edge points `0..ne`, then face points) correction and phase on one
+    /// axis, from the values `x` (the coarse values and, for a face point, the fine edge
+    /// points): the fine value is the detail plus the correction (SPEC.md 10.6).
+    #[inline]
+    pub fn predict(&self, x: &[i64], i: usize) -> (i64, u8) {
+        let (p, r, d) = self.exact(x, i);
+        (p, crate::transform::phase::phase(r, d))
+    }
+
+    /// [`Phaser::predict`] and the fraction: the unrounded prediction lies about
+    /// `fraction / 512` above the correction (SPEC.md 10.9).
+    #[inline]
+    pub fn predict_frac(&self, x: &[i64], i: usize) -> (i64, u8, i16) {
+        let (p, r, d) = self.exact(x, i);
+        // (|r| <= d / 2, so the fraction is at most 256 in magnitude.)
+        let frac = round_div(crate::transform::phase::FRAC_DIV * r, d) as i16;
+        (p, crate::transform::phase::phase(r, d), frac)
+    }
+
+    /// Detail `i`'s correction `p`, and where its unrounded prediction lies: `r / d`
+    /// above `p`.
+    #[inline(always)]
+    fn exact(&self, x: &[i64], i: usize) -> (i64, i128, i128) {
+        let level = self.level;
+        let ne = level.ne();
+        let (n, d, sign) = match &self.interp4 {
+            Some(st) if i < ne => {
+                let (s, d) = interp4_edge_sum(level, st, x, i, false);
+                (s, d, 1)
+            }
+            Some(st) => {
+                let (s, d) = interp4_face_sum(level, st, x, i - ne, false);
+                (s, d, 1)
+            }
+            // The lazy w-lift (SPEC.md 9.2, a = -1/2) adds `[N / D]` in analysis: for an
+            // edge point `N = -(x_a + x_b)`, `D = 2`; for a face point of k corners
+            // `N = 4 (sum of corners) - 8 (sum of edge points)`, `D = 4 k`.
+            None if i < ne => {
+                let [a, b] = level.edges[i];
+                (-(x[a as usize] as i128 + x[b as usize] as i128), 2, -1)
+            }
+            None => {
+                let f = i - ne;
+                let corners = level.coarse.face(f);
+                let sv: i128 = corners.iter().map(|&v| x[v as usize] as i128).sum();
+                let se: i128 = level
+                    .f_edges(f)
+                    .iter()
+                    .map(|&e| x[level.nv + e as usize] as i128)
+                    .sum();
+                (4 * sv - 8 * se, 4 * corners.len() as i128, -1)
+            }
+        };
+        let p = round_div(n, d);
+        // The detail is `x - [N / D]` (interp4) or `x + [N / D]` (lazy): the unrounded
+        // prediction lies `r / D` above (or below) the rounded one.
+        (sign * p, sign as i128 * (n - p as i128 * d), d)
+    }
+}
+
+/// The 4-point interpolating transform and its inverse (SPEC.md 9.11): details are the
+/// fine values less their predictions; analysis predicts the face points first (from the
+/// fine edge points), synthesis the edge points first.
+pub(super) fn interp4<T: Sample>(level: &Level, st: &Interp4, x: &mut [T], forward: bool, skip: &[bool]) {
+    let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
+    let (e0, f0) = (nv, nv + ne);
+    let live = |i: usize| !flag(skip, i);
+    // The edge points read coarse values, the face points edge points (and, beside a
+    // face that is not a quad, coarse values): each pass checks what it reads.
+    if forward {
+        let narrow = T::narrow(&x[..f0]);
+        for f in (0..nf).filter(|&f| live(f0 + f)) {
+            let p = interp4_face(level, st, x, f, narrow);
+            x[f0 + f] = x[f0 + f].minus(p);
+        }
+        let narrow = T::narrow(&x[..e0]);
+        for e in (0..ne).filter(|&e| live(e0 + e)) {
+            let p = interp4_edge(level, st, x, e, narrow);
+            x[e0 + e] = x[e0 + e].minus(p);
+        }
+    } else {
+        let narrow = T::narrow(&x[..e0]);
+        for e in (0..ne).filter(|&e| live(e0 + e)) {
+            let p = interp4_edge(level, st, x, e, narrow);
+            x[e0 + e] = x[e0 + e].plus(p);
+        }
+        let narrow = T::narrow(&x[..f0]);
+        for f in (0..nf).filter(|&f| live(f0 + f)) {
+            let p = interp4_face(level, st, x, f, narrow);
+            x[f0 + f] = x[f0 + f].plus(p);
+        }
+    }
+}
