@@ -28,9 +28,9 @@ use std::collections::BTreeSet;
 
 pub use subwave_codec::io::{read_mesh, write_mesh, Format, RawMesh};
 pub use subwave_codec::{
-    decode, encode, inspect, DecodeOptions, Decoded, DiscTransform, EncodeOptions, Encoded, Error,
-    Family, FloatWidth, Header, Info, Limits, Mesh, Quantization, RawCoords, Result, SectionInfo,
-    Source, Transform, TransformChoice, Wavelet, FORMAT_VERSION, MAX_COORD,
+    decode, encode, encode_file, inspect, DecodeOptions, Decoded, DiscTransform, EncodeOptions,
+    Encoded, Error, Family, FloatWidth, Header, Info, Limits, Mesh, Quantization, RawCoords,
+    Result, SectionInfo, Source, Transform, TransformChoice, Wavelet, FORMAT_VERSION, MAX_COORD,
 };
 
 /// A mesh file read and turned into integers.
@@ -59,17 +59,15 @@ impl Loaded {
 }
 
 /// Reads a mesh file (OBJ, PLY or OFF, sniffed from its bytes) and turns its positions
-/// into integers: exactly when `bits` is `None`, on Draco's `bits`-bit grid otherwise.
+/// into integers: exactly when `bits` is `None` (decimal text on its grid, binary floats
+/// and text beyond any decimal grid as the floats they are, bit for bit), on Draco's
+/// `bits`-bit grid otherwise.
 pub fn load(bytes: &[u8], bits: Option<u8>) -> Result<Loaded> {
     let raw = read_mesh(bytes)?;
-    if let (None, Some(why)) = (bits, &raw.inexact) {
-        return Err(Error::Range(format!(
-            "{why}: exact mode cannot keep this file's values; use --bits Q (1..=30) to quantise"
-        )));
-    }
-    let (positions, quantization) = subwave_codec::integerize(&raw.coords, bits)?;
+    let (positions, quantization, floats) = subwave_codec::integerize(&raw.coords, bits)?;
     let mut mesh = raw.topology;
     mesh.positions = positions;
+    mesh.floats = floats;
     mesh.validate()?;
     Ok(Loaded {
         mesh,
@@ -122,11 +120,26 @@ pub fn compare_up_to_order(
             original.face_count()
         ));
     }
+    if decoded.floats.len() != original.floats.len() {
+        return Err(format!(
+            "{} float values decoded, {} expected",
+            decoded.floats.len(),
+            original.floats.len()
+        ));
+    }
     for (i, &o) in order.iter().enumerate() {
         let want = original
             .positions
             .get(o as usize)
             .ok_or_else(|| format!("order names vertex {o}, out of range"))?;
+        if let (Some(d), Some(w)) = (decoded.floats.get(i), original.floats.get(o as usize)) {
+            if d != w {
+                return Err(format!(
+                    "vertex {} decoded with float bits {d:x?}, expected {w:x?}",
+                    o + 1
+                ));
+            }
+        }
         if decoded.positions[i] != *want {
             return Err(format!(
                 "vertex {} decoded as {:?}, expected {:?}",
@@ -175,6 +188,8 @@ pub fn decode_into(bytes: &[u8], opts: &DecodeOptions, out: &mut Mesh) -> Result
     out.faces.extend_from_slice(&d.mesh.faces);
     out.face_starts.clear();
     out.face_starts.extend_from_slice(&d.mesh.face_starts);
+    out.floats.clear();
+    out.floats.extend_from_slice(&d.mesh.floats);
     Ok(d)
 }
 

@@ -195,8 +195,12 @@ fn bad_mesh_files() {
         ply.extend_from_slice(&i.to_le_bytes());
     }
     assert!(mesh_err(&ply).contains("NaN"));
-    // Exact values that do not fit: suggest --bits.
-    assert!(mesh_err(b"v 1e30 1e-30 0\n").contains("--bits"));
+    // Exact values no decimal grid in the range holds: the floats they denote.
+    let m = subwave::load(b"v 1e30 1e-30 0\n", None).unwrap();
+    assert_eq!(
+        m.mesh.floats,
+        vec![[1e30f32, 1e-30, 0.0].map(|x| x.to_bits() as u64)]
+    );
 }
 
 #[test]
@@ -660,4 +664,78 @@ fn polar_headers_that_do_not_fit_their_base_mesh_are_refused() {
         *head.last_mut().unwrap() = code;
         assert!(subwave::Header::read(&head, 0, &Limits::default()).is_ok());
     }
+}
+
+/// The frozen float container (`corpus/floats_cc2.ply`: -0.0, tiny and subnormal
+/// values) with its FBIT payload edited, re-framed with valid checksums.
+fn with_float_bits(edit: impl FnOnce(&mut Vec<u8>)) -> Vec<u8> {
+    let bytes = std::fs::read(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus/golden/floats_cc2.swv"),
+    )
+    .unwrap();
+    let c = subwave_container::Container::parse(&bytes, &Limits::default()).unwrap();
+    let mut w = ContainerWriter::new();
+    let mut edit = Some(edit);
+    for s in c.sections.iter().filter(|s| s.kind != SectionKind::END) {
+        let mut p = s.payload.to_vec();
+        if s.kind == SectionKind::FLOAT_BITS {
+            (edit.take().unwrap())(&mut p);
+        }
+        w.section(s.kind, &p);
+    }
+    assert!(edit.is_none(), "no FBIT section");
+    w.finish()
+}
+
+#[test]
+fn float_bits_that_do_not_fit_their_integers_are_corrupt() {
+    let ok = with_float_bits(|_| {});
+    let want = subwave::decode_slice(&ok).unwrap();
+    assert!(!want.mesh.floats.is_empty());
+    let corrupt = |b: &[u8], what: &str| match subwave::decode_slice(b) {
+        Err(Error::CorruptStream {
+            section: "FBIT", ..
+        }) => {}
+        other => panic!("{what}: expected corrupt FBIT data, got {other:?}"),
+    };
+    corrupt(&with_float_bits(|p| p.push(0)), "a byte more");
+    corrupt(&with_float_bits(|p| p.truncate(p.len() - 1)), "a byte less");
+    corrupt(&with_float_bits(|p| p.clear()), "no bits");
+    // Every bit flipped in turn: an error, or other floats with the same integers.
+    let n = with_float_bits(|_| {}).len();
+    let mut payload_len = 0;
+    let _ = with_float_bits(|p| payload_len = p.len());
+    assert!(n > payload_len);
+    for bit in 0..payload_len * 8 {
+        let b = with_float_bits(|p| p[bit / 8] ^= 0x80 >> (bit % 8));
+        if let Ok(d) = subwave::decode_slice(&b) {
+            assert_eq!(d.mesh.positions, want.mesh.positions, "bit {bit}");
+            assert_ne!(d.mesh.floats, want.mesh.floats, "bit {bit}");
+            assert!(
+                d.mesh
+                    .floats
+                    .iter()
+                    .flatten()
+                    .all(|&f| f32::from_bits(f as u32).is_finite()),
+                "bit {bit}"
+            );
+        }
+    }
+    // The float bits flag needs binary float quantisation.
+    let mut h = subwave::decode_slice(&ok).unwrap().header;
+    h.quantization = subwave::Quantization::Decimal { decimals: 6 };
+    let c = subwave_container::Container::parse(&ok, &Limits::default()).unwrap();
+    let mut w = ContainerWriter::new();
+    for s in c.sections.iter().filter(|s| s.kind != SectionKind::END) {
+        let p = if s.kind == SectionKind::HEADER {
+            h.write()
+        } else {
+            s.payload.to_vec()
+        };
+        w.section(s.kind, &p);
+    }
+    assert!(matches!(
+        subwave::decode_slice(&w.finish()),
+        Err(Error::Container(subwave_container::Error::Malformed { .. }))
+    ));
 }

@@ -68,10 +68,11 @@ fn encoded_bytes_match_the_golden_hashes() {
 /// it was coded: a transform's name (`bicubic`, `sqrt2-sym`, ...) fixes the transform,
 /// `flat` codes without levels, `disc` (`lifted`) codes the pole discs with the lazy
 /// (lifted) polar wavelet, `vmap` codes every axis's value map, `q16` (`q12`, `q10`)
-/// holds the mesh on Draco's 16-bit (12-bit, 10-bit) grid; the first part names the
+/// holds the mesh on Draco's 16-bit (12-bit, 10-bit) grid, `file` keeps the file's own
+/// bytes (`encode_file`, a TMPL section); the first part names the
 /// corpus mesh it decodes to. Before the first release the decoder reads the current
 /// format only, so a format change blesses them anew (`SUBWAVE_BLESS=1`), deliberately.
-const FROZEN: [&str; 27] = [
+const FROZEN: [&str; 30] = [
     "cube_cc4.swv",
     "cube_cc4.flat.swv",
     "cube_cc4.lazy.swv",
@@ -99,57 +100,63 @@ const FROZEN: [&str; 27] = [
     "terrain_grid33.interp6.q10.swv",
     "subdivided_open_cc3.lazy.q12.swv",
     "subdivided_open_cc3.interp6.q12.swv",
+    "floats_cc2.swv",
+    "floats_cc2.file.swv",
+    "two_components_cc2.file.swv",
 ];
 
 /// Codes a frozen container as its name says (see [`FROZEN`]).
-fn freeze(swv: &str, m: &subwave::Loaded) -> Vec<u8> {
+fn freeze(swv: &str, m: &subwave::Loaded, source: &[u8]) -> Vec<u8> {
     let parts: Vec<&str> = swv.split('.').collect();
     let has = |p: &str| parts.contains(&p);
     let transform = parts
         .iter()
         .find_map(|p| subwave::Wavelet::from_name(p))
         .map_or(Default::default(), subwave::TransformChoice::Fixed);
-    let enc = subwave::encode_to_vec(
-        &m.mesh,
-        &m.quantization,
-        &EncodeOptions {
-            keep_order: true,
-            source: m.source(),
-            max_levels: if has("flat") { 0 } else { 16 },
-            disc: if has("disc") {
-                Some(subwave::DiscTransform::LazyRadialFirst)
-            } else if has("lifted") {
-                Some(subwave::DiscTransform::LiftedCircularFirst)
-            } else {
-                None
-            },
-            value_map: has("vmap").then_some(true),
-            // On two threads: the container is the same for every count.
-            threads: 2,
-            transform,
+    let opts = EncodeOptions {
+        keep_order: true,
+        source: m.source(),
+        max_levels: if has("flat") { 0 } else { 16 },
+        disc: if has("disc") {
+            Some(subwave::DiscTransform::LazyRadialFirst)
+        } else if has("lifted") {
+            Some(subwave::DiscTransform::LiftedCircularFirst)
+        } else {
+            None
         },
-    )
-    .unwrap();
-    enc.bytes
+        value_map: has("vmap").then_some(true),
+        // On two threads: the container is the same for every count.
+        threads: 2,
+        transform,
+    };
+    let (mesh, q) = (&m.mesh, &m.quantization);
+    match has("file") {
+        true => subwave::encode_file(mesh, q, &opts, source, m.format),
+        false => subwave::encode_to_vec(mesh, q, &opts),
+    }
+    .unwrap()
+    .bytes
 }
 
 #[test]
 fn frozen_containers_still_decode() {
     let bless = std::env::var_os("SUBWAVE_BLESS").is_some();
     for swv in FROZEN {
-        let obj = format!("{}.obj", swv.split('.').next().unwrap());
+        // The corpus mesh: an OBJ, or a binary PLY (float positions).
+        let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus");
+        let stem = swv.split('.').next().unwrap();
+        let obj = ["obj", "ply"]
+            .iter()
+            .map(|e| format!("{stem}.{e}"))
+            .find(|f| corpus.join(f).exists())
+            .unwrap();
         let path = golden_dir().join(swv);
-        let source = std::fs::read(
-            Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("corpus")
-                .join(&obj),
-        )
-        .unwrap();
+        let source = std::fs::read(corpus.join(&obj)).unwrap();
         let bits = swv
             .split('.')
             .find_map(|p| p.strip_prefix('q')?.parse::<u8>().ok());
         let m = subwave::load(&source, bits).unwrap();
-        let fresh = freeze(swv, &m);
+        let fresh = freeze(swv, &m, &source);
         if bless {
             std::fs::write(&path, &fresh).unwrap();
         }
@@ -157,6 +164,16 @@ fn frozen_containers_still_decode() {
         // Frozen, and still what the encoder writes: a change of either is deliberate.
         assert!(bytes == fresh, "{swv}: the encoder writes other bytes now");
         let dec = subwave::decode_slice(&bytes).unwrap();
+        if swv.contains(".file.") {
+            // The file itself, byte for byte.
+            let file = dec.file().expect("a file template").unwrap();
+            assert!(file == source, "{swv} no longer gives back {obj}");
+        }
+        if obj.ends_with(".ply") {
+            // Every value, bit for bit, in the file's order.
+            assert!(dec.mesh == m.mesh, "{swv} no longer decodes to {obj}");
+            continue;
+        }
         let mut out = Vec::new();
         subwave::write_mesh(&mut out, &dec.mesh, &dec.quantization, Format::Obj).unwrap();
         let want = match bits {

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use clap::{Parser, Subcommand, ValueEnum};
 use serde_json::json;
 use subwave::{
-    DecodeOptions, EncodeOptions, Format, Limits, Quantization, TransformChoice, Wavelet,
+    DecodeOptions, EncodeOptions, Format, Limits, Quantization, Source, TransformChoice, Wavelet,
 };
 
 const EXAMPLES: &str = "\
@@ -281,7 +281,7 @@ fn warn_dropped(quiet: bool, file: &str, loaded: &subwave::Loaded) {
     if !quiet && !loaded.dropped.is_empty() {
         let list: Vec<&str> = loaded.dropped.iter().map(String::as_str).collect();
         eprintln!(
-            "subwave: warning: {file}: not carried (positions and faces only): {}",
+            "subwave: warning: {file}: not carried (positions and faces only; --keep-order keeps the whole file): {}",
             list.join(", ")
         );
     }
@@ -299,15 +299,22 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
             progress.stage("reading");
             let bytes = read_input(input)?;
             let loaded = subwave::load(&bytes, coding.bits).map_err(|e| fail(input, e))?;
-            warn_dropped(cli.quiet, input, &loaded);
+            if !*keep_order {
+                warn_dropped(cli.quiet, input, &loaded);
+            }
             progress.stage("encoding");
             let opts = EncodeOptions {
                 keep_order: *keep_order,
                 source: loaded.source(),
                 ..coding.options()
             };
-            let enc = subwave::encode_to_vec(&loaded.mesh, &loaded.quantization, &opts)
-                .map_err(|e| fail(input, e))?;
+            // With the file's order, its own bytes too: it comes back byte for byte.
+            let (mesh, q) = (&loaded.mesh, &loaded.quantization);
+            let enc = match keep_order {
+                true => subwave::encode_file(mesh, q, &opts, &bytes, loaded.format),
+                false => subwave::encode_to_vec(mesh, q, &opts),
+            }
+            .map_err(|e| fail(input, e))?;
             progress.stage("writing");
             write_output(output, &enc.bytes)?;
             Ok(ExitCode::SUCCESS)
@@ -350,9 +357,24 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
                 }
             };
             progress.stage("writing");
-            let mut buf = Vec::new();
-            subwave::write_mesh(&mut buf, &dec.mesh, &dec.quantization, fmt)
-                .map_err(|e| fail(output, e))?;
+            // The input file itself where the container keeps it and the output is of
+            // its kind (or says no kind).
+            let same_kind = |f: Format| match dec.header.source {
+                Source::Obj => f == Format::Obj,
+                Source::Off => f == Format::Off,
+                Source::PlyAscii | Source::PlyBinary => f.is_ply(),
+                Source::Unknown => false,
+            };
+            let original = format.is_none() && Format::from_path(output).is_none_or(same_kind);
+            let buf = match dec.file().filter(|_| original) {
+                Some(file) => file.map_err(|e| fail(input, e))?,
+                None => {
+                    let mut buf = Vec::new();
+                    subwave::write_mesh(&mut buf, &dec.mesh, &dec.quantization, fmt)
+                        .map_err(|e| fail(output, e))?;
+                    buf
+                }
+            };
             write_output(output, &buf)?;
             Ok(ExitCode::SUCCESS)
         }

@@ -5,7 +5,7 @@ use crate::mesh::{Mesh, MAX_COORD};
 use crate::quant::Quantization;
 use crate::sections::head::{Header, Transform};
 use crate::sections::vmap::ValueMap;
-use crate::sections::{base, levl, ordr};
+use crate::sections::{base, fbit, levl, ordr, tmpl};
 use crate::topology::Family;
 use crate::topology::{self, Level, Topo};
 use crate::transform::fit;
@@ -38,6 +38,22 @@ pub struct Decoded {
     pub level: u8,
     /// Whether the vertices are in the input's order.
     pub input_order: bool,
+    /// The input file's template (SPEC.md 11), when the container keeps the file's own
+    /// bytes and the mesh is in its order: [`Decoded::file`] gives the file back.
+    pub template: Option<Vec<u8>>,
+}
+
+impl Decoded {
+    /// The input file, byte for byte, when the container keeps its own bytes (a
+    /// container written by [`crate::encode_file`], decoded whole).
+    pub fn file(&self) -> Option<Result<Vec<u8>>> {
+        let t = self.template.as_ref()?;
+        Some(crate::io::template::expand(
+            t,
+            &self.mesh,
+            &self.quantization,
+        ))
+    }
 }
 
 pub(crate) fn expect_kind(
@@ -71,8 +87,14 @@ pub(crate) fn layout(c: &Container<'_>, limits: &Limits, whole: bool) -> Result<
     }
     expected.push((SectionKind::BASE, "base mesh"));
     expected.extend((0..h.levels).map(|_| (SectionKind::LEVEL, "level")));
+    if h.has_float_bits {
+        expected.push((SectionKind::FLOAT_BITS, "float bits"));
+    }
     if h.has_order {
         expected.push((SectionKind::ORDER, "vertex order"));
+    }
+    if h.has_template {
+        expected.push((SectionKind::TEMPLATE, "file template"));
     }
     expected.push((SectionKind::END, "end marker"));
     for (i, &(kind, what)) in expected.iter().enumerate() {
@@ -158,21 +180,42 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
     if let Some(m) = &vmap {
         m.values(&mut mesh.positions, level == h.levels)?;
     }
+    // Binary floats below their grid (SPEC.md 3.2), at the finest level.
+    let after_levels = 2 + h.levels as usize;
+    if let (true, true, Quantization::Float { width, exponent }) =
+        (h.has_float_bits, level == h.levels, h.quantization)
+    {
+        let s = c.sections.get(after_levels).ok_or_else(|| {
+            Error::from(subwave_container::Error::Truncated {
+                what: "the float bits section (FBIT) is missing".into(),
+            })
+        })?;
+        mesh.floats = fbit::decode(s.payload, &mesh.positions, width, exponent)?;
+    }
     let mut input_order = false;
+    let ordr_at = after_levels + h.has_float_bits as usize;
     if h.has_order && level == h.levels {
-        if let Some(s) = c.sections.get(2 + h.levels as usize) {
+        if let Some(s) = c.sections.get(ordr_at) {
             let degrees: Vec<u32> = mesh.face_starts.windows(2).map(|w| w[1] - w[0]).collect();
             let o = ordr::decode(s.payload, mesh.vertex_count(), &degrees)?;
             mesh = restore_order(&mesh, &o);
             input_order = true;
         }
     }
+    // The file's own bytes (SPEC.md 11), within the decompression-bomb allowance.
+    let template = match c.sections.get(ordr_at + 1) {
+        Some(s) if h.has_template && input_order => {
+            Some(tmpl::decode(s.payload, s.offset, allowance)?)
+        }
+        _ => None,
+    };
     Ok(Decoded {
         mesh,
         quantization: h.quantization,
         header: h,
         level,
         input_order,
+        template,
     })
 }
 
@@ -441,10 +484,22 @@ fn unpermute(mesh: &Mesh, order: &[u32]) -> Mesh {
     for (new, &old) in order.iter().enumerate() {
         positions[old as usize] = mesh.positions[new];
     }
+    let mut floats = vec![
+        [0u64; 3];
+        if mesh.floats.is_empty() {
+            0
+        } else {
+            order.len()
+        }
+    ];
+    for (new, &old) in order.iter().enumerate().take(mesh.floats.len()) {
+        floats[old as usize] = mesh.floats[new];
+    }
     Mesh {
         positions,
         face_starts: mesh.face_starts.clone(),
         faces: mesh.faces.iter().map(|&v| order[v as usize]).collect(),
+        floats,
     }
 }
 

@@ -50,5 +50,5 @@ mod encoder;
 mod info;
 
 pub use decoder::{decode, DecodeOptions, Decoded};
-pub use encoder::{encode, EncodeOptions, Encoded, TransformChoice};
+pub use encoder::{encode, encode_file, EncodeOptions, Encoded, TransformChoice};
 pub use info::{inspect, Info, SectionInfo};

@@ -20,6 +20,11 @@ pub struct Mesh {
     pub face_starts: Vec<u32>,
     /// All faces' vertex indices, concatenated.
     pub faces: Vec<u32>,
+    /// Binary float positions finer than their grid (SPEC.md 3.2): per vertex and axis,
+    /// the value's IEEE 754 bits (binary32 in the low 32 bits), from which `positions`
+    /// hold the integers on the grid. Empty when every value is its integer times the
+    /// grid step (decimal and grid quantisation, and floats that fit one grid).
+    pub floats: Vec<[u64; 3]>,
 }
 
 impl Mesh {
@@ -29,6 +34,7 @@ impl Mesh {
             positions: Vec::new(),
             face_starts: vec![0],
             faces: Vec::new(),
+            floats: Vec::new(),
         }
     }
 
@@ -77,6 +83,13 @@ impl Mesh {
             || self.face_starts.windows(2).any(|w| w[1] < w[0])
         {
             return Err(Error::InvalidMesh("face table is inconsistent".into()));
+        }
+        if !self.floats.is_empty() && self.floats.len() != self.positions.len() {
+            return Err(Error::InvalidMesh(format!(
+                "{} float values for {} vertices",
+                self.floats.len(),
+                self.positions.len()
+            )));
         }
         if self.positions.len() > u32::MAX as usize {
             return Err(Error::InvalidMesh("more than 2^32 - 1 vertices".into()));

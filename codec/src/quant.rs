@@ -178,6 +178,9 @@ impl RawCoords {
 pub struct TextCoords {
     exact: Vec<[Decimal; 3]>,
     inexact: Option<(Vec<[f64; 3]>, String)>,
+    /// Once inexact: whether every number so far is the shortest text of a binary32
+    /// (then the values are those binary32s).
+    all_f32: bool,
 }
 
 impl TextCoords {
@@ -205,10 +208,14 @@ impl TextCoords {
                     return Ok(());
                 }
                 Some(why) => {
+                    self.all_f32 = self
+                        .exact
+                        .iter()
+                        .all(|p| p.iter().all(|&d| shortest_f32(d).is_some()));
                     let v = self
                         .exact
                         .drain(..)
-                        .map(|p| p.map(|d| d.to_f64()))
+                        .map(|p| p.map(nearest_f64))
                         .collect();
                     self.inexact = Some((v, why));
                 }
@@ -221,6 +228,7 @@ impl TextCoords {
                 .ok()
                 .filter(|x| x.is_finite())
                 .ok_or_else(|| format!("'{}' is not a finite number", t[k]))?;
+            self.all_f32 = self.all_f32 && token_f32(t[k]).is_some();
         }
         if let Some((v, _)) = &mut self.inexact {
             v.push(p);
@@ -242,9 +250,15 @@ impl TextCoords {
         self.len() == 0
     }
 
-    /// The coordinates, and why they are not exact decimals if they are not.
+    /// The coordinates, and why they are not exact decimals if they are not: then the
+    /// binary32 values when every number is a binary32's shortest text, else the nearest
+    /// binary64s.
     pub fn finish(self) -> (RawCoords, Option<String>) {
         match self.inexact {
+            Some((v, why)) if self.all_f32 => (
+                RawCoords::F32(v.iter().map(|p| p.map(|x| x as f32)).collect()),
+                Some(why),
+            ),
             Some((v, why)) => (RawCoords::F64(v), Some(why)),
             None => (RawCoords::Decimal(self.exact), None),
         }
@@ -258,6 +272,33 @@ pub enum FloatWidth {
     F32,
     /// IEEE 754 binary64.
     F64,
+}
+
+impl FloatWidth {
+    /// Bits of the format: 32 or 64.
+    pub fn bits(self) -> u32 {
+        match self {
+            FloatWidth::F32 => 32,
+            FloatWidth::F64 => 64,
+        }
+    }
+
+    /// Mantissa bits with the leading one: 24 or 53.
+    pub fn precision(self) -> u32 {
+        match self {
+            FloatWidth::F32 => 24,
+            FloatWidth::F64 => 53,
+        }
+    }
+
+    /// What a normal float's exponent field less gives the exponent of its last
+    /// mantissa bit: 150 or 1075.
+    pub(crate) fn bias(self) -> i32 {
+        match self {
+            FloatWidth::F32 => 150,
+            FloatWidth::F64 => 1075,
+        }
+    }
 }
 
 /// How integer coordinates map to the values written to a file (SPEC.md 3).
@@ -387,6 +428,95 @@ pub fn write_decimal(n: i64, decimals: u8, out: &mut String) {
     );
 }
 
+/// A decimal number's digits without leading or trailing zeros and its power of ten:
+/// value = (-1)^neg * digits * 10^exp; `None` with more than 19 significant digits or
+/// text that is no number. Zero is (neg, 0, 0).
+fn decimal_key(text: &str) -> Option<(bool, u64, i32)> {
+    let (neg, body) = match text.as_bytes().first()? {
+        b'-' => (true, &text[1..]),
+        b'+' => (false, &text[1..]),
+        _ => (false, text),
+    };
+    let (mant, exp) = match body.find(['e', 'E']) {
+        Some(i) => (&body[..i], body[i + 1..].parse::<i32>().ok()?),
+        None => (body, 0),
+    };
+    let (int, frac) = mant.split_once('.').unwrap_or((mant, ""));
+    let all = int.bytes().chain(frac.bytes());
+    let (mut digits, mut n, mut exp) = (0u64, 0usize, exp.checked_sub(frac.len() as i32)?);
+    let mut trailing = 0i32;
+    for c in all {
+        if !c.is_ascii_digit() {
+            return None;
+        }
+        let d = (c - b'0') as u64;
+        if digits == 0 && d == 0 {
+            continue;
+        }
+        if d == 0 {
+            trailing += 1;
+            continue;
+        }
+        for _ in 0..trailing {
+            digits = digits.checked_mul(10)?;
+            n += 1;
+        }
+        trailing = 0;
+        digits = digits.checked_mul(10)?.checked_add(d)?;
+        n += 1;
+        if n > 19 {
+            return None;
+        }
+    }
+    if int.is_empty() && frac.is_empty() {
+        return None;
+    }
+    if digits == 0 {
+        return Some((neg, 0, 0));
+    }
+    exp = exp.checked_add(trailing)?;
+    Some((neg, digits, exp))
+}
+
+/// The binary32 whose shortest text is `token` (the same digits and power of ten, its
+/// form aside: `0.5`, `5e-1` and `0.50` are all binary32 0.5's), if any.
+pub(crate) fn token_f32(token: &str) -> Option<f32> {
+    let x: f32 = token.parse().ok().filter(|x: &f32| x.is_finite())?;
+    let key = decimal_key(token)?;
+    (decimal_key(&format!("{x:e}")) == Some(key)).then_some(x)
+}
+
+/// The binary32 whose shortest text is the decimal `d`, if any.
+pub(crate) fn shortest_f32(d: Decimal) -> Option<f32> {
+    token_f32(&format!("{}e-{}", d.mantissa, d.decimals))
+}
+
+/// The binary64 nearest to the decimal `d` (a correctly rounded conversion).
+pub(crate) fn nearest_f64(d: Decimal) -> f64 {
+    format!("{}e-{}", d.mantissa, d.decimals)
+        .parse()
+        .unwrap_or_else(|_| d.to_f64())
+}
+
+/// Decimal text whose grid the codec cannot hold, as the binary floats it denotes:
+/// binary32 when every number is a binary32's shortest text, else the nearest binary64.
+fn decimals_as_floats(v: &[[Decimal; 3]]) -> RawCoords {
+    let f32s: Option<Vec<[f32; 3]>> = v
+        .iter()
+        .map(|p| {
+            Some([
+                shortest_f32(p[0])?,
+                shortest_f32(p[1])?,
+                shortest_f32(p[2])?,
+            ])
+        })
+        .collect();
+    match f32s {
+        Some(f) => RawCoords::F32(f),
+        None => RawCoords::F64(v.iter().map(|p| p.map(nearest_f64)).collect()),
+    }
+}
+
 fn range_error(what: String) -> Error {
     Error::Range(format!(
         "{what}; exact integers would not fit the codec's range of +-(2^{COORD_BITS} - 1): \
@@ -394,25 +524,121 @@ fn range_error(what: String) -> Error {
     ))
 }
 
-/// Turns the coordinates into integers: exactly when `bits` is `None`, on Draco's
-/// Q-bit grid otherwise.
-pub fn integerize(raw: &RawCoords, bits: Option<u8>) -> Result<(Vec<[i64; 3]>, Quantization)> {
+/// Integer positions, how they map to values, and the exact binary floats where the
+/// integers alone do not give them (`Mesh::floats`; empty otherwise).
+pub type Integers = (Vec<[i64; 3]>, Quantization, Vec<[u64; 3]>);
+
+/// Turns the coordinates into integers: exactly when `bits` is `None` (decimal text on
+/// its grid, or as the binary floats it denotes when that grid is beyond the codec's
+/// range; binary floats bit for bit, SPEC.md 3.2), on Draco's Q-bit grid otherwise.
+pub fn integerize(raw: &RawCoords, bits: Option<u8>) -> Result<Integers> {
     check_finite(raw)?;
-    match bits {
-        Some(q) => grid(raw, q),
-        None => match raw {
-            RawCoords::Decimal(v) => exact_decimal(v),
-            RawCoords::F32(v) => exact_float(
-                v.iter().flat_map(|p| p.iter().map(|&x| split_f32(x))),
-                v.len(),
-                FloatWidth::F32,
-            ),
-            RawCoords::F64(v) => exact_float(
-                v.iter().flat_map(|p| p.iter().map(|&x| split_f64(x))),
-                v.len(),
-                FloatWidth::F64,
-            ),
+    match (bits, raw) {
+        (Some(q), _) => grid(raw, q).map(|(p, q)| (p, q, Vec::new())),
+        (None, RawCoords::Decimal(v)) => match exact_decimal(v) {
+            Ok((p, q)) => Ok((p, q, Vec::new())),
+            Err(Error::Range(_)) => integerize(&decimals_as_floats(v), None),
+            Err(e) => Err(e),
         },
+        (None, RawCoords::F32(v)) => Ok(exact_floats(
+            v.iter().map(|p| p.map(|x| x.to_bits() as u64)).collect(),
+            FloatWidth::F32,
+        )),
+        (None, RawCoords::F64(v)) => Ok(exact_floats(
+            v.iter().map(|p| p.map(f64::to_bits)).collect(),
+            FloatWidth::F64,
+        )),
+    }
+}
+
+/// Exact binary floats: on the grid 2^e that holds every value (SPEC.md 3, kind 1) when
+/// its integers fit the codec's range, no value is negative zero, and (binary32) it is
+/// no finer than the grid of the largest values' last mantissa bit; else on that grid,
+/// the values kept beside the integers for the bits below it (3.2).
+fn exact_floats(bits: Vec<[u64; 3]>, width: FloatWidth) -> Integers {
+    let split = |b: u64| match width {
+        FloatWidth::F32 => split_f32(f32::from_bits(b as u32)),
+        FloatWidth::F64 => split_f64(f64::from_bits(b)),
+    };
+    let negative_zero = 1u64 << (width.bits() - 1);
+    let e = fine_grid(&bits, width);
+    // binary32: the grid of the largest values' last bit unless a coarser one holds
+    // every value (the bits below it are the smaller values' own, coded raw rather than
+    // through the levels, where the larger values' zero bits would cost as much);
+    // binary64: one grid wherever it fits (the raw bits would be the 53-bit mantissas').
+    let coarse = |emin: i32| width == FloatWidth::F64 || emin >= e;
+    let emin = bits
+        .iter()
+        .flatten()
+        .map(|&b| split(b))
+        .filter(|p| p.1 != 0)
+        .map(|p| p.2)
+        .min()
+        .unwrap_or(0);
+    if coarse(emin) && !bits.iter().flatten().any(|&b| b == negative_zero) {
+        if let Ok((p, q)) = exact_float(
+            bits.iter().flat_map(|p| p.iter().map(move |&b| split(b))),
+            bits.len(),
+            width,
+        ) {
+            return (p, q, Vec::new());
+        }
+    }
+    let positions = bits
+        .iter()
+        .map(|p| p.map(|b| grid_integer(b, width, e)))
+        .collect();
+    (positions, Quantization::Float { width, exponent: e }, bits)
+}
+
+/// A normal float's sign, mantissa with its leading one (`precision` bits) and the
+/// exponent of its last bit: `value = (-1)^sign * m * 2^x`; `None` for zero, subnormals
+/// and non-finite values.
+pub(crate) fn normal_parts(bits: u64, width: FloatWidth) -> Option<(bool, u64, i32)> {
+    let p = width.precision();
+    let w = width.bits();
+    let field = (bits >> (p - 1)) & ((1 << (w - p)) - 1);
+    if field == 0 || field == (1 << (w - p)) - 1 {
+        return None;
+    }
+    let m = bits & ((1 << (p - 1)) - 1) | 1 << (p - 1);
+    Some((bits >> (w - 1) & 1 == 1, m, field as i32 - width.bias()))
+}
+
+/// The grid of 3.2: the exponent of the last mantissa bit of the largest values, raised
+/// so that every integer fits the codec's range (binary64: by 9 bits).
+fn fine_grid(bits: &[[u64; 3]], width: FloatWidth) -> i32 {
+    let top = bits
+        .iter()
+        .flatten()
+        .filter_map(|&b| normal_parts(b, width))
+        .map(|(_, _, x)| x)
+        .max()
+        .unwrap_or(0);
+    top + (width.precision() as i32 - COORD_BITS as i32).max(0)
+}
+
+/// A float's integer on the grid 2^e (SPEC.md 3.2): its value over 2^e truncated toward
+/// zero when its mantissa reaches the grid by fewer than its precision bits, else 0
+/// (also for zero and subnormals).
+pub(crate) fn grid_integer(bits: u64, width: FloatWidth, e: i32) -> i64 {
+    let Some((neg, m, x)) = normal_parts(bits, width) else {
+        return 0;
+    };
+    let p = width.precision() as i32;
+    let n = if x >= e {
+        // At most COORD_BITS bits when e is the grid of fine_grid.
+        m.checked_shl((x - e) as u32).filter(|&v| v <= MAX_COORD as u64)
+    } else if e - x < p {
+        Some(m >> (e - x))
+    } else {
+        Some(0)
+    };
+    let n = n.unwrap_or(0) as i64;
+    if neg {
+        -n
+    } else {
+        n
     }
 }
 
@@ -653,8 +879,14 @@ mod tests {
 
     #[test]
     fn exact_floats_are_exact() {
-        let v = vec![[1.5f32, -0.001, 1000.25], [0.0, 0.5, -7.0]];
-        let (ints, q) = integerize(&RawCoords::F32(v.clone()), None).unwrap();
+        // On a grid no finer than the largest value's last bit: one grid, no float bits.
+        let v = vec![[1.5f32, -0.25, 1000.25], [0.0, 0.5, -7.0]];
+        let (ints, q, floats) = integerize(&RawCoords::F32(v.clone()), None).unwrap();
+        assert!(floats.is_empty(), "one grid holds them");
+        // -0.001's last bit is finer than 1000.25's: the float bits keep it.
+        let w = vec![[1.5f32, -0.001, 1000.25]];
+        let (_, _, floats) = integerize(&RawCoords::F32(w.clone()), None).unwrap();
+        assert_eq!(floats, vec![w[0].map(|x| x.to_bits() as u64)]);
         for (p, n) in v.iter().zip(&ints) {
             for k in 0..3 {
                 assert_eq!(q.value_f32(n[k], k).to_bits(), p[k].to_bits());
@@ -663,18 +895,61 @@ mod tests {
     }
 
     #[test]
-    fn exact_mode_refuses_what_does_not_fit() {
-        let v = vec![[1.0e30f64, 1.0e-30, 0.0]];
-        let e = integerize(&RawCoords::F64(v), None).unwrap_err();
-        assert!(e.to_string().contains("--bits"), "{e}");
+    fn floats_beyond_one_grid_keep_their_bits() {
+        // Exponents 200 apart, and a negative zero: no one grid holds them in 44 bits.
+        let v = vec![[1.0e30f64, 1.0e-30, -0.0], [3.0, -2.5e-300, 7.0e-310]];
+        let (ints, q, floats) = integerize(&RawCoords::F64(v.clone()), None).unwrap();
+        let Quantization::Float { exponent: e, .. } = q else {
+            panic!("{q:?}")
+        };
+        assert_eq!(floats.len(), 2);
+        for (p, (n, f)) in v.iter().zip(ints.iter().zip(&floats)) {
+            for k in 0..3 {
+                assert_eq!(f[k], p[k].to_bits());
+                assert_eq!(n[k], grid_integer(f[k], FloatWidth::F64, e));
+                assert!(n[k].abs() <= MAX_COORD);
+            }
+        }
+        assert_eq!(ints[0][0] >> 43, 1, "the largest value's integer takes 44 bits");
         let nan = vec![[f32::NAN, 0.0, 0.0]];
         assert!(integerize(&RawCoords::F32(nan), None).is_err());
     }
 
     #[test]
+    fn decimal_text_beyond_the_grid_is_read_as_floats() {
+        let read = |lines: &[[&str; 3]]| {
+            let mut t = TextCoords::default();
+            for l in lines {
+                t.push(*l).unwrap();
+            }
+            integerize(&t.finish().0, None).unwrap()
+        };
+        // binary32 shortest texts (a Blender ASCII PLY's): on a decimal grid too fine
+        // for the codec's range, then with a number too long for any decimal grid.
+        for tail in [["1e-17", "0.1", "7"], ["1e-20", "0.1", "7"]] {
+            let (_, q, floats) = read(&[["0.020000003", "-2.3283064e-10", "-1"], tail]);
+            assert!(matches!(q, Quantization::Float { width: FloatWidth::F32, .. }));
+            let want = |l: [&str; 3]| l.map(|t| t.parse::<f32>().unwrap().to_bits() as u64);
+            assert_eq!(
+                floats,
+                [want(["0.020000003", "-2.3283064e-10", "-1"]), want(tail)]
+            );
+        }
+        // %.17g text: binary64.
+        let (_, q, floats) = read(&[["0.0055160000000000001", "1e-12", "12345.5"]]);
+        assert!(matches!(q, Quantization::Float { width: FloatWidth::F64, .. }));
+        assert_eq!(floats[0], [0.005516f64, 1e-12, 12345.5].map(f64::to_bits));
+        for (t, want) in [("0.5", true), ("5e-1", true), ("0.50", true), ("0.1", true)] {
+            assert_eq!(token_f32(t).is_some(), want, "{t}");
+        }
+        assert!(token_f32("0.10000000149011612").is_none());
+        assert!(token_f32("-0").is_some_and(|x| x.to_bits() == (-0.0f32).to_bits()));
+    }
+
+    #[test]
     fn grid_matches_drafts_formula() {
         let v = vec![[0.0f32, 0.0, 0.0], [2.0, 1.0, 0.5], [1.0, 0.3, 0.1]];
-        let (ints, q) = integerize(&RawCoords::F32(v), Some(8)).unwrap();
+        let (ints, q, _) = integerize(&RawCoords::F32(v), Some(8)).unwrap();
         assert_eq!(ints[1], [255, 128, 64]);
         assert_eq!(ints[2][0], 128);
         assert_eq!(q.value_f32(255, 0), 2.0);

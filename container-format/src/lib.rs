@@ -31,7 +31,7 @@ pub const MAGIC: [u8; 8] = [0x89, b'S', b'W', b'V', b'\r', b'\n', 0x1a, b'\n'];
 /// The format version this crate writes and the only one it reads: before the first
 /// release the format has one version at a time (SPEC.md 1), and a container of any other
 /// version is refused with an error that names it.
-pub const FORMAT_VERSION: u16 = 26;
+pub const FORMAT_VERSION: u16 = 27;
 
 /// Bytes before the first section: magic, version, reserved.
 pub const PREAMBLE_LEN: usize = 12;
@@ -134,16 +134,22 @@ impl SectionKind {
     pub const LEVEL: SectionKind = SectionKind(*b"LEVL");
     /// The permutation back to the input's vertex order.
     pub const ORDER: SectionKind = SectionKind(*b"ORDR");
+    /// Binary float positions below their grid.
+    pub const FLOAT_BITS: SectionKind = SectionKind(*b"FBIT");
+    /// The input file's own bytes around the coded values.
+    pub const TEMPLATE: SectionKind = SectionKind(*b"TMPL");
     /// Marks the end of a complete container.
     pub const END: SectionKind = SectionKind(*b"SEND");
 
     /// Every kind, with its one-byte code in the stream (SPEC.md 2.2).
-    const CODES: [(SectionKind, u8); 6] = [
+    const CODES: [(SectionKind, u8); 8] = [
         (SectionKind::HEADER, b'H'),
         (SectionKind::VALUE_MAP, b'V'),
         (SectionKind::BASE, b'B'),
         (SectionKind::LEVEL, b'L'),
+        (SectionKind::FLOAT_BITS, b'F'),
         (SectionKind::ORDER, b'O'),
+        (SectionKind::TEMPLATE, b'T'),
         (SectionKind::END, b'E'),
     ];
 

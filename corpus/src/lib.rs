@@ -267,6 +267,32 @@ impl PolyMesh {
         PolyMesh { positions, faces }
     }
 
+    /// Binary little-endian PLY with float32 positions, the first coordinates set to
+    /// `special` (values the codec must keep bit for bit).
+    pub fn to_ply_f32(&self, special: &[f32]) -> Vec<u8> {
+        let mut out = format!(
+            "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\n\
+             property float y\nproperty float z\nelement face {}\n\
+             property list uchar int vertex_indices\nend_header\n",
+            self.positions.len(),
+            self.faces.len()
+        )
+        .into_bytes();
+        for (i, p) in self.positions.iter().enumerate() {
+            for (k, &x) in p.iter().enumerate() {
+                let x = special.get(3 * i + k).copied().unwrap_or(x as f32);
+                out.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        for f in &self.faces {
+            out.push(f.len() as u8);
+            for &v in f {
+                out.extend_from_slice(&(v as i32).to_le_bytes());
+            }
+        }
+        out
+    }
+
     /// Writes OBJ text with `decimals` decimals.
     pub fn to_obj(&self, decimals: usize) -> String {
         let mut s = String::with_capacity(self.positions.len() * 40 + self.faces.len() * 30);
@@ -462,7 +488,7 @@ pub fn unstructured(n: u32, seed: u64) -> PolyMesh {
 }
 
 /// The small meshes committed in `corpus/`, by file name.
-pub fn small_corpus() -> Vec<(&'static str, String)> {
+pub fn small_corpus() -> Vec<(&'static str, Vec<u8>)> {
     let mut rng = Rng::new(7);
     let mut cube4 = cube().refined(4);
     cube4.displace(0.05, 0.002, &mut rng);
@@ -485,7 +511,11 @@ pub fn small_corpus() -> Vec<(&'static str, String)> {
     control.displace(0.2, 0.05, &mut rng);
     let mut open_control = open_grid(4, 3);
     open_control.displace(0.2, 0.05, &mut rng);
-    vec![
+    // Binary floats beyond one grid: a refined mixed mesh in float32, with a coordinate
+    // of -0.0, tiny and subnormal ones (the FBIT section's case, SPEC.md 3.2).
+    let mut floats = mixed_polygons().refined(2);
+    floats.displace(0.03, 0.001, &mut rng);
+    let text = vec![
         ("cube_cc4.obj", cube4.to_obj(6)),
         ("cube_cc4.shuffled.obj", shuffled.to_obj(6)),
         ("mixed_cc2.obj", mixed2.to_obj(6)),
@@ -497,7 +527,14 @@ pub fn small_corpus() -> Vec<(&'static str, String)> {
         ("sphere_polar3.obj", polar.to_obj(6)),
         ("subdivided_cc3.obj", control.refined(3).to_obj(6)),
         ("subdivided_open_cc3.obj", open_control.refined(3).to_obj(6)),
-    ]
+    ];
+    let mut out: Vec<(&'static str, Vec<u8>)> =
+        text.into_iter().map(|(n, t)| (n, t.into_bytes())).collect();
+    out.push((
+        "floats_cc2.ply",
+        floats.to_ply_f32(&[-0.0, 2.3283064e-10, 1e-40]),
+    ));
+    out
 }
 
 /// A large polar mesh for benchmarks: a displaced latitude-longitude sphere (two poles

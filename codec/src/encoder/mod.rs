@@ -9,11 +9,12 @@ use std::collections::HashMap;
 
 use crate::error::{Error, Result};
 use crate::info::{section_info, SectionInfo};
+use crate::io::{template, Format};
 use crate::mesh::Mesh;
 use crate::quant::Quantization;
 use crate::sections::head::{Header, Source, Transform};
 use crate::sections::vmap::ValueMap;
-use crate::sections::{base, levl, ordr};
+use crate::sections::{base, fbit, levl, ordr, tmpl};
 use crate::topology::{self, Canonical, Family, Topo};
 use crate::transform::level::{Direction, LevelTransform, Scheme};
 use crate::transform::polar::DiscTransform;
@@ -140,6 +141,8 @@ pub(crate) fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -
         source: opts.source,
         has_order: opts.keep_order,
         has_value_map: false,
+        has_float_bits: !mesh.floats.is_empty(),
+        has_template: false,
         poles: Vec::new(),
         disc: DiscTransform::None,
     }
@@ -183,25 +186,59 @@ pub(crate) fn canonical_positions(mesh: &Mesh, canon: &Canonical) -> [Vec<i64>; 
 /// Catmull-Clark, sqrt(2) or polar hierarchy when one is found, else flat; with the
 /// value map of `opts.value_map` (SPEC.md 3.1) when it makes the container smaller.
 pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Encoded> {
+    encode_inner(mesh, q, opts, None)
+}
+
+/// Encodes a mesh read from `file`, a file of `format` whose mesh (in the file's vertex
+/// and face order) is `mesh` on `q`, with the file's own bytes around the coded values
+/// (SPEC.md 11): decoding then gives the file back byte for byte
+/// ([`crate::Decoded::file`]). Needs `opts.keep_order`.
+pub fn encode_file(
+    mesh: &Mesh,
+    q: &Quantization,
+    opts: &EncodeOptions,
+    file: &[u8],
+    format: Format,
+) -> Result<Encoded> {
+    if !opts.keep_order {
+        return Err(Error::InvalidArgument(
+            "a file's own bytes are kept only with its order (keep_order)".into(),
+        ));
+    }
     mesh.validate()?;
+    let t =
+        template::make(file, format, mesh, q).unwrap_or_else(|| template::verbatim(file, mesh, q));
+    encode_inner(mesh, q, opts, Some(&tmpl::encode(&t)?))
+}
+
+/// [`encode`], with a TMPL payload when given.
+fn encode_inner(
+    mesh: &Mesh,
+    q: &Quantization,
+    opts: &EncodeOptions,
+    tmpl: Option<&[u8]>,
+) -> Result<Encoded> {
+    mesh.validate()?;
+    check_floats(mesh, q)?;
     let map = match opts.value_map {
         Some(false) => None,
         Some(true) => ValueMap::every_axis(&mesh.positions),
         None => ValueMap::candidate(&mesh.positions),
     };
     let Some(map) = map else {
-        return encode_with(mesh, q, opts, None);
+        return encode_with(mesh, q, opts, None, tmpl);
     };
     let ranked = Mesh {
         positions: map.ranks(&mesh.positions),
         face_starts: mesh.face_starts.clone(),
         faces: mesh.faces.clone(),
+        floats: mesh.floats.clone(),
     };
-    let mapped = encode_with(&ranked, q, opts, Some(&map))?;
+    let mapped = encode_with(&ranked, q, opts, Some(&map), tmpl)?;
     if opts.value_map == Some(true) {
         return Ok(mapped);
     }
-    let plain = encode_with(mesh, q, opts, None)?;
+    let plain = encode_with(mesh, q, opts, None, tmpl)?;
     Ok(if mapped.bytes.len() < plain.bytes.len() {
         mapped
     } else {
@@ -215,9 +252,11 @@ fn encode_with(
     q: &Quantization,
     opts: &EncodeOptions,
     vmap: Option<&ValueMap>,
+    tmpl: Option<&[u8]>,
 ) -> Result<Encoded> {
     let mut flat_h = flat_header(mesh, q, opts);
     flat_h.has_value_map = vmap.is_some();
+    flat_h.has_template = tmpl.is_some();
     let best = if opts.max_levels > 0 {
         best_hierarchy(mesh, opts, &flat_h)?
     } else {
@@ -227,7 +266,8 @@ fn encode_with(
         Some((p, canon)) => (p, canon.order),
         None => best_flat(mesh, opts, &flat_h),
     };
-    let (bytes, sections) = write_container(&payloads, vmap)?;
+    let fbit = float_bits(mesh, q, &order)?;
+    let (bytes, sections) = write_container(&payloads, vmap, fbit.as_deref(), tmpl)?;
     let header = payloads.header;
     Ok(Encoded {
         bytes,
@@ -235,6 +275,39 @@ fn encode_with(
         header,
         sections,
     })
+}
+
+/// A mesh's float values must be those its integers stand for on the quantisation's
+/// grid (SPEC.md 3.2), and one FBIT coding must give them back.
+fn check_floats(mesh: &Mesh, q: &Quantization) -> Result<()> {
+    if mesh.floats.is_empty() {
+        return Ok(());
+    }
+    let Quantization::Float { width, exponent } = *q else {
+        return Err(Error::InvalidArgument(
+            "float values need binary float quantisation".into(),
+        ));
+    };
+    let bits = fbit::encode(mesh.floats.iter().copied(), width, exponent);
+    match fbit::decode(&bits, &mesh.positions, width, exponent) {
+        Ok(back) if back == mesh.floats => Ok(()),
+        _ => Err(Error::InvalidArgument(
+            "the float values are not the integers' values on their grid".into(),
+        )),
+    }
+}
+
+/// The FBIT payload of a mesh with binary floats below their grid (SPEC.md 3.2), the
+/// values in the decoder's order (`order[decoded] = input`); `None` for other meshes.
+fn float_bits(mesh: &Mesh, q: &Quantization, order: &[u32]) -> Result<Option<Vec<u8>>> {
+    let Quantization::Float { width, exponent } = *q else {
+        return Ok(None);
+    };
+    if mesh.floats.is_empty() {
+        return Ok(None);
+    }
+    let decoded = order.iter().map(|&i| mesh.floats[i as usize]);
+    Ok(Some(fbit::encode(decoded, width, exponent)))
 }
 
 /// The hierarchy coding that codes `mesh` smallest, with the canonical hierarchy it was
@@ -361,6 +434,8 @@ fn best_flat(mesh: &Mesh, opts: &EncodeOptions, flat_h: &Header) -> (Payloads, V
 fn write_container(
     payloads: &Payloads,
     vmap: Option<&ValueMap>,
+    fbit: Option<&[u8]>,
+    tmpl: Option<&[u8]>,
 ) -> Result<(Vec<u8>, Vec<SectionInfo>)> {
     let header = &payloads.header;
     let transform = header.transform;
@@ -386,8 +461,14 @@ fn write_container(
     for l in &payloads.levels {
         put(&mut w, SectionKind::LEVEL, l)?;
     }
+    if let Some(f) = fbit {
+        put(&mut w, SectionKind::FLOAT_BITS, f)?;
+    }
     if let Some(o) = &payloads.order {
         put(&mut w, SectionKind::ORDER, o)?;
+    }
+    if let Some(t) = tmpl {
+        put(&mut w, SectionKind::TEMPLATE, t)?;
     }
     let bytes = w.finish();
     let end = subwave_container::section_overhead(0);
@@ -418,6 +499,7 @@ mod tests {
                 .collect(),
             face_starts: t.starts.clone(),
             faces: t.idx.clone(),
+            floats: Vec::new(),
         };
         let q = Quantization::Decimal { decimals: 0 };
         let header = flat_header(&mesh, &q, &EncodeOptions::default());

@@ -8,13 +8,14 @@
 mod obj;
 mod off;
 mod ply;
+pub(crate) mod template;
 
 use std::collections::BTreeSet;
 use std::io::Write;
 
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
-use crate::quant::{Quantization, RawCoords};
+use crate::quant::{FloatWidth, Quantization, RawCoords};
 
 /// Mesh file formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -148,17 +149,69 @@ pub fn write_mesh<W: Write>(out: W, mesh: &Mesh, q: &Quantization, format: Forma
     Ok(())
 }
 
-/// Writes a mesh to a `String` buffer line by line; shared by the text writers.
-pub(crate) fn coords_line(prefix: &str, p: &[i64; 3], q: &Quantization, line: &mut String) {
+/// Writes vertex `v`'s line (`prefix x y z`) to a `String` buffer; shared by the text
+/// writers.
+pub(crate) fn coords_line(
+    prefix: &str,
+    mesh: &Mesh,
+    v: usize,
+    q: &Quantization,
+    line: &mut String,
+) {
     line.clear();
     line.push_str(prefix);
-    for (k, &c) in p.iter().enumerate() {
+    for k in 0..3 {
         if k > 0 || !prefix.is_empty() {
             line.push(' ');
         }
-        q.write_text(c, k, line);
+        format_coord(mesh, v, k, q, line);
     }
     line.push('\n');
+}
+
+/// Appends vertex `v`'s coordinate `k` as text: the shortest text of its float when the
+/// mesh keeps one, else as its quantisation writes it ([`Quantization::write_text`]).
+pub(crate) fn format_coord(mesh: &Mesh, v: usize, k: usize, q: &Quantization, out: &mut String) {
+    match (mesh.floats.get(v), q) {
+        (Some(f), Quantization::Float { width, .. }) => {
+            use std::fmt::Write as _;
+            let _ = match width {
+                FloatWidth::F32 => write!(out, "{}", f32::from_bits(f[k] as u32)),
+                FloatWidth::F64 => write!(out, "{}", f64::from_bits(f[k])),
+            };
+        }
+        _ => q.write_text(mesh.positions[v][k], k, out),
+    }
+}
+
+/// Vertex `v`'s coordinate `k` as `f64` (its float when the mesh keeps one).
+pub(crate) fn value_f64(mesh: &Mesh, v: usize, k: usize, q: &Quantization) -> f64 {
+    match (mesh.floats.get(v), q) {
+        (
+            Some(f),
+            Quantization::Float {
+                width: FloatWidth::F32,
+                ..
+            },
+        ) => f32::from_bits(f[k] as u32) as f64,
+        (Some(f), _) => f64::from_bits(f[k]),
+        (None, _) => q.value_f64(mesh.positions[v][k], k),
+    }
+}
+
+/// Vertex `v`'s coordinate `k` as `f32` (exact for binary32 values and grids).
+pub(crate) fn value_f32(mesh: &Mesh, v: usize, k: usize, q: &Quantization) -> f32 {
+    match (mesh.floats.get(v), q) {
+        (
+            Some(f),
+            Quantization::Float {
+                width: FloatWidth::F32,
+                ..
+            },
+        ) => f32::from_bits(f[k] as u32),
+        (Some(_), _) => value_f64(mesh, v, k, q) as f32,
+        (None, _) => q.value_f32(mesh.positions[v][k], k),
+    }
 }
 
 /// Writes the vertex lines (`x y z`) and face lines (`k i0 i1 ...`, 0-based) that OFF
@@ -169,8 +222,8 @@ pub(crate) fn write_counted_text<W: Write>(
     q: &Quantization,
 ) -> Result<()> {
     let mut line = String::with_capacity(128);
-    for p in &mesh.positions {
-        coords_line("", p, q, &mut line);
+    for v in 0..mesh.vertex_count() {
+        coords_line("", mesh, v, q, &mut line);
         out.write_all(line.as_bytes())?;
     }
     for face in mesh.iter_faces() {

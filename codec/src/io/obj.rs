@@ -3,6 +3,7 @@
 use std::collections::BTreeSet;
 use std::io::Write;
 
+use super::template::Builder;
 use super::{coords_line, syntax, Format, RawMesh};
 use crate::error::Result;
 use crate::mesh::Mesh;
@@ -175,8 +176,8 @@ fn line_of(bytes: &[u8], offset: usize) -> usize {
 
 pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Result<()> {
     let mut line = String::with_capacity(128);
-    for p in &mesh.positions {
-        coords_line("v", p, q, &mut line);
+    for v in 0..mesh.vertex_count() {
+        coords_line("v", mesh, v, q, &mut line);
         out.write_all(line.as_bytes())?;
     }
     for face in mesh.iter_faces() {
@@ -190,4 +191,74 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
         out.write_all(line.as_bytes())?;
     }
     Ok(())
+}
+
+/// Spans of the whitespace-separated tokens of `code` (ASCII whitespace, as the reader
+/// splits them).
+pub(super) fn tokens(code: &[u8]) -> impl Iterator<Item = (usize, usize)> + '_ {
+    let mut i = 0;
+    std::iter::from_fn(move || {
+        while i < code.len() && code[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        let start = i;
+        while i < code.len() && !code[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        (i > start).then_some((start, i))
+    })
+}
+
+/// Walks an OBJ file for its template (SPEC.md 11): the three coordinates of every `v`
+/// line and the vertex number of every `f` corner are the coded values; `None` for a
+/// file with continued lines (the reader joins them).
+pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
+    let mut rest = bytes;
+    while !rest.is_empty() {
+        let end = rest
+            .iter()
+            .position(|&c| c == b'\n')
+            .map_or(rest.len(), |i| i + 1);
+        let (line, tail) = rest.split_at(end);
+        rest = tail;
+        let mut content = line.strip_suffix(b"\n").unwrap_or(line);
+        content = content.strip_suffix(b"\r").unwrap_or(content);
+        if content.trim_ascii_end().ends_with(b"\\") {
+            return None;
+        }
+        let code = &content[..content
+            .iter()
+            .position(|&c| c == b'#')
+            .unwrap_or(content.len())];
+        let mut toks = tokens(code);
+        let Some((s0, e0)) = toks.next() else {
+            b.literal(line);
+            continue;
+        };
+        let kw = &code[s0..e0];
+        let mut at = 0;
+        match kw {
+            b"v" => {
+                for (s, e) in toks.take(3) {
+                    b.literal(&line[at..s]);
+                    b.coord_text(&line[s..e]);
+                    at = e;
+                }
+            }
+            b"f" | b"fo" => {
+                for (s, e) in toks {
+                    b.literal(&line[at..s]);
+                    let slash = line[s..e]
+                        .iter()
+                        .position(|&c| c == b'/')
+                        .map_or(e, |i| s + i);
+                    b.index_text(&line[s..slash], 1);
+                    at = slash;
+                }
+            }
+            _ => {}
+        }
+        b.literal(&line[at..]);
+    }
+    Some(())
 }

@@ -3,6 +3,7 @@
 use std::collections::BTreeSet;
 use std::io::Write;
 
+use super::template::Builder;
 use super::{syntax, write_counted_text, Format, RawMesh};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
@@ -165,4 +166,58 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
     writeln!(out, "OFF")?;
     writeln!(out, "{} {} 0", mesh.vertex_count(), mesh.face_count())?;
     write_counted_text(out, mesh, q)
+}
+
+/// Walks an OFF file for its template (SPEC.md 11): the first three numbers of every
+/// vertex line and the indices of every face line are the coded values.
+pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
+    let mut rest = bytes;
+    // Statements seen: the keyword, the counts, then vertices and faces.
+    let (mut seen, mut counts_at, mut nv) = (0usize, None, 0usize);
+    while !rest.is_empty() {
+        let end = rest
+            .iter()
+            .position(|&c| c == b'\n')
+            .map_or(rest.len(), |i| i + 1);
+        let (line, tail) = rest.split_at(end);
+        rest = tail;
+        let code = &line[..line.iter().position(|&c| c == b'#').unwrap_or(line.len())];
+        let toks: Vec<(usize, usize)> = super::obj::tokens(code).collect();
+        if toks.is_empty() {
+            b.literal(line);
+            continue;
+        }
+        let stmt = seen;
+        seen += 1;
+        if stmt == 0 {
+            // The keyword, with the counts on the same line or the next.
+            counts_at = Some(if toks.len() > 1 { 0 } else { 1 });
+        }
+        let counts_stmt = counts_at?;
+        if stmt == counts_stmt {
+            let first = if stmt == 0 { 1 } else { 0 };
+            let (s, e) = *toks.get(first)?;
+            nv = std::str::from_utf8(&line[s..e]).ok()?.parse().ok()?;
+        }
+        let mut at = 0;
+        if stmt > counts_stmt && stmt <= counts_stmt + nv {
+            for &(s, e) in toks.iter().take(3) {
+                b.literal(&line[at..s]);
+                b.coord_text(&line[s..e]);
+                at = e;
+            }
+        } else if stmt > counts_stmt + nv {
+            let k: usize = std::str::from_utf8(&line[toks[0].0..toks[0].1])
+                .ok()?
+                .parse()
+                .ok()?;
+            for &(s, e) in toks.iter().skip(1).take(k) {
+                b.literal(&line[at..s]);
+                b.index_text(&line[s..e], 0);
+                at = e;
+            }
+        }
+        b.literal(&line[at..]);
+    }
+    Some(())
 }

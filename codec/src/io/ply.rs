@@ -4,7 +4,8 @@
 use std::collections::BTreeSet;
 use std::io::Write;
 
-use super::{write_counted_text, Format, RawMesh};
+use super::template::Builder;
+use super::{value_f32, value_f64, write_counted_text, Format, RawMesh};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::quant::{Decimal, Quantization, RawCoords, TextCoords};
@@ -506,12 +507,12 @@ pub(crate) fn write<W: Write>(
     )?;
     if binary {
         let mut buf = Vec::with_capacity(1 << 16);
-        for p in &mesh.positions {
-            for (k, &c) in p.iter().enumerate() {
+        for v in 0..mesh.vertex_count() {
+            for k in 0..3 {
                 if f32_out {
-                    buf.extend_from_slice(&q.value_f32(c, k).to_le_bytes());
+                    buf.extend_from_slice(&value_f32(mesh, v, k, q).to_le_bytes());
                 } else {
-                    buf.extend_from_slice(&q.value_f64(c, k).to_le_bytes());
+                    buf.extend_from_slice(&value_f64(mesh, v, k, q).to_le_bytes());
                 }
             }
             if buf.len() > 60_000 {
@@ -538,4 +539,115 @@ pub(crate) fn write<W: Write>(
         write_counted_text(out, mesh, q)?;
     }
     Ok(())
+}
+
+/// Walks a PLY file for its template (SPEC.md 11): the header and every property but the
+/// vertices' x, y, z (in that order) and the faces' first vertex index list stay as they
+/// are. `None` where the walk cannot follow the file (coordinates out of order, integer
+/// coordinates in a binary file, index lists of other than 32-bit items).
+pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
+    let (mode, elements, body_start) = parse_header(bytes).ok()?;
+    b.literal(&bytes[..body_start]);
+    let mut pos = body_start;
+    let big = mode == Mode::Be;
+    // An ASCII token: the whitespace before it literal, its span returned.
+    let token = |pos: &mut usize, b: &mut Builder<'_>| -> Option<(usize, usize)> {
+        let s = *pos
+            + bytes[*pos..]
+                .iter()
+                .position(|c| !c.is_ascii_whitespace())?;
+        let e = s + bytes[s..]
+            .iter()
+            .position(|c| c.is_ascii_whitespace())
+            .unwrap_or(bytes.len() - s);
+        b.literal(&bytes[*pos..s]);
+        *pos = e;
+        Some((s, e))
+    };
+    for el in &elements {
+        let is_vertex = el.name == "vertex";
+        let is_face = el.name == "face";
+        let axes: Vec<Option<usize>> = el
+            .props
+            .iter()
+            .map(|p| match p {
+                Prop::Scalar(n, _) if is_vertex => ["x", "y", "z"].iter().position(|a| a == n),
+                _ => None,
+            })
+            .collect();
+        if axes
+            .iter()
+            .flatten()
+            .copied()
+            .ne(0..3usize.min(axes.iter().flatten().count()))
+        {
+            return None;
+        }
+        for _ in 0..el.count {
+            let mut took_list = false;
+            for (p, axis) in el.props.iter().zip(&axes) {
+                match (p, mode) {
+                    (Prop::Scalar(..), Mode::Ascii) => {
+                        let (s, e) = token(&mut pos, b)?;
+                        match axis {
+                            Some(_) => b.coord_text(&bytes[s..e]),
+                            None => b.literal(&bytes[s..e]),
+                        }
+                    }
+                    (Prop::Scalar(_, ty), _) => {
+                        let raw = bytes.get(pos..pos + ty.size())?;
+                        pos += ty.size();
+                        match axis {
+                            Some(_) if ty.is_float() => b.coord_binary(raw, big),
+                            Some(_) => return None,
+                            None => b.literal(raw),
+                        }
+                    }
+                    (Prop::List(name, cty, ity), _) => {
+                        let want = is_face
+                            && !took_list
+                            && (name == "vertex_indices" || name == "vertex_index");
+                        took_list |= want;
+                        let n = if mode == Mode::Ascii {
+                            let (s, e) = token(&mut pos, b)?;
+                            b.literal(&bytes[s..e]);
+                            std::str::from_utf8(&bytes[s..e])
+                                .ok()?
+                                .parse::<usize>()
+                                .ok()?
+                        } else {
+                            let raw = bytes.get(pos..pos + cty.size())?;
+                            pos += cty.size();
+                            b.literal(raw);
+                            let mut body = Body {
+                                data: raw,
+                                pos: 0,
+                                mode,
+                            };
+                            usize::try_from(body.int(*cty, "list count").ok()?).ok()?
+                        };
+                        for _ in 0..n {
+                            if mode == Mode::Ascii {
+                                let (s, e) = token(&mut pos, b)?;
+                                match want {
+                                    true => b.index_text(&bytes[s..e], 0),
+                                    false => b.literal(&bytes[s..e]),
+                                }
+                            } else {
+                                let raw = bytes.get(pos..pos + ity.size())?;
+                                pos += ity.size();
+                                match (want, ity.size()) {
+                                    (true, 4) => b.index_binary(raw, big),
+                                    (true, _) => return None,
+                                    (false, _) => b.literal(raw),
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    b.literal(&bytes[pos..]);
+    Some(())
 }

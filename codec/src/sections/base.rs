@@ -44,6 +44,7 @@ pub fn permute(mesh: &Mesh, order: &[u32]) -> Mesh {
         positions: order.iter().map(|&o| mesh.positions[o as usize]).collect(),
         face_starts: mesh.face_starts.clone(),
         faces: mesh.faces.iter().map(|&v| inv[v as usize]).collect(),
+        floats: Vec::new(),
     }
 }
 

@@ -120,6 +120,12 @@ pub struct Header {
     pub has_order: bool,
     /// A `VMAP` section follows the header (SPEC.md 3.1).
     pub has_value_map: bool,
+    /// An `FBIT` section follows the levels: binary float values below their grid
+    /// (SPEC.md 3.2).
+    pub has_float_bits: bool,
+    /// A `TMPL` section follows the input order: the input file's own bytes around the
+    /// coded values (SPEC.md 11).
+    pub has_template: bool,
     /// Polar hierarchies (family 3): the base mesh's poles, increasing (SPEC.md 8.6);
     /// empty for every other family.
     pub poles: Vec<u32>,
@@ -130,6 +136,8 @@ pub struct Header {
 
 const FLAG_ORDER: u64 = 1;
 const FLAG_VALUE_MAP: u64 = 2;
+const FLAG_FLOAT_BITS: u64 = 4;
+const FLAG_TEMPLATE: u64 = 8;
 /// The transform code of the subdivision fit.
 const FIT_CODE: u8 = 9;
 
@@ -176,13 +184,12 @@ impl Header {
             }
         }
         w.u8(self.source.code());
+        let flag = |on: bool, bit: u64| if on { bit } else { 0 };
         w.varint(
-            if self.has_order { FLAG_ORDER } else { 0 }
-                | if self.has_value_map {
-                    FLAG_VALUE_MAP
-                } else {
-                    0
-                },
+            flag(self.has_order, FLAG_ORDER)
+                | flag(self.has_value_map, FLAG_VALUE_MAP)
+                | flag(self.has_float_bits, FLAG_FLOAT_BITS)
+                | flag(self.has_template, FLAG_TEMPLATE),
         );
         if self.family == Family::Polar {
             w.varint(self.poles.len() as u64);
@@ -244,7 +251,7 @@ impl Header {
         let source = Source::from_code(r.u8("source format")?);
         let at = r.offset();
         let flags = r.varint("flags")?;
-        let known = FLAG_ORDER | FLAG_VALUE_MAP;
+        let known = FLAG_ORDER | FLAG_VALUE_MAP | FLAG_FLOAT_BITS | FLAG_TEMPLATE;
         if flags & !known != 0 {
             return Err(Error::Unsupported(format!(
                 "header flags {flags:#x} (byte {at})"
@@ -271,6 +278,8 @@ impl Header {
             source,
             has_order: flags & FLAG_ORDER != 0,
             has_value_map: flags & FLAG_VALUE_MAP != 0,
+            has_float_bits: flags & FLAG_FLOAT_BITS != 0,
+            has_template: flags & FLAG_TEMPLATE != 0,
             poles,
             disc,
         };
@@ -279,12 +288,14 @@ impl Header {
     }
 
     /// An upper bound on what decoding this container allocates (SPEC.md 2.5): 128 bytes
-    /// per vertex, 24 per corner, 8 per face. (Measured peaks: about 110 per vertex for
+    /// per vertex (152 with an FBIT section), 24 per corner, 8 per face. (Measured
+    /// peaks: about 110 per vertex for
     /// the levels' values, topology, edge tables and output; the flat path's edge tables
     /// about 20 per corner.)
     pub fn memory_estimate(&self) -> u64 {
+        let per_vertex = if self.has_float_bits { 152 } else { 128 };
         self.vertices
-            .saturating_mul(128)
+            .saturating_mul(per_vertex)
             .saturating_add(self.corners.saturating_mul(24))
             .saturating_add(self.faces.saturating_mul(8))
     }
@@ -299,6 +310,12 @@ impl Header {
                 offset,
                 "base counts differ from mesh counts with no levels",
             ));
+        }
+        if self.has_template && !self.has_order {
+            return Err(malformed(offset, "a file template without the input order"));
+        }
+        if self.has_float_bits && !matches!(self.quantization, Quantization::Float { .. }) {
+            return Err(malformed(offset, "float bits without binary float quantisation"));
         }
         if self.levels == 0 && (self.family != Family::None || self.transform != Transform::None) {
             return Err(malformed(offset, "a family or transform without levels"));

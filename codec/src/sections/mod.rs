@@ -2,7 +2,9 @@
 //! them: each holds its payload's wire format, both ways.
 
 pub mod base;
+pub mod fbit;
 pub mod head;
 pub mod levl;
 pub mod ordr;
+pub(crate) mod tmpl;
 pub mod vmap;

@@ -1,0 +1,235 @@
+//! A mesh file's own bytes around the values the codec codes (SPEC.md 11): the file
+//! with each coordinate and each face corner's vertex index replaced by a marker where
+//! the decoded mesh writes it the same way, so that the decoder gives the file back byte
+//! for byte. Everything else (attributes, comments, number styles, line endings, a PLY
+//! header) is kept as it is; the TMPL section compresses it.
+
+use super::{format_coord, value_f32, value_f64, Format};
+use crate::error::{Error, Result};
+use crate::mesh::Mesh;
+use crate::quant::Quantization;
+
+/// The next coordinate, as text (how [`format_coord`] writes it).
+const COORD_TEXT: u8 = 1;
+/// The next corner's vertex index, as text, counted from 1.
+const INDEX_TEXT_1: u8 = 2;
+/// The next byte is literal.
+const ESCAPE: u8 = 3;
+/// The next coordinate is not written here (its text stands literally beside).
+const SKIP_COORD: u8 = 4;
+/// The next corner index is not written here.
+const SKIP_INDEX: u8 = 5;
+/// The next corner's vertex index, as text, counted from 0.
+const INDEX_TEXT_0: u8 = 6;
+/// The next coordinate as binary32, little-endian.
+const COORD_F32_LE: u8 = 7;
+/// The next coordinate as binary64, little-endian.
+const COORD_F64_LE: u8 = 8;
+/// The next corner index as a 32-bit integer, little-endian.
+const INDEX_32_LE: u8 = 9;
+/// The next coordinate as binary32, big-endian.
+const COORD_F32_BE: u8 = 10;
+/// The next coordinate as binary64, big-endian.
+const COORD_F64_BE: u8 = 11;
+/// The next corner index as a 32-bit integer, big-endian.
+const INDEX_32_BE: u8 = 12;
+/// Bytes at most this are markers; a literal one is escaped.
+const LAST_MARKER: u8 = 12;
+
+/// Builds a template while a format's walker reads the file.
+pub(super) struct Builder<'m> {
+    out: Vec<u8>,
+    mesh: &'m Mesh,
+    q: &'m Quantization,
+    /// Coordinates and corners met so far.
+    coord: usize,
+    corner: usize,
+    text: String,
+}
+
+impl<'m> Builder<'m> {
+    fn new(mesh: &'m Mesh, q: &'m Quantization, capacity: usize) -> Self {
+        Builder {
+            out: Vec::with_capacity(capacity),
+            mesh,
+            q,
+            coord: 0,
+            corner: 0,
+            text: String::new(),
+        }
+    }
+
+    /// Bytes kept as they are.
+    pub(super) fn literal(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            if (1..=LAST_MARKER).contains(&b) {
+                self.out.push(ESCAPE);
+            }
+            self.out.push(b);
+        }
+    }
+
+    /// The next coordinate, written in the file as `token`.
+    pub(super) fn coord_text(&mut self, token: &[u8]) {
+        let (v, k) = (self.coord / 3, self.coord % 3);
+        self.coord += 1;
+        self.text.clear();
+        if v < self.mesh.vertex_count() {
+            format_coord(self.mesh, v, k, self.q, &mut self.text);
+        }
+        if v < self.mesh.vertex_count() && self.text.as_bytes() == token {
+            self.out.push(COORD_TEXT);
+        } else {
+            self.out.push(SKIP_COORD);
+            self.literal(token);
+        }
+    }
+
+    /// The next corner's vertex index, written as `token`, counted from `base`.
+    pub(super) fn index_text(&mut self, token: &[u8], base: u32) {
+        let c = self.corner;
+        self.corner += 1;
+        let want = self
+            .mesh
+            .faces
+            .get(c)
+            .map(|&i| (i as u64 + base as u64).to_string());
+        if want.as_deref().map(str::as_bytes) == Some(token) {
+            self.out.push(if base == 1 {
+                INDEX_TEXT_1
+            } else {
+                INDEX_TEXT_0
+            });
+        } else {
+            self.out.push(SKIP_INDEX);
+            self.literal(token);
+        }
+    }
+
+    /// The next coordinate, stored as the binary float `bytes` (4 or 8, `big` endian).
+    pub(super) fn coord_binary(&mut self, bytes: &[u8], big: bool) {
+        let (v, k) = (self.coord / 3, self.coord % 3);
+        self.coord += 1;
+        let want: Option<Vec<u8>> =
+            (v < self.mesh.vertex_count()).then(|| match (bytes.len(), big) {
+                (4, false) => value_f32(self.mesh, v, k, self.q).to_le_bytes().to_vec(),
+                (4, true) => value_f32(self.mesh, v, k, self.q).to_be_bytes().to_vec(),
+                (_, false) => value_f64(self.mesh, v, k, self.q).to_le_bytes().to_vec(),
+                (_, true) => value_f64(self.mesh, v, k, self.q).to_be_bytes().to_vec(),
+            });
+        if want.as_deref() == Some(bytes) {
+            self.out.push(match (bytes.len(), big) {
+                (4, false) => COORD_F32_LE,
+                (4, true) => COORD_F32_BE,
+                (_, false) => COORD_F64_LE,
+                (_, true) => COORD_F64_BE,
+            });
+        } else {
+            self.out.push(SKIP_COORD);
+            self.literal(bytes);
+        }
+    }
+
+    /// The next corner index, stored as the 32-bit integer `bytes` (`big` endian).
+    pub(super) fn index_binary(&mut self, bytes: &[u8], big: bool) {
+        let c = self.corner;
+        self.corner += 1;
+        let want = self.mesh.faces.get(c).map(|&i| match big {
+            false => i.to_le_bytes(),
+            true => i.to_be_bytes(),
+        });
+        if bytes.len() == 4 && want.as_ref().map(|w| &w[..]) == Some(bytes) {
+            self.out.push(if big { INDEX_32_BE } else { INDEX_32_LE });
+        } else {
+            self.out.push(SKIP_INDEX);
+            self.literal(bytes);
+        }
+    }
+}
+
+/// The template of `bytes`, a file of `format` whose mesh (in the file's vertex and
+/// face order) is `mesh` on `q`, checked to expand back to `bytes`; `None` where the
+/// file strays from what the walkers know (then the caller keeps the file whole).
+pub(crate) fn make(bytes: &[u8], format: Format, mesh: &Mesh, q: &Quantization) -> Option<Vec<u8>> {
+    let mut b = Builder::new(mesh, q, bytes.len() / 2);
+    match format {
+        Format::Obj => super::obj::template(bytes, &mut b)?,
+        Format::PlyAscii | Format::PlyBinary | Format::PlyBinaryBigEndian => {
+            super::ply::template(bytes, &mut b)?
+        }
+        Format::Off => super::off::template(bytes, &mut b)?,
+    }
+    let t = b.out;
+    (expand(&t, mesh, q).ok()? == bytes).then_some(t)
+}
+
+/// A template that gives `bytes` back whatever the mesh: every byte literal.
+pub(crate) fn verbatim(bytes: &[u8], mesh: &Mesh, q: &Quantization) -> Vec<u8> {
+    let mut b = Builder::new(mesh, q, bytes.len() + bytes.len() / 16);
+    b.literal(bytes);
+    b.out
+}
+
+/// The file a template stands for, with the decoded `mesh` (in the file's order).
+pub(crate) fn expand(t: &[u8], mesh: &Mesh, q: &Quantization) -> Result<Vec<u8>> {
+    let bad = |what: &str| Error::corrupt("TMPL", what.to_string());
+    let mut out = Vec::with_capacity(t.len() + 24 * mesh.vertex_count());
+    let (mut coord, mut corner) = (0usize, 0usize);
+    let mut text = String::new();
+    let mut i = 0;
+    let next_coord = |coord: &mut usize| {
+        let c = *coord;
+        *coord += 1;
+        (c / 3 < mesh.vertex_count()).then_some((c / 3, c % 3))
+    };
+    let next_corner = |corner: &mut usize| {
+        let c = *corner;
+        *corner += 1;
+        mesh.faces.get(c).copied()
+    };
+    while i < t.len() {
+        let b = t[i];
+        i += 1;
+        match b {
+            COORD_TEXT => {
+                let (v, k) =
+                    next_coord(&mut coord).ok_or_else(|| bad("more coordinates than vertices"))?;
+                text.clear();
+                format_coord(mesh, v, k, q, &mut text);
+                out.extend_from_slice(text.as_bytes());
+            }
+            COORD_F32_LE | COORD_F32_BE | COORD_F64_LE | COORD_F64_BE => {
+                let (v, k) =
+                    next_coord(&mut coord).ok_or_else(|| bad("more coordinates than vertices"))?;
+                match b {
+                    COORD_F32_LE => out.extend_from_slice(&value_f32(mesh, v, k, q).to_le_bytes()),
+                    COORD_F32_BE => out.extend_from_slice(&value_f32(mesh, v, k, q).to_be_bytes()),
+                    COORD_F64_LE => out.extend_from_slice(&value_f64(mesh, v, k, q).to_le_bytes()),
+                    _ => out.extend_from_slice(&value_f64(mesh, v, k, q).to_be_bytes()),
+                }
+            }
+            INDEX_TEXT_1 | INDEX_TEXT_0 | INDEX_32_LE | INDEX_32_BE => {
+                let v =
+                    next_corner(&mut corner).ok_or_else(|| bad("more corners than faces have"))?;
+                match b {
+                    INDEX_TEXT_1 => out.extend_from_slice((v as u64 + 1).to_string().as_bytes()),
+                    INDEX_TEXT_0 => out.extend_from_slice(v.to_string().as_bytes()),
+                    INDEX_32_LE => out.extend_from_slice(&v.to_le_bytes()),
+                    _ => out.extend_from_slice(&v.to_be_bytes()),
+                }
+            }
+            SKIP_COORD => {
+                next_coord(&mut coord).ok_or_else(|| bad("more coordinates than vertices"))?;
+            }
+            SKIP_INDEX => {
+                next_corner(&mut corner).ok_or_else(|| bad("more corners than faces have"))?;
+            }
+            ESCAPE => {
+                out.push(*t.get(i).ok_or_else(|| bad("ends inside an escape"))?);
+                i += 1;
+            }
+            _ => out.push(b),
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,170 @@
+//! Whole files back, byte for byte (SPEC.md 11): a file compressed with its own bytes
+//! (`encode_file`, the command's `--keep-order`) decodes to the same bytes, whatever it
+//! holds beside positions and faces (texture coordinates, normals, colours, materials,
+//! comments, number styles, line endings, a PLY header).
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use subwave::EncodeOptions;
+
+/// Compresses `bytes` with its own bytes kept and checks they come back: the container
+/// size, or what went wrong.
+fn round_trip(name: &str, bytes: &[u8]) -> Result<usize, String> {
+    let m = subwave::load(bytes, None).map_err(|e| format!("{name}: {e}"))?;
+    let opts = EncodeOptions {
+        keep_order: true,
+        source: m.source(),
+        threads: 2,
+        ..Default::default()
+    };
+    let enc = subwave::encode_file(&m.mesh, &m.quantization, &opts, bytes, m.format)
+        .map_err(|e| format!("{name}: {e}"))?;
+    let dec = subwave::decode_slice(&enc.bytes).map_err(|e| format!("{name}: {e}"))?;
+    let file = dec
+        .file()
+        .ok_or_else(|| format!("{name}: no file kept"))?
+        .map_err(|e| format!("{name}: {e}"))?;
+    if file != bytes {
+        let at = file.iter().zip(bytes).position(|(a, b)| a != b);
+        return Err(format!(
+            "{name}: {} bytes back for {}, first difference at {at:?}",
+            file.len(),
+            bytes.len()
+        ));
+    }
+    // The mesh itself is decoded as without the file's bytes.
+    if dec.mesh != m.mesh {
+        return Err(format!("{name}: the mesh differs"));
+    }
+    Ok(enc.bytes.len())
+}
+
+fn files_in(dir: &Path) -> Vec<PathBuf> {
+    common::list(dir)
+}
+
+#[test]
+fn own_corpus_files_come_back_byte_for_byte() {
+    for f in common::own_corpus() {
+        let bytes = std::fs::read(&f).unwrap();
+        round_trip(&f.display().to_string(), &bytes).unwrap();
+    }
+}
+
+#[test]
+fn files_the_walkers_cannot_follow_still_come_back() {
+    // CRLF line ends, comments, a continued line, tabs, negative zero, an exponent, a
+    // number with more decimals than the others, relative indices, groups and
+    // attributes: kept as they are.
+    let obj = b"# made by hand\r\nmtllib a.mtl\r\nv 0 0 0\r\nv 1.0 0 -0.000\r\nv\t1 1 0.5e0\r\nv 0 1 \\\r\n 0.25\r\nvt 0.5 0.5\r\nvn 0 0 1\r\ng side\r\nusemtl red\r\ns 1\r\nf 1/1/1 2/1/1 -2/1/1 4/1/1 # a quad\r\n";
+    round_trip("obj", obj).unwrap();
+    let off = b"OFF # a comment\n4 1 0\n\n0 0 0\n1 0 0 # x\n1 1 0\n0 1 0.50\n4  0 1 2 3 255 0 0\n";
+    round_trip("off", off).unwrap();
+    let ply = b"ply\nformat ascii 1.0\ncomment hi\nelement vertex 4\nproperty float y\nproperty float x\nproperty float z\nproperty uchar red\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 1\n0 1 0 2\n1 1 -0 3\n1 0 1e-3 4\n4 0 1 2 3\n";
+    round_trip("ply", ply).unwrap();
+}
+
+#[test]
+fn blender_files_come_back_byte_for_byte() {
+    let Some(dir) = common::shared_corpus().map(|d| d.join("blender")) else {
+        eprintln!("../shared/corpus not found; skipping");
+        return;
+    };
+    let files = files_in(&dir);
+    assert!(files.len() >= 12, "only {} Blender files", files.len());
+    let mut failures = Vec::new();
+    for f in &files {
+        let bytes = std::fs::read(f).unwrap();
+        match round_trip(&f.display().to_string(), &bytes) {
+            Ok(size) => eprintln!(
+                "{}: {} bytes -> {size} ({:.3})",
+                f.display(),
+                bytes.len(),
+                size as f64 / bytes.len() as f64
+            ),
+            Err(e) => failures.push(e),
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+#[test]
+fn shared_corpus_objs_come_back_byte_for_byte() {
+    let Some(dir) = common::shared_corpus() else {
+        eprintln!("../shared/corpus not found; skipping");
+        return;
+    };
+    // The unshuffled meshes (their shuffled copies take the same path).
+    let files: Vec<PathBuf> = files_in(&dir)
+        .into_iter()
+        .filter(|f| !f.to_string_lossy().contains(".shuffled."))
+        .collect();
+    assert!(files.len() >= 20);
+    let failures: Vec<String> = files
+        .iter()
+        .filter_map(|f| round_trip(&f.display().to_string(), &std::fs::read(f).unwrap()).err())
+        .collect();
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+#[test]
+fn hostile_templates_are_errors() {
+    let text =
+        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus/cube_cc4.obj")).unwrap();
+    let m = subwave::load(&text, None).unwrap();
+    let opts = EncodeOptions {
+        keep_order: true,
+        ..Default::default()
+    };
+    let enc = subwave::encode_file(&m.mesh, &m.quantization, &opts, &text, m.format).unwrap();
+    // A file's bytes need its order.
+    assert!(subwave::encode_file(
+        &m.mesh,
+        &m.quantization,
+        &EncodeOptions::default(),
+        &text,
+        m.format
+    )
+    .is_err());
+    let c = subwave_container::Container::parse(&enc.bytes, &subwave::Limits::default()).unwrap();
+    let rebuilt = |edit: &dyn Fn(&mut Vec<u8>)| {
+        let mut w = subwave_container::ContainerWriter::new();
+        for s in c
+            .sections
+            .iter()
+            .filter(|s| s.kind != subwave_container::SectionKind::END)
+        {
+            let mut p = s.payload.to_vec();
+            if s.kind == subwave_container::SectionKind::TEMPLATE {
+                edit(&mut p);
+            }
+            w.section(s.kind, &p);
+        }
+        w.finish()
+    };
+    // Cut, extended, a compressed byte flipped, a length that lies: errors, no panic.
+    for (what, bytes) in [
+        ("cut", rebuilt(&|p| p.truncate(p.len() / 2))),
+        ("extended", rebuilt(&|p| p.extend_from_slice(&[1, 2, 3]))),
+        ("flipped", rebuilt(&|p| *p.last_mut().unwrap() ^= 0x10)),
+        ("long", rebuilt(&|p| p[0] = 0xff)),
+        (
+            "huge",
+            rebuilt(&|p| {
+                p.splice(0..1, [0xff, 0xff, 0xff, 0xff, 0x0f])
+                    .for_each(drop)
+            }),
+        ),
+    ] {
+        if let Ok(d) = subwave::decode_slice(&bytes) {
+            // A flip the compressed data survives can only give other bytes.
+            assert_ne!(
+                d.file().and_then(Result::ok).as_deref(),
+                Some(&text[..]),
+                "{what}"
+            );
+        }
+    }
+}
