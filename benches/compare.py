@@ -81,7 +81,7 @@ def main():
                 row["t_" + t] = json.loads(r2.stdout)["bits_per_vertex"] if r2.returncode == 0 else None
             if a.keep_order:
                 with tempfile.NamedTemporaryFile(suffix=".swv") as t:
-                    subprocess.run([exe, "-q", "compress", mesh, t.name, "--keep-order"] + ([] if b == "exact" else ["--bits", b]), check=True)
+                    subprocess.run([exe, "-q", "-f", "compress", mesh, t.name, "--keep-order"] + ([] if b == "exact" else ["--bits", b]), check=True)
                     row["keep_bpv"] = os.path.getsize(t.name) * 8 / v["vertices"]
             for n in names:
                 p = peers.get((stem, int(b), n)) if b != "exact" else None

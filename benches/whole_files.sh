@@ -15,7 +15,7 @@ for f in "$dir"/*.obj "$dir"/*.ply "$dir"/*.off; do
   [ -e "$f" ] || continue
   n=$(basename "$f")
   "$bin" compress "$f" "$tmp/$n.swv" --keep-order -q
-  "$bin" decompress "$tmp/$n.swv" "$tmp/out.${n##*.}" -q
+  "$bin" decompress "$tmp/$n.swv" "$tmp/out.${n##*.}" -q -f
   back=DIFFERENT
   cmp -s "$f" "$tmp/out.${n##*.}" && back=exact
   size=$(stat -c %s "$f")

@@ -739,3 +739,34 @@ fn float_bits_that_do_not_fit_their_integers_are_corrupt() {
         Err(Error::Container(subwave_container::Error::Malformed { .. }))
     ));
 }
+
+#[test]
+fn files_with_no_mesh_are_errors_and_empty_meshes_are_meshes() {
+    assert!(mesh_err(b"").contains("empty"));
+    assert!(mesh_err(b"  \n\n").contains("empty"));
+    assert!(mesh_err(b"Hello, world\n").contains("not an OBJ file"));
+    assert!(mesh_err(b"solid cube\nfacet normal 0 0 1\n").contains("not an OBJ file"));
+    assert!(mesh_err(&[0x80, 0x81, 0x00, 0xff]).contains("not an OBJ file"));
+    // An OFF whose first lines are comments is an OFF.
+    let off = subwave::load(
+        b"# made by hand\n\nOFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+        None,
+    )
+    .unwrap();
+    assert_eq!(off.format, subwave::Format::Off);
+    assert_eq!((off.mesh.vertex_count(), off.mesh.face_count()), (3, 1));
+    // A valid mesh file without vertices is an empty mesh, and round-trips as one.
+    for text in [&b"# nothing yet\n"[..], b"o empty\n"] {
+        let m = subwave::load(text, None).unwrap();
+        assert_eq!(m.mesh.vertex_count(), 0);
+        let enc =
+            subwave::encode_to_vec(&m.mesh, &m.quantization, &EncodeOptions::default()).unwrap();
+        assert_eq!(
+            subwave::decode_slice(&enc.bytes)
+                .unwrap()
+                .mesh
+                .vertex_count(),
+            0
+        );
+    }
+}

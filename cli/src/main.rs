@@ -17,6 +17,7 @@ Examples:
   subwave compress scan.ply scan.swv --bits 16           Draco's 16-bit grid
   subwave decompress cube.swv cube.obj                   format follows the extension
   subwave decompress cube.swv - --format off > cube.off  '-' is stdout (stdin for input)
+  subwave compress scan.obj scan.swv -f                  overwrite scan.swv if it exists
   subwave info cube.swv --json
   subwave verify corpus/cube_cc4.obj                     compress + decompress in memory";
 
@@ -31,6 +32,9 @@ struct Cli {
     /// Do not print warnings.
     #[arg(short, long, global = true)]
     quiet: bool,
+    /// Overwrite an existing output file, and write binary data to a terminal.
+    #[arg(short, long, global = true)]
+    force: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -197,12 +201,15 @@ enum OutFormat {
 struct Failure {
     file: String,
     message: String,
+    /// The reader of standard output went away (`| head`): end quietly.
+    closed_pipe: bool,
 }
 
 fn fail(file: &str, e: impl std::fmt::Display) -> Failure {
     Failure {
         file: file.to_string(),
         message: e.to_string(),
+        closed_pipe: false,
     }
 }
 
@@ -210,6 +217,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(&cli) {
         Ok(code) => code,
+        Err(f) if f.closed_pipe => ExitCode::SUCCESS,
         Err(f) => {
             let name = if f.file == "-" {
                 "<stdin/stdout>"
@@ -266,15 +274,90 @@ fn read_input(path: &str) -> Result<Vec<u8>, Failure> {
     std::fs::read(path).map_err(|e| fail(path, e))
 }
 
+/// A mesh file whose extension names one format and whose content is another is refused
+/// (a misnamed file, or one subwave would misread).
+fn check_kind(path: &str, bytes: &[u8]) -> Result<(), Failure> {
+    let Some(named) = Format::from_path(path) else {
+        return Ok(());
+    };
+    let found = Format::sniff(bytes);
+    if named.is_ply() != found.is_ply() || (named == Format::Off) != (found == Format::Off) {
+        return Err(fail(
+            path,
+            format!(
+                "the extension says {}, the content is not (it reads as {})",
+                named.name().split(' ').next().unwrap_or("PLY"),
+                found.name()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Refuses, before any work, an output that would clobber: the input itself, an existing
+/// file (unless `force`), binary data to a terminal (unless `force`).
+fn check_output(input: &str, output: &str, binary: bool, force: bool) -> Result<(), Failure> {
+    if output == "-" {
+        if binary && !force && std::io::stdout().is_terminal() {
+            return Err(fail(
+                output,
+                "refusing to write binary data to a terminal (redirect it, or use -f)",
+            ));
+        }
+        return Ok(());
+    }
+    let out = Path::new(output);
+    if input != "-" {
+        let same = match (std::fs::canonicalize(input), std::fs::canonicalize(out)) {
+            (Ok(a), Ok(b)) => a == b,
+            _ => Path::new(input) == out,
+        };
+        if same {
+            return Err(fail(
+                output,
+                "the output is the input; refusing to overwrite it",
+            ));
+        }
+    }
+    if out.is_dir() {
+        return Err(fail(output, "is a directory"));
+    }
+    if out.exists() && !force {
+        return Err(fail(output, "already exists (use -f to overwrite it)"));
+    }
+    Ok(())
+}
+
+/// Writes the output whole or not at all: to a temporary file beside it, renamed into
+/// place once written. A closed standard output ends quietly.
 fn write_output(path: &str, bytes: &[u8]) -> Result<(), Failure> {
     if path == "-" {
         let mut out = std::io::stdout().lock();
         return out
             .write_all(bytes)
             .and_then(|_| out.flush())
-            .map_err(|e| fail(path, e));
+            .map_err(|e| Failure {
+                closed_pipe: e.kind() == std::io::ErrorKind::BrokenPipe,
+                ..fail(path, e)
+            });
     }
-    std::fs::write(path, bytes).map_err(|e| fail(path, e))
+    let target = Path::new(path);
+    let dir = target
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = target
+        .file_name()
+        .map_or("out".into(), |n| n.to_string_lossy());
+    let tmp = dir.join(format!(".{name}.{}.subwave-tmp", std::process::id()));
+    let written = std::fs::File::create(&tmp)
+        .and_then(|mut f| f.write_all(bytes).and_then(|_| f.sync_all()))
+        .and_then(|_| std::fs::rename(&tmp, target));
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(fail(path, e));
+    }
+    Ok(())
 }
 
 fn warn_dropped(quiet: bool, file: &str, loaded: &subwave::Loaded) {
@@ -295,9 +378,11 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
             keep_order,
             coding,
         } => {
+            check_output(input, output, true, cli.force)?;
             let progress = Progress::new();
             progress.stage("reading");
             let bytes = read_input(input)?;
+            check_kind(input, &bytes)?;
             let loaded = subwave::load(&bytes, coding.bits).map_err(|e| fail(input, e))?;
             if !*keep_order {
                 warn_dropped(cli.quiet, input, &loaded);
@@ -325,6 +410,16 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
             format,
             max_level,
         } => {
+            if format.is_none() && output != "-" && Format::from_path(output).is_none() {
+                return Err(fail(
+                    output,
+                    "the extension names no mesh format (.obj, .ply, .off); use --format",
+                ));
+            }
+            // A binary PLY only where one may be written; text formats go to a terminal.
+            let binary = matches!(format, Some(OutFormat::Ply))
+                || (format.is_none() && output.to_ascii_lowercase().ends_with(".ply"));
+            check_output(input, output, binary, cli.force)?;
             let progress = Progress::new();
             progress.stage("reading");
             let bytes = read_input(input)?;
@@ -519,6 +614,7 @@ fn verify(
     let progress = Progress::new();
     progress.stage("reading");
     let bytes = read_input(input)?;
+    check_kind(input, &bytes)?;
     let loaded = subwave::load(&bytes, bits).map_err(|e| fail(input, e))?;
     warn_dropped(cli.quiet, input, &loaded);
     progress.stage("encoding");

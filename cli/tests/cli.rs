@@ -280,6 +280,7 @@ fn warnings_name_what_was_dropped_and_q_silences_them() {
     );
     let o = run(&[
         "-q",
+        "-f",
         "compress",
         p.to_str().unwrap(),
         tmp("attrs.swv").to_str().unwrap(),
@@ -364,6 +365,7 @@ fn max_level_on_a_cut_file_and_info_reports_cc() {
     assert!(m.mesh.face_count() > base_faces && m.mesh.face_count() < 1536);
     // The whole mesh needs the whole file.
     let o = run(&[
+        "-f",
         "decompress",
         cut_path.to_str().unwrap(),
         out.to_str().unwrap(),
@@ -395,4 +397,73 @@ fn thread_counts_write_the_same_file() {
         "x",
     ]);
     assert_eq!(o.status.code(), Some(2), "a bad --threads is bad usage");
+}
+
+#[test]
+fn nothing_is_clobbered_or_half_written() {
+    let input = corpus("cube_cc4.obj");
+    let swv = tmp("guard.swv");
+    let _ = std::fs::remove_file(&swv);
+    let (i, o) = (input.to_str().unwrap(), swv.to_str().unwrap());
+    // The input is never the output, even with -f.
+    let copy = tmp("guard_input.obj");
+    std::fs::copy(&input, &copy).unwrap();
+    let c = copy.to_str().unwrap();
+    for args in [vec!["compress", c, c], vec!["-f", "compress", c, c]] {
+        let r = run(&args);
+        assert_eq!(r.status.code(), Some(1), "{args:?}");
+        assert!(String::from_utf8_lossy(&r.stderr).contains("is the input"));
+    }
+    assert_eq!(
+        std::fs::read(&copy).unwrap(),
+        std::fs::read(&input).unwrap()
+    );
+    // An existing output needs -f; nothing is written without it.
+    assert!(run(&["compress", i, o]).status.success());
+    let first = std::fs::read(&swv).unwrap();
+    let r = run(&["compress", i, o, "--bits", "8"]);
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("already exists"));
+    assert_eq!(std::fs::read(&swv).unwrap(), first);
+    assert!(run(&["compress", i, o, "--bits", "8", "-f"])
+        .status
+        .success());
+    assert_ne!(std::fs::read(&swv).unwrap(), first);
+    // A failed run leaves no output and no temporary file behind.
+    let bad = tmp("guard_bad.obj");
+    std::fs::write(&bad, b"v 0 0 0\nf 1 2 3\n").unwrap();
+    let out = tmp("guard_bad.swv");
+    let _ = std::fs::remove_file(&out);
+    assert_eq!(
+        run(&["compress", bad.to_str().unwrap(), out.to_str().unwrap()])
+            .status
+            .code(),
+        Some(1)
+    );
+    assert!(!out.exists());
+    let dir = out.parent().unwrap();
+    assert!(std::fs::read_dir(dir).unwrap().all(|e| !e
+        .unwrap()
+        .file_name()
+        .to_string_lossy()
+        .ends_with(".subwave-tmp")));
+    // An output extension that names no mesh format is an error.
+    let r = run(&["decompress", o, tmp("guard.stl").to_str().unwrap()]);
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("no mesh format"));
+}
+
+#[test]
+fn a_file_whose_extension_and_content_disagree_is_refused() {
+    let misnamed = tmp("misnamed.ply");
+    std::fs::copy(corpus("cube_cc4.obj"), &misnamed).unwrap();
+    let out = tmp("misnamed.swv");
+    let r = run(&[
+        "-f",
+        "compress",
+        misnamed.to_str().unwrap(),
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("the extension says PLY"));
 }

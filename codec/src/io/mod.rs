@@ -45,18 +45,20 @@ impl Format {
         }
     }
 
-    /// Guesses the format from a file's first bytes: `ply`, `OFF`, else OBJ.
+    /// Guesses the format from a file's first bytes: `ply`, `OFF` (after any comment
+    /// lines), else OBJ.
     pub fn sniff(bytes: &[u8]) -> Format {
-        let head = &bytes[..bytes.len().min(64)];
+        let head = &bytes[..bytes.len().min(4096)];
         if head.starts_with(b"ply") {
             return Format::PlyAscii;
         }
-        let trimmed: Vec<u8> = head
-            .iter()
-            .copied()
-            .skip_while(|b| b.is_ascii_whitespace())
-            .take(8)
-            .collect();
+        // The first line that is neither blank nor a comment.
+        let first = head
+            .split(|&b| b == b'\n')
+            .map(|l| l.trim_ascii_start())
+            .find(|l| !l.is_empty() && !l.starts_with(b"#"))
+            .unwrap_or(&[]);
+        let trimmed: Vec<u8> = first.iter().copied().take(8).collect();
         let word: Vec<u8> = trimmed
             .iter()
             .copied()
@@ -104,8 +106,12 @@ pub struct RawMesh {
     pub inexact: Option<String>,
 }
 
-/// Reads a mesh file from bytes. The format is sniffed from the content.
+/// Reads a mesh file from bytes. The format is sniffed from the content. A file with
+/// nothing in it, or that is no OBJ, PLY or OFF, is an error.
 pub fn read_mesh(bytes: &[u8]) -> Result<RawMesh> {
+    if bytes.trim_ascii().is_empty() {
+        return Err(Error::MeshFile("the file is empty: no mesh in it".into()));
+    }
     let mut m = match Format::sniff(bytes) {
         Format::Off => off::read(bytes)?,
         Format::Obj => obj::read(bytes)?,

@@ -9,9 +9,46 @@ use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::quant::{Quantization, TextCoords};
 
+/// The OBJ statements (Wavefront's specification and common extensions) besides those
+/// read above, kept as dropped: a line that starts with none of them is not OBJ.
+const OTHER_KEYWORDS: [&str; 27] = [
+    "cstype",
+    "deg",
+    "bmat",
+    "step",
+    "curv",
+    "curv2",
+    "surf",
+    "parm",
+    "trim",
+    "hole",
+    "scrv",
+    "sp",
+    "end",
+    "con",
+    "mg",
+    "bevel",
+    "c_interp",
+    "d_interp",
+    "lod",
+    "usemap",
+    "maplib",
+    "shadow_obj",
+    "trace_obj",
+    "ctech",
+    "stech",
+    "call",
+    "csh",
+];
+
 pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
-    let text = std::str::from_utf8(bytes)
-        .map_err(|e| syntax("OBJ", line_of(bytes, e.valid_up_to()), "not UTF-8 text"))?;
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        syntax(
+            "OBJ",
+            line_of(bytes, e.valid_up_to()),
+            "not UTF-8 text: not an OBJ file (subwave reads OBJ, PLY and OFF)",
+        )
+    })?;
     let mut coords = TextCoords::default();
     let mut topo = Mesh::new();
     let mut dropped = BTreeSet::new();
@@ -80,8 +117,16 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             "mtllib" | "usemtl" => {
                 dropped.insert("materials".to_string());
             }
-            other => {
+            other if OTHER_KEYWORDS.contains(&other) => {
                 dropped.insert(format!("'{other}' statements"));
+            }
+            other => {
+                // Not OBJ: text that is no mesh, or a format subwave does not read.
+                return Err(syntax(
+                    "OBJ",
+                    lineno,
+                    format!("'{other}' is no OBJ statement: not an OBJ file (subwave reads OBJ, PLY and OFF)"),
+                ));
             }
         }
     }
