@@ -9,7 +9,7 @@ use std::collections::HashMap;
 
 use crate::error::{Error, Result};
 use crate::info::{section_info, SectionInfo};
-use crate::io::{template, Format};
+use crate::io::{self, Format};
 use crate::mesh::Mesh;
 use crate::quant::Quantization;
 use crate::sections::head::{Header, Source, Transform};
@@ -206,8 +206,8 @@ pub fn encode_file(
         ));
     }
     mesh.validate()?;
-    let t =
-        template::make(file, format, mesh, q).unwrap_or_else(|| template::verbatim(file, mesh, q));
+    let t = io::template_of(file, format, mesh, q)
+        .unwrap_or_else(|| io::template::verbatim(file, mesh, q));
     encode_inner(mesh, q, opts, Some(&tmpl::encode(&t)?))
 }
 

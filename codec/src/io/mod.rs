@@ -142,6 +142,26 @@ fn check_faces(m: &mut RawMesh) -> Result<()> {
     Ok(())
 }
 
+/// The template of `bytes` (SPEC.md 11), a file of `format` whose mesh (in the file's
+/// vertex and face order) is `mesh` on `q`, checked to expand back to `bytes`; `None`
+/// where the file strays from what the walkers follow (the caller keeps it whole).
+pub(crate) fn template_of(
+    bytes: &[u8],
+    format: Format,
+    mesh: &Mesh,
+    q: &Quantization,
+) -> Option<Vec<u8>> {
+    let mut b = template::builder(mesh, q, bytes.len());
+    match format {
+        Format::Obj => obj::template(bytes, &mut b)?,
+        Format::PlyAscii | Format::PlyBinary | Format::PlyBinaryBigEndian => {
+            ply::template(bytes, &mut b)?
+        }
+        Format::Off => off::template(bytes, &mut b)?,
+    }
+    template::checked(b, bytes)
+}
+
 /// Writes `mesh` in `format`, mapping integers to values with `q`.
 pub fn write_mesh<W: Write>(out: W, mesh: &Mesh, q: &Quantization, format: Format) -> Result<()> {
     let mut out = std::io::BufWriter::with_capacity(1 << 16, out);

@@ -4,7 +4,7 @@
 //! for byte. Everything else (attributes, comments, number styles, line endings, a PLY
 //! header) is kept as it is; the TMPL section compresses it.
 
-use super::{format_coord, value_f32, value_f64, Format};
+use super::{format_coord, value_f32, value_f64};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::quant::Quantization;
@@ -147,18 +147,14 @@ impl<'m> Builder<'m> {
     }
 }
 
-/// The template of `bytes`, a file of `format` whose mesh (in the file's vertex and
-/// face order) is `mesh` on `q`, checked to expand back to `bytes`; `None` where the
-/// file strays from what the walkers know (then the caller keeps the file whole).
-pub(crate) fn make(bytes: &[u8], format: Format, mesh: &Mesh, q: &Quantization) -> Option<Vec<u8>> {
-    let mut b = Builder::new(mesh, q, bytes.len() / 2);
-    match format {
-        Format::Obj => super::obj::template(bytes, &mut b)?,
-        Format::PlyAscii | Format::PlyBinary | Format::PlyBinaryBigEndian => {
-            super::ply::template(bytes, &mut b)?
-        }
-        Format::Off => super::off::template(bytes, &mut b)?,
-    }
+/// A builder for a template of a file of about `len` bytes.
+pub(super) fn builder<'m>(mesh: &'m Mesh, q: &'m Quantization, len: usize) -> Builder<'m> {
+    Builder::new(mesh, q, len / 2)
+}
+
+/// The template a walk built, if it expands back to `bytes`.
+pub(super) fn checked(b: Builder<'_>, bytes: &[u8]) -> Option<Vec<u8>> {
+    let (mesh, q) = (b.mesh, b.q);
     let t = b.out;
     (expand(&t, mesh, q).ok()? == bytes).then_some(t)
 }
