@@ -142,6 +142,11 @@ fn check_faces(m: &mut RawMesh) -> Result<()> {
     Ok(())
 }
 
+/// A file's lines, each with its line end (`\n`, and a `\r` before it, kept).
+pub(crate) fn lines_with_ends(bytes: &[u8]) -> impl Iterator<Item = &[u8]> {
+    bytes.split_inclusive(|&c| c == b'\n')
+}
+
 /// The template of `bytes` (SPEC.md 11), a file of `format` whose mesh (in the file's
 /// vertex and face order) is `mesh` on `q`, checked to expand back to `bytes`; `None`
 /// where the file strays from what the walkers follow (the caller keeps it whole).

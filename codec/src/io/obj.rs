@@ -258,14 +258,7 @@ pub(super) fn tokens(code: &[u8]) -> impl Iterator<Item = (usize, usize)> + '_ {
 /// line and the vertex number of every `f` corner are the coded values; `None` for a
 /// file with continued lines (the reader joins them).
 pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
-    let mut rest = bytes;
-    while !rest.is_empty() {
-        let end = rest
-            .iter()
-            .position(|&c| c == b'\n')
-            .map_or(rest.len(), |i| i + 1);
-        let (line, tail) = rest.split_at(end);
-        rest = tail;
+    for line in super::lines_with_ends(bytes) {
         let mut content = line.strip_suffix(b"\n").unwrap_or(line);
         content = content.strip_suffix(b"\r").unwrap_or(content);
         if content.trim_ascii_end().ends_with(b"\\") {

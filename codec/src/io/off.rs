@@ -171,16 +171,9 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
 /// Walks an OFF file for its template (SPEC.md 11): the first three numbers of every
 /// vertex line and the indices of every face line are the coded values.
 pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
-    let mut rest = bytes;
     // Statements seen: the keyword, the counts, then vertices and faces.
     let (mut seen, mut counts_at, mut nv) = (0usize, None, 0usize);
-    while !rest.is_empty() {
-        let end = rest
-            .iter()
-            .position(|&c| c == b'\n')
-            .map_or(rest.len(), |i| i + 1);
-        let (line, tail) = rest.split_at(end);
-        rest = tail;
+    for line in super::lines_with_ends(bytes) {
         let code = &line[..line.iter().position(|&c| c == b'#').unwrap_or(line.len())];
         let toks: Vec<(usize, usize)> = super::obj::tokens(code).collect();
         if toks.is_empty() {
