@@ -19,7 +19,9 @@ Examples:
   subwave decompress cube.swv - --format off > cube.off  '-' is stdout (stdin for input)
   subwave compress scan.obj scan.swv -f                  overwrite scan.swv if it exists
   subwave info cube.swv --json
-  subwave verify corpus/cube_cc4.obj                     compress + decompress in memory";
+  subwave verify corpus/cube_cc4.obj                     compress + decompress in memory
+  subwave verify scan.ply --bits 16 --json               grid error bound, sizes, times
+  subwave info cube.swv                                  sections, levels, transform";
 
 #[derive(Parser)]
 #[command(
@@ -149,7 +151,7 @@ fn parse_transform(s: &str) -> Result<TransformChoice, String> {
     Wavelet::from_name(s)
         .map(TransformChoice::Fixed)
         .ok_or_else(|| {
-            format!("unknown transform '{s}'; use auto, lazy, bilinear, bicubic, biquintic, dyadic-sym (Catmull-Clark), sqrt2-lazy, ir2w or sqrt2-sym (sqrt(2)), fit (subdivision fit)")
+            format!("unknown transform '{s}'; use auto, lazy, bilinear, bicubic, biquintic, dyadic-sym, interp4, interp6 (Catmull-Clark), sqrt2-lazy, ir2w or sqrt2-sym (sqrt(2)), fit (subdivision fit)")
         })
 }
 
@@ -272,6 +274,25 @@ fn read_input(path: &str) -> Result<Vec<u8>, Failure> {
         return Ok(v);
     }
     std::fs::read(path).map_err(|e| fail(path, e))
+}
+
+/// The largest distance, over every coordinate, between a file's value and its value
+/// on the grid `q`.
+fn max_grid_error(raw: &subwave::RawCoords, mesh: &subwave::Mesh, q: &Quantization) -> f64 {
+    let file = |v: usize, k: usize| -> f64 {
+        match raw {
+            subwave::RawCoords::Decimal(p) => p[v][k].to_f64(),
+            subwave::RawCoords::F32(p) => p[v][k] as f64,
+            subwave::RawCoords::F64(p) => p[v][k],
+        }
+    };
+    let mut worst = 0f64;
+    for (v, p) in mesh.positions.iter().enumerate() {
+        for k in 0..3 {
+            worst = worst.max((file(v, k) - q.value_f64(p[k], k)).abs());
+        }
+    }
+    worst
 }
 
 /// A mesh file whose extension names one format and whose content is another is refused
@@ -630,6 +651,15 @@ fn verify(
     let check = subwave::compare_up_to_order(&loaded.mesh, &dec.mesh, &enc.order);
     let exact = check.is_ok() && dec.quantization == loaded.quantization;
     let n = loaded.mesh.vertex_count() as u64;
+    // On a grid (--bits), the round trip is exact on the grid's integers; how far the
+    // values moved from the file's is the error bound a user asks for.
+    let grid_error = match loaded.quantization {
+        Quantization::Grid { step, .. } => subwave::read_mesh(&bytes).ok().map(|raw| {
+            let err = max_grid_error(&raw.coords, &loaded.mesh, &loaded.quantization);
+            (err, step as f64)
+        }),
+        _ => None,
+    };
     if as_json {
         let v = json!({
             "file": input,
@@ -645,6 +675,8 @@ fn verify(
             "family": enc.header.family.name(),
             "transform": enc.header.transform.name(),
             "quantization": quant_json(&loaded.quantization),
+            "lossless": exact && grid_error.is_none(),
+            "max_error": grid_error.map(|e| e.0),
         });
         println!("{v}");
     } else {
@@ -658,7 +690,13 @@ fn verify(
             encode_ms,
             opts.threads.max(1),
             decode_ms,
-            if exact { "exact" } else { "MISMATCH" }
+            match (exact, grid_error) {
+                (false, _) => "MISMATCH".to_string(),
+                (true, None) => "exact".to_string(),
+                (true, Some((e, step))) => format!(
+                    "exact on the grid; values within {e:.3e} of the file's (grid step {step:.3e})"
+                ),
+            }
         );
     }
     if let Err(why) = check {

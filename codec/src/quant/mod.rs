@@ -436,7 +436,7 @@ pub fn write_decimal(n: i64, decimals: u8, out: &mut String) {
 fn range_error(what: String) -> Error {
     Error::Range(format!(
         "{what}; exact integers would not fit the codec's range of +-(2^{COORD_BITS} - 1): \
-         use --bits Q (1..=30) to quantise"
+         quantise them (a grid of 1 to 30 bits)"
     ))
 }
 
