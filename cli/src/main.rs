@@ -288,8 +288,8 @@ fn max_grid_error(raw: &subwave::RawCoords, mesh: &subwave::Mesh, q: &Quantizati
     };
     let mut worst = 0f64;
     for (v, p) in mesh.positions.iter().enumerate() {
-        for k in 0..3 {
-            worst = worst.max((file(v, k) - q.value_f64(p[k], k)).abs());
+        for (k, &n) in p.iter().enumerate() {
+            worst = worst.max((file(v, k) - q.value_f64(n, k)).abs());
         }
     }
     worst
