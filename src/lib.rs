@@ -26,11 +26,14 @@ pub struct ReadmeDoctests;
 
 use std::collections::BTreeSet;
 
+pub mod json;
+
 pub use subwave_codec::io::{read_mesh, write_mesh, Format, RawMesh};
 pub use subwave_codec::{
-    decode, encode, encode_file, inspect, DecodeOptions, Decoded, DiscTransform, EncodeOptions,
-    Encoded, Error, Family, FloatWidth, Header, Info, Limits, Mesh, Quantization, RawCoords,
-    Result, SectionInfo, Source, Transform, TransformChoice, Wavelet, FORMAT_VERSION, MAX_COORD,
+    decode, encode, encode_file, inspect, integerize, Decimal, DecodeOptions, Decoded,
+    DiscTransform, EncodeOptions, Encoded, Error, Family, FloatWidth, Header, Info, Limits, Mesh,
+    Progress, Quantization, RawCoords, Result, SectionInfo, Source, Stage, Transform,
+    TransformChoice, Wavelet, FORMAT_VERSION, MAX_COORD, MAX_DECIMALS,
 };
 
 /// A mesh file read and turned into integers.
@@ -54,11 +57,13 @@ impl Loaded {
             Format::PlyAscii => Source::PlyAscii,
             Format::PlyBinary | Format::PlyBinaryBigEndian => Source::PlyBinary,
             Format::Off => Source::Off,
+            Format::StlAscii => Source::StlAscii,
+            Format::StlBinary => Source::StlBinary,
         }
     }
 }
 
-/// Reads a mesh file (OBJ, PLY or OFF, sniffed from its bytes) and turns its positions
+/// Reads a mesh file (OBJ, PLY, OFF or STL, sniffed from its bytes) and turns its positions
 /// into integers: exactly when `bits` is `None` (decimal text on its grid, binary floats
 /// and text beyond any decimal grid as the floats they are, bit for bit), on Draco's
 /// `bits`-bit grid otherwise.
@@ -93,6 +98,8 @@ pub fn default_output_format(source: Source) -> Format {
         Source::PlyAscii => Format::PlyAscii,
         Source::PlyBinary => Format::PlyBinary,
         Source::Off => Format::Off,
+        Source::StlAscii => Format::StlAscii,
+        Source::StlBinary => Format::StlBinary,
         Source::Obj | Source::Unknown => Format::Obj,
     }
 }

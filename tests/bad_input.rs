@@ -177,7 +177,30 @@ fn bad_mesh_files() {
     assert!(mesh_err(b"v 0 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").contains("not a finite number"));
     assert!(mesh_err(b"v 0 0 inf\n").contains("not a finite number"));
     assert!(mesh_err(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").contains("refers to vertex 4"));
-    assert!(mesh_err(b"v 0 0 0\nv 1 0 0\nf 1 2\n").contains("at least 3"));
+    // An OBJ face of two corners is a line, not a polygon: reported, not coded.
+    let line = subwave::load(b"v 0 0 0\nv 1 0 0\nf 1 2\n", None).unwrap();
+    assert_eq!(line.mesh.face_count(), 0);
+    assert!(line.dropped.iter().any(|d| d.contains("fewer than 3")));
+    assert!(mesh_err(b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n").contains("at least 3"));
+    // STL: a solid that never ends, a vertex of two numbers, an unknown statement.
+    assert!(mesh_err(b"solid a\nfacet normal 0 0 1\n").contains("ends inside a solid"));
+    assert!(mesh_err(b"solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0\n").contains("needs 3"));
+    assert!(mesh_err(
+        b"solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\n"
+    )
+    .contains("at least 3"));
+    assert!(mesh_err(b"solid a\nbogus\nendsolid a\n").contains("unexpected 'bogus'"));
+    // A binary STL with a NaN corner.
+    let mut stl = vec![0u8; 80];
+    stl.extend_from_slice(&1u32.to_le_bytes());
+    for x in [0f32, 0., 1., 0., 0., 0., 1., 0., 0., f32::NAN, 1., 0.] {
+        stl.extend_from_slice(&x.to_le_bytes());
+    }
+    stl.extend_from_slice(&[0, 0]);
+    assert!(mesh_err(&stl).contains("not a finite number"));
+    // One byte short of its count: neither a binary STL nor text.
+    stl.pop();
+    assert!(!mesh_err(&stl).is_empty());
     assert!(mesh_err(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n").contains("out of range"));
     assert!(mesh_err(b"v 0 0\n").contains("needs 3"));
     assert!(mesh_err(b"ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n")
@@ -745,7 +768,7 @@ fn files_with_no_mesh_are_errors_and_empty_meshes_are_meshes() {
     assert!(mesh_err(b"").contains("empty"));
     assert!(mesh_err(b"  \n\n").contains("empty"));
     assert!(mesh_err(b"Hello, world\n").contains("not an OBJ file"));
-    assert!(mesh_err(b"solid cube\nfacet normal 0 0 1\n").contains("not an OBJ file"));
+    assert!(mesh_err(b"solid\n").contains("STL"));
     assert!(mesh_err(&[0x80, 0x81, 0x00, 0xff]).contains("not an OBJ file"));
     // An OFF whose first lines are comments is an OFF.
     let off = subwave::load(

@@ -141,3 +141,134 @@ fn grid_mode_matches_dracos_dequantisation() {
         }
     }
 }
+
+/// A binary STL of `tris` (three corners each), facet normals zero.
+fn binary_stl(tris: &[[[f32; 3]; 3]]) -> Vec<u8> {
+    let mut b = b"made by the test".to_vec();
+    b.resize(80, b' ');
+    b.extend_from_slice(&(tris.len() as u32).to_le_bytes());
+    for t in tris {
+        b.extend_from_slice(&[0u8; 12]);
+        for x in t.iter().flatten() {
+            b.extend_from_slice(&x.to_le_bytes());
+        }
+        b.extend_from_slice(&[0, 0]);
+    }
+    b
+}
+
+#[test]
+fn stl_corners_become_shared_vertices_and_come_back() {
+    let (a, b, c, d) = (
+        [0f32, 0., 0.],
+        [1., 0., 0.],
+        [1., 1., -0.0],
+        [0., 1., 1e-30],
+    );
+    let bin = binary_stl(&[[a, b, c], [a, c, d]]);
+    let m = subwave::load(&bin, None).unwrap();
+    assert_eq!(m.format, Format::StlBinary);
+    assert_eq!(m.mesh.vertex_count(), 4);
+    assert_eq!(m.mesh.faces, [0, 1, 2, 0, 2, 3]);
+    // Every value bit for bit (-0 and the tiny one too), through the codec and back to a
+    // binary STL, and to the same bytes with the file's order.
+    let enc = subwave::encode_to_vec(&m.mesh, &m.quantization, &EncodeOptions::default()).unwrap();
+    let dec = subwave::decode_slice(&enc.bytes).unwrap();
+    let mut out = Vec::new();
+    subwave::write_mesh(&mut out, &dec.mesh, &dec.quantization, Format::StlBinary).unwrap();
+    let again = subwave::load(&out, None).unwrap();
+    let corners = |l: &subwave::Loaded| -> Vec<[u32; 3]> {
+        let mut v: Vec<[u32; 3]> = (0..l.mesh.faces.len())
+            .map(|i| {
+                let p = l.mesh.faces[i] as usize;
+                std::array::from_fn(|k| {
+                    let n = l.mesh.floats.get(p).map_or(0, |f| f[k]);
+                    if l.mesh.floats.is_empty() {
+                        l.quantization
+                            .value_f32(l.mesh.positions[p][k], k)
+                            .to_bits()
+                    } else {
+                        n as u32
+                    }
+                })
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(corners(&again), corners(&m));
+    let opts = EncodeOptions {
+        keep_order: true,
+        source: m.source(),
+        ..Default::default()
+    };
+    let enc = subwave::encode_file(&m.mesh, &m.quantization, &opts, &bin, m.format).unwrap();
+    let dec = subwave::decode_slice(&enc.bytes).unwrap();
+    assert_eq!(dec.file().unwrap().unwrap(), bin);
+
+    // ASCII: corners welded by their text, polygons kept, the same values back as text.
+    let ascii = b"solid sq\nfacet normal 0 0 1\n outer loop\n  vertex 0 0 0\n  vertex 1.5 0 0\n  vertex 1.5 1 0\n  vertex 0 1 0\n endloop\nendfacet\nfacet normal 0 0 1\n outer loop\n  vertex 0 0 0\n  vertex 0 1 0\n  vertex -1 0.5 0\n endloop\nendfacet\nendsolid sq\n";
+    let m = subwave::load(ascii, None).unwrap();
+    assert_eq!(m.format, Format::StlAscii);
+    assert_eq!((m.mesh.vertex_count(), m.mesh.face_count()), (5, 2));
+    assert_eq!(m.mesh.face(0), &[0, 1, 2, 3]);
+    let mut out = Vec::new();
+    subwave::write_mesh(&mut out, &m.mesh, &m.quantization, Format::StlAscii).unwrap();
+    let again = subwave::load(&out, None).unwrap();
+    assert_eq!(again.mesh, m.mesh);
+    let enc = subwave::encode_file(&m.mesh, &m.quantization, &opts, ascii, m.format).unwrap();
+    let dec = subwave::decode_slice(&enc.bytes).unwrap();
+    assert_eq!(dec.file().unwrap().unwrap(), ascii);
+    // An empty solid is an empty mesh; so is a binary STL of no facets.
+    assert_eq!(
+        subwave::load(b"solid e\nendsolid e\n", None)
+            .unwrap()
+            .mesh
+            .vertex_count(),
+        0
+    );
+    assert_eq!(
+        subwave::load(&binary_stl(&[]), None)
+            .unwrap()
+            .mesh
+            .vertex_count(),
+        0
+    );
+}
+
+#[test]
+fn records_as_real_writers_lay_them_out() {
+    // OFF faces spread over several lines (libigl), the counts glued to the keyword.
+    let off = subwave::load(
+        b"OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 \n1\n2 \n3\n",
+        None,
+    )
+    .unwrap();
+    assert_eq!(off.mesh.face(0), &[0, 1, 2, 3]);
+    let glued = subwave::load(b"  OFF3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", None).unwrap();
+    assert_eq!((glued.mesh.vertex_count(), glued.mesh.face_count()), (3, 1));
+    // A PLY face with a list of floats besides its vertex indices (texture coordinates
+    // per corner), and ASCII records with more values than the header names (VCG).
+    let ply = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\nproperty uchar red\nend_header\n0 0 0\n1 0 0\n0 1 0 7 7\n3 0 1 2 6 0.5 0.25 0 0 1 1 9 1 1 1\n";
+    let m = subwave::load(ply, None).unwrap();
+    assert_eq!(m.mesh.face(0), &[0, 1, 2]);
+    assert!(m.dropped.iter().any(|d| d.contains("texcoord")));
+    assert!(m.dropped.iter().any(|d| d.contains("values past the end")));
+    let opts = EncodeOptions {
+        keep_order: true,
+        source: m.source(),
+        ..Default::default()
+    };
+    for file in [
+        &ply[..],
+        b"OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 \n1\n2 \n3\n",
+    ] {
+        let m = subwave::load(file, None).unwrap();
+        let enc = subwave::encode_file(&m.mesh, &m.quantization, &opts, file, m.format).unwrap();
+        let dec = subwave::decode_slice(&enc.bytes).unwrap();
+        assert_eq!(dec.file().unwrap().unwrap(), file);
+    }
+    // A PLY header without a vertex element is an empty mesh.
+    let empty = subwave::load(b"ply\nformat ascii 1.0\nend_header\n", None).unwrap();
+    assert_eq!(empty.mesh.vertex_count(), 0);
+}

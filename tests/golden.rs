@@ -72,7 +72,7 @@ fn encoded_bytes_match_the_golden_hashes() {
 /// bytes (`encode_file`, a TMPL section); the first part names the
 /// corpus mesh it decodes to. Before the first release the decoder reads the current
 /// format only, so a format change blesses them anew (`SUBWAVE_BLESS=1`), deliberately.
-const FROZEN: [&str; 30] = [
+const FROZEN: [&str; 32] = [
     "cube_cc4.swv",
     "cube_cc4.flat.swv",
     "cube_cc4.lazy.swv",
@@ -103,6 +103,8 @@ const FROZEN: [&str; 30] = [
     "floats_cc2.swv",
     "floats_cc2.file.swv",
     "two_components_cc2.file.swv",
+    "cube_cc2.swv",
+    "cube_cc2.file.swv",
 ];
 
 /// Codes a frozen container as its name says (see [`FROZEN`]).
@@ -128,6 +130,7 @@ fn freeze(swv: &str, m: &subwave::Loaded, source: &[u8]) -> Vec<u8> {
         // On two threads: the container is the same for every count.
         threads: 2,
         transform,
+        ..Default::default()
     };
     let (mesh, q) = (&m.mesh, &m.quantization);
     match has("file") {
@@ -142,10 +145,10 @@ fn freeze(swv: &str, m: &subwave::Loaded, source: &[u8]) -> Vec<u8> {
 fn frozen_containers_still_decode() {
     let bless = std::env::var_os("SUBWAVE_BLESS").is_some();
     for swv in FROZEN {
-        // The corpus mesh: an OBJ, or a binary PLY (float positions).
+        // The corpus mesh: an OBJ, a binary PLY (float positions) or a binary STL.
         let corpus = Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus");
         let stem = swv.split('.').next().unwrap();
-        let obj = ["obj", "ply"]
+        let obj = ["obj", "ply", "stl"]
             .iter()
             .map(|e| format!("{stem}.{e}"))
             .find(|f| corpus.join(f).exists())
@@ -169,7 +172,7 @@ fn frozen_containers_still_decode() {
             let file = dec.file().expect("a file template").unwrap();
             assert!(file == source, "{swv} no longer gives back {obj}");
         }
-        if obj.ends_with(".ply") {
+        if obj.ends_with(".ply") || obj.ends_with(".stl") {
             // Every value, bit for bit, in the file's order.
             assert!(dec.mesh == m.mesh, "{swv} no longer decodes to {obj}");
             continue;

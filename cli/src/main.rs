@@ -43,35 +43,53 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Compress a mesh file (OBJ, PLY or OFF) into a .swv container.
+    /// Compress a mesh file (OBJ, PLY, OFF or STL) into a .swv container, or many
+    /// files into a folder (`-o DIR`).
     #[command(after_help = EXAMPLES)]
     Compress {
-        /// Input mesh file, or - for standard input.
-        input: String,
-        /// Output container, or - for standard output.
-        output: String,
+        /// IN OUT (a mesh file and its container; - for standard input or output), or
+        /// with -o DIR any number of mesh files (and folders, with -r).
+        #[arg(required = true, num_args = 1..)]
+        files: Vec<String>,
+        /// Write each input NAME to DIR/NAME.swv (created if missing).
+        #[arg(short = 'o', long = "output-dir", value_name = "DIR")]
+        output_dir: Option<String>,
+        /// With -o: take the mesh files (.obj, .ply, .off, .stl) inside folders, at
+        /// any depth, keeping their relative paths under DIR.
+        #[arg(short, long)]
+        recursive: bool,
         /// Store the input's vertex and face order so decompression restores it.
         #[arg(long)]
         keep_order: bool,
         #[command(flatten)]
         coding: Coding,
     },
-    /// Decompress a .swv container into a mesh file.
+    /// Decompress a .swv container into a mesh file, or many into a folder (`-o DIR`).
     #[command(after_help = EXAMPLES)]
     Decompress {
-        /// Input container, or - for standard input.
-        input: String,
-        /// Output mesh file, or - for standard output.
-        output: String,
-        /// Output format. By default the output's extension says (.obj, .off; .ply is
-        /// ASCII for decimal values and binary for float values, so values stay exact),
-        /// else the input's format.
+        /// IN OUT (a container and its mesh file; - for standard input or output), or
+        /// with -o DIR any number of containers (and folders, with -r).
+        #[arg(required = true, num_args = 1..)]
+        files: Vec<String>,
+        /// Write each input NAME.swv to DIR/NAME (created if missing); a NAME without a
+        /// mesh extension gets its source format's.
+        #[arg(short = 'o', long = "output-dir", value_name = "DIR")]
+        output_dir: Option<String>,
+        /// With -o: take the .swv files inside folders, at any depth.
+        #[arg(short, long)]
+        recursive: bool,
+        /// Output format. By default the output's extension says (.obj, .off; .ply and
+        /// .stl are ASCII for decimal values and binary for float values, so values
+        /// stay exact), else the input's format.
         #[arg(long, value_enum)]
         format: Option<OutFormat>,
         /// Write the mesh of refinement level K (0 = base mesh); works on a file cut off
         /// after level K's section.
         #[arg(long, value_name = "K")]
         max_level: Option<u8>,
+        /// With -o: files decoded at once (0: one per core).
+        #[arg(long, value_name = "N", default_value_t = 0)]
+        threads: usize,
     },
     /// Describe a container: counts, family, transform, quantisation, section sizes.
     Info {
@@ -120,20 +138,26 @@ struct Coding {
     #[arg(long, default_value = "auto", value_parser = parse_value_map)]
     value_map: ValueMapArg,
     /// Threads the encoder may use to try transforms at once (0: one per core, at most
-    /// 4). The file is the same for any count; each thread holds a coding's memory.
+    /// 4, and one for meshes over 500,000 vertices); with -o, files coded at once
+    /// instead (0: one per core). The file is the same for any count; each thread
+    /// holds a coding's memory.
     #[arg(long, value_name = "N", default_value_t = 0)]
     threads: usize,
 }
 
 impl Coding {
-    /// The encoder options these arguments ask for (the input's order not kept).
-    fn options(&self) -> EncodeOptions {
+    /// The encoder options these arguments ask for, for a mesh of `vertices` (the
+    /// input's order not kept).
+    fn options(&self, vertices: usize) -> EncodeOptions {
         EncodeOptions {
             transform: self.transform,
             max_levels: self.levels,
             disc: self.polar_disc.0,
             value_map: self.value_map.0,
             threads: match self.threads {
+                // Each thread holds a coding's memory: one per core, at most 4, and on
+                // large meshes (about 400 bytes per vertex each) one.
+                0 if vertices > LARGE_MESH => 1,
                 0 => std::thread::available_parallelism().map_or(1, |n| n.get().min(4)),
                 n => n,
             },
@@ -189,6 +213,9 @@ fn parse_value_map(s: &str) -> Result<ValueMapArg, String> {
     }
 }
 
+/// Vertices above which `--threads 0` codes on one thread, to bound memory.
+const LARGE_MESH: usize = 500_000;
+
 #[derive(Clone, Copy, ValueEnum)]
 enum OutFormat {
     Obj,
@@ -197,6 +224,10 @@ enum OutFormat {
     /// ASCII PLY.
     PlyAscii,
     Off,
+    /// Binary STL (triangles; values become the nearest floats).
+    Stl,
+    /// ASCII STL (triangles and polygons as facets).
+    StlAscii,
 }
 
 /// An error for the user: the file it concerns and what went wrong.
@@ -232,15 +263,31 @@ fn main() -> ExitCode {
     }
 }
 
-/// A spinner on stderr that shows itself only after a second of work, and only when
-/// stderr is a terminal.
+/// A progress display on stderr, only when stderr is a terminal, shown after a second
+/// of work: for one file a spinner with the stage it is in (reading, the hierarchy's
+/// recovery, each level of each transform tried, writing); for a batch one bar over the
+/// files.
+#[derive(Clone)]
 struct Progress {
     bar: indicatif::ProgressBar,
 }
 
 impl Progress {
-    fn new() -> Self {
+    fn new(batch: bool) -> Self {
         let bar = indicatif::ProgressBar::hidden();
+        if batch {
+            bar.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} files {msg}",
+                )
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+        } else {
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{spinner} [{elapsed_precise}] {msg}")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+            );
+        }
         if std::io::stderr().is_terminal() {
             let b = bar.clone();
             std::thread::spawn(move || {
@@ -254,8 +301,25 @@ impl Progress {
         Progress { bar }
     }
 
-    fn stage(&self, what: &'static str) {
+    fn stage(&self, what: impl Into<std::borrow::Cow<'static, str>>) {
         self.bar.set_message(what);
+    }
+
+    /// The encoder's stages, shown as they come.
+    fn encoder(&self) -> subwave::Progress {
+        let bar = self.bar.clone();
+        subwave::Progress::new(move |s| {
+            bar.set_message(match s {
+                subwave::Stage::Recovering => "recovering the hierarchy".to_string(),
+                subwave::Stage::Level {
+                    transform,
+                    level,
+                    levels,
+                } => format!("coding level {level}/{levels} ({transform})"),
+                subwave::Stage::Flat => "coding the mesh flat".to_string(),
+                subwave::Stage::Container => "writing the container".to_string(),
+            })
+        })
     }
 }
 
@@ -295,6 +359,351 @@ fn max_grid_error(raw: &subwave::RawCoords, mesh: &subwave::Mesh, q: &Quantizati
     worst
 }
 
+/// What a batch does to each file.
+enum Job<'a> {
+    Compress {
+        keep_order: bool,
+        coding: &'a Coding,
+    },
+    Decompress {
+        format: Option<OutFormat>,
+        max_level: Option<u8>,
+    },
+}
+
+/// The two-argument form's input and output.
+fn pair(files: &[String], recursive: bool) -> Result<(&str, &str), Failure> {
+    match files {
+        [input, output] if !recursive => Ok((input, output)),
+        [one] => Err(fail(
+            one,
+            "no output given: name one (IN OUT) or a folder (-o DIR)",
+        )),
+        _ => Err(fail(
+            &files[0],
+            "several inputs (or -r) need a folder for the outputs: -o DIR",
+        )),
+    }
+}
+
+/// Mesh file extensions a batch compresses in folders.
+const MESH_EXTENSIONS: [&str; 4] = ["obj", "ply", "off", "stl"];
+
+/// The batch's inputs, each with its path relative to the output folder: files as
+/// named, and with `recursive` the files of `wanted` extensions in folders.
+fn batch_inputs(
+    files: &[String],
+    recursive: bool,
+    wanted: &dyn Fn(&Path) -> bool,
+) -> Result<Vec<(String, std::path::PathBuf)>, Failure> {
+    let mut out = Vec::new();
+    for f in files {
+        let path = Path::new(f);
+        if f == "-" {
+            return Err(fail(f, "standard input cannot be part of a batch (-o DIR)"));
+        }
+        if !path.is_dir() {
+            let name = path.file_name().ok_or_else(|| fail(f, "not a file name"))?;
+            out.push((f.clone(), name.into()));
+            continue;
+        }
+        if !recursive {
+            return Err(fail(
+                f,
+                "is a directory (use -r to take the files inside it)",
+            ));
+        }
+        let mut stack = vec![path.to_path_buf()];
+        let mut found = Vec::new();
+        while let Some(dir) = stack.pop() {
+            for entry in std::fs::read_dir(&dir).map_err(|e| fail(&dir.to_string_lossy(), e))? {
+                let p = entry.map_err(|e| fail(&dir.to_string_lossy(), e))?.path();
+                if p.is_dir() {
+                    stack.push(p);
+                } else if wanted(&p) {
+                    found.push(p);
+                }
+            }
+        }
+        found.sort();
+        let top = path
+            .file_name()
+            .map(std::path::PathBuf::from)
+            .unwrap_or_default();
+        for p in found {
+            let rel = top.join(p.strip_prefix(path).unwrap_or(&p));
+            out.push((p.to_string_lossy().into_owned(), rel));
+        }
+    }
+    Ok(out)
+}
+
+/// Compresses or decompresses every input into `dir`, `threads` files at once (0: one
+/// per core), with one progress bar; a summary line at the end, and exit 1 naming the
+/// files that failed while the others are done.
+fn batch(
+    cli: &Cli,
+    job: &Job<'_>,
+    files: &[String],
+    dir: &str,
+    recursive: bool,
+    threads: usize,
+) -> Result<ExitCode, Failure> {
+    let has_ext = |p: &Path, exts: &[&str]| {
+        p.extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| exts.iter().any(|x| e.eq_ignore_ascii_case(x)))
+    };
+    let inputs = match job {
+        Job::Compress { .. } => batch_inputs(files, recursive, &|p| has_ext(p, &MESH_EXTENSIONS))?,
+        Job::Decompress { .. } => batch_inputs(files, recursive, &|p| has_ext(p, &["swv"]))?,
+    };
+    // Each output's path: NAME.swv, or NAME without its .swv.
+    let target = |rel: &Path| -> std::path::PathBuf {
+        let out = Path::new(dir).join(rel);
+        match job {
+            Job::Compress { .. } => {
+                let mut name = out.clone().into_os_string();
+                name.push(".swv");
+                name.into()
+            }
+            Job::Decompress { .. } if has_ext(&out, &["swv"]) => out.with_extension(""),
+            Job::Decompress { .. } => out,
+        }
+    };
+    std::fs::create_dir_all(dir).map_err(|e| fail(dir, e))?;
+    let threads = match threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        n => n,
+    }
+    .clamp(1, inputs.len().max(1));
+    let progress = Progress::new(true);
+    progress.bar.set_length(inputs.len() as u64);
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    // Per input (by its index): the bytes read and written, or why not.
+    type Outcome = (usize, Result<(u64, u64), Failure>);
+    let results: std::sync::Mutex<Vec<Outcome>> = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some((input, rel)) = inputs.get(i) else {
+                    break;
+                };
+                let out = target(rel);
+                let result: Result<(u64, u64), Failure> = (|| {
+                    if let Some(parent) = out.parent() {
+                        std::fs::create_dir_all(parent)
+                            .map_err(|e| fail(&parent.to_string_lossy(), e))?;
+                    }
+                    let out_name = out.to_string_lossy();
+                    let quiet = Progress {
+                        bar: indicatif::ProgressBar::hidden(),
+                    };
+                    let written = match job {
+                        Job::Compress { keep_order, coding } => {
+                            compress(cli, input, &out_name, *keep_order, coding, true, &quiet)?
+                        }
+                        Job::Decompress { format, max_level } => {
+                            let out_name = match (format, Format::from_path(&out_name)) {
+                                (None, None) => with_source_extension(input, &out_name)?,
+                                _ => out_name.into_owned(),
+                            };
+                            decompress(cli, input, &out_name, *format, *max_level, &quiet)?
+                        }
+                    };
+                    let read = std::fs::metadata(input).map_or(0, |m| m.len());
+                    Ok((read, written))
+                })();
+                if let Err(f) = &result {
+                    progress
+                        .bar
+                        .suspend(|| eprintln!("subwave: error: {}: {}", f.file, f.message));
+                }
+                progress.bar.inc(1);
+                if let Ok(mut r) = results.lock() {
+                    r.push((i, result));
+                }
+            });
+        }
+    });
+    drop(progress);
+    let mut results = results.into_inner().unwrap_or_default();
+    results.sort_by_key(|(i, _)| *i);
+    let (mut read, mut written, mut done) = (0u64, 0u64, 0usize);
+    let mut failed = Vec::new();
+    for (i, r) in &results {
+        match r {
+            Ok((a, b)) => {
+                read += a;
+                written += b;
+                done += 1;
+            }
+            Err(_) => failed.push(inputs[*i].0.as_str()),
+        }
+    }
+    let verb = match job {
+        Job::Compress { .. } => "compressed",
+        Job::Decompress { .. } => "decompressed",
+    };
+    let ratio = if read > 0 {
+        written as f64 / read as f64
+    } else {
+        0.0
+    };
+    eprintln!(
+        "subwave: {verb} {done} of {} files into {dir}: {read} -> {written} bytes ({ratio:.3}){}",
+        inputs.len(),
+        if failed.is_empty() {
+            String::new()
+        } else {
+            format!("; {} failed: {}", failed.len(), failed.join(", "))
+        }
+    );
+    Ok(if failed.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
+
+/// `out`, with the extension of the format `container` was compressed from.
+fn with_source_extension(container: &str, out: &str) -> Result<String, Failure> {
+    let bytes = read_input(container)?;
+    let info = subwave::inspect(&bytes, &Limits::default()).map_err(|e| fail(container, e))?;
+    let ext = match subwave::default_output_format(info.header.source) {
+        Format::Obj => "obj",
+        Format::Off => "off",
+        f if f.is_stl() => "stl",
+        _ => "ply",
+    };
+    Ok(format!("{out}.{ext}"))
+}
+
+/// Compresses `input` into `output` (`in_batch`: on one thread, the batch's files being
+/// what runs at once); the container's size.
+#[allow(clippy::too_many_arguments)]
+fn compress(
+    cli: &Cli,
+    input: &str,
+    output: &str,
+    keep_order: bool,
+    coding: &Coding,
+    in_batch: bool,
+    progress: &Progress,
+) -> Result<u64, Failure> {
+    check_output(input, output, true, cli.force)?;
+    progress.stage("reading");
+    let mut bytes = read_input(input)?;
+    check_kind(input, &bytes)?;
+    let loaded = subwave::load(&bytes, coding.bits).map_err(|e| fail(input, e))?;
+    if !keep_order {
+        warn_dropped(cli.quiet, input, &loaded);
+        // The file's bytes are needed no more: free them before coding.
+        bytes = Vec::new();
+    }
+    let mut opts = EncodeOptions {
+        keep_order,
+        source: loaded.source(),
+        progress: progress.encoder(),
+        ..coding.options(loaded.mesh.vertex_count())
+    };
+    if in_batch {
+        opts.threads = 1;
+    }
+    // With the file's order, its own bytes too: it comes back byte for byte.
+    let (mesh, q) = (&loaded.mesh, &loaded.quantization);
+    let enc = match keep_order {
+        true => subwave::encode_file(mesh, q, &opts, &bytes, loaded.format),
+        false => subwave::encode_to_vec(mesh, q, &opts),
+    }
+    .map_err(|e| fail(input, e))?;
+    drop(bytes);
+    progress.stage("writing");
+    write_output(output, &enc.bytes)?;
+    Ok(enc.bytes.len() as u64)
+}
+
+/// Decompresses `input` into `output`; the mesh file's size.
+fn decompress(
+    cli: &Cli,
+    input: &str,
+    output: &str,
+    format: Option<OutFormat>,
+    max_level: Option<u8>,
+    progress: &Progress,
+) -> Result<u64, Failure> {
+    if format.is_none() && output != "-" && Format::from_path(output).is_none() {
+        return Err(fail(
+            output,
+            "the extension names no mesh format (.obj, .ply, .off, .stl); use --format",
+        ));
+    }
+    // Binary only where it may be written; text formats go to a terminal.
+    let lower = output.to_ascii_lowercase();
+    let binary = matches!(format, Some(OutFormat::Ply | OutFormat::Stl))
+        || (format.is_none() && (lower.ends_with(".ply") || lower.ends_with(".stl")));
+    check_output(input, output, binary, cli.force)?;
+    progress.stage("reading");
+    let bytes = read_input(input)?;
+    progress.stage("decoding");
+    let opts = DecodeOptions {
+        limits: Limits::default(),
+        max_level,
+    };
+    let dec = subwave::decode(&bytes, &opts).map_err(|e| fail(input, e))?;
+    let fmt = match format {
+        Some(OutFormat::Obj) => Format::Obj,
+        Some(OutFormat::Ply) => Format::PlyBinary,
+        Some(OutFormat::PlyAscii) => Format::PlyAscii,
+        Some(OutFormat::Off) => Format::Off,
+        Some(OutFormat::Stl) => Format::StlBinary,
+        Some(OutFormat::StlAscii) => Format::StlAscii,
+        None => {
+            let src = subwave::default_output_format(dec.header.source);
+            // PLY and STL keep the values exact: ASCII for decimals (binary floats
+            // cannot hold them), binary for float and grid values.
+            let binary_exact = dec.quantization.prefers_f32()
+                || matches!(dec.quantization, Quantization::Float { .. });
+            match Format::from_path(output) {
+                Some(f) if f.is_ply() => match dec.quantization {
+                    Quantization::Decimal { .. } => Format::PlyAscii,
+                    _ => Format::PlyBinary,
+                },
+                Some(f) if f.is_stl() => match dec.quantization.prefers_f32() {
+                    true => Format::StlBinary,
+                    false => Format::StlAscii,
+                },
+                Some(f) => f,
+                None if src.is_stl() && !binary_exact => Format::StlAscii,
+                None => src,
+            }
+        }
+    };
+    progress.stage("writing");
+    // The input file itself where the container keeps it and the output is of its kind
+    // (or says no kind).
+    let same_kind = |f: Format| match dec.header.source {
+        Source::Obj => f == Format::Obj,
+        Source::Off => f == Format::Off,
+        Source::PlyAscii | Source::PlyBinary => f.is_ply(),
+        Source::StlAscii | Source::StlBinary => f.is_stl(),
+        Source::Unknown => false,
+    };
+    let original = format.is_none() && Format::from_path(output).is_none_or(same_kind);
+    let buf = match dec.file().filter(|_| original) {
+        Some(file) => file.map_err(|e| fail(input, e))?,
+        None => {
+            let mut buf = Vec::new();
+            subwave::write_mesh(&mut buf, &dec.mesh, &dec.quantization, fmt)
+                .map_err(|e| fail(output, e))?;
+            buf
+        }
+    };
+    write_output(output, &buf)?;
+    Ok(buf.len() as u64)
+}
+
 /// A mesh file whose extension names one format and whose content is another is refused
 /// (a misnamed file, or one subwave would misread).
 fn check_kind(path: &str, bytes: &[u8]) -> Result<(), Failure> {
@@ -302,7 +711,10 @@ fn check_kind(path: &str, bytes: &[u8]) -> Result<(), Failure> {
         return Ok(());
     };
     let found = Format::sniff(bytes);
-    if named.is_ply() != found.is_ply() || (named == Format::Off) != (found == Format::Off) {
+    if named.is_ply() != found.is_ply()
+        || named.is_stl() != found.is_stl()
+        || (named == Format::Off) != (found == Format::Off)
+    {
         return Err(fail(
             path,
             format!(
@@ -394,105 +806,47 @@ fn warn_dropped(quiet: bool, file: &str, loaded: &subwave::Loaded) {
 fn run(cli: &Cli) -> Result<ExitCode, Failure> {
     match &cli.command {
         Command::Compress {
-            input,
-            output,
+            files,
+            output_dir,
+            recursive,
             keep_order,
             coding,
         } => {
-            check_output(input, output, true, cli.force)?;
-            let progress = Progress::new();
-            progress.stage("reading");
-            let bytes = read_input(input)?;
-            check_kind(input, &bytes)?;
-            let loaded = subwave::load(&bytes, coding.bits).map_err(|e| fail(input, e))?;
-            if !*keep_order {
-                warn_dropped(cli.quiet, input, &loaded);
-            }
-            progress.stage("encoding");
-            let opts = EncodeOptions {
+            let job = Job::Compress {
                 keep_order: *keep_order,
-                source: loaded.source(),
-                ..coding.options()
+                coding,
             };
-            // With the file's order, its own bytes too: it comes back byte for byte.
-            let (mesh, q) = (&loaded.mesh, &loaded.quantization);
-            let enc = match keep_order {
-                true => subwave::encode_file(mesh, q, &opts, &bytes, loaded.format),
-                false => subwave::encode_to_vec(mesh, q, &opts),
+            match output_dir {
+                Some(dir) => batch(cli, &job, files, dir, *recursive, coding.threads),
+                None => {
+                    let (input, output) = pair(files, *recursive)?;
+                    let progress = Progress::new(false);
+                    compress(cli, input, output, *keep_order, coding, false, &progress)?;
+                    Ok(ExitCode::SUCCESS)
+                }
             }
-            .map_err(|e| fail(input, e))?;
-            progress.stage("writing");
-            write_output(output, &enc.bytes)?;
-            Ok(ExitCode::SUCCESS)
         }
         Command::Decompress {
-            input,
-            output,
+            files,
+            output_dir,
+            recursive,
             format,
             max_level,
+            threads,
         } => {
-            if format.is_none() && output != "-" && Format::from_path(output).is_none() {
-                return Err(fail(
-                    output,
-                    "the extension names no mesh format (.obj, .ply, .off); use --format",
-                ));
-            }
-            // A binary PLY only where one may be written; text formats go to a terminal.
-            let binary = matches!(format, Some(OutFormat::Ply))
-                || (format.is_none() && output.to_ascii_lowercase().ends_with(".ply"));
-            check_output(input, output, binary, cli.force)?;
-            let progress = Progress::new();
-            progress.stage("reading");
-            let bytes = read_input(input)?;
-            progress.stage("decoding");
-            let opts = DecodeOptions {
-                limits: Limits::default(),
+            let job = Job::Decompress {
+                format: *format,
                 max_level: *max_level,
             };
-            let dec = subwave::decode(&bytes, &opts).map_err(|e| fail(input, e))?;
-            let fmt = match format {
-                Some(OutFormat::Obj) => Format::Obj,
-                Some(OutFormat::Ply) => Format::PlyBinary,
-                Some(OutFormat::PlyAscii) => Format::PlyAscii,
-                Some(OutFormat::Off) => Format::Off,
+            match output_dir {
+                Some(dir) => batch(cli, &job, files, dir, *recursive, *threads),
                 None => {
-                    let src = subwave::default_output_format(dec.header.source);
-                    match Format::from_path(output) {
-                        // PLY keeps the values exact: ASCII for decimals (binary floats
-                        // cannot hold them), binary for float and grid values.
-                        Some(f) if f.is_ply() => {
-                            if matches!(dec.quantization, Quantization::Decimal { .. }) {
-                                Format::PlyAscii
-                            } else {
-                                Format::PlyBinary
-                            }
-                        }
-                        Some(f) => f,
-                        None => src,
-                    }
+                    let (input, output) = pair(files, *recursive)?;
+                    let progress = Progress::new(false);
+                    decompress(cli, input, output, *format, *max_level, &progress)?;
+                    Ok(ExitCode::SUCCESS)
                 }
-            };
-            progress.stage("writing");
-            // The input file itself where the container keeps it and the output is of
-            // its kind (or says no kind).
-            let same_kind = |f: Format| match dec.header.source {
-                Source::Obj => f == Format::Obj,
-                Source::Off => f == Format::Off,
-                Source::PlyAscii | Source::PlyBinary => f.is_ply(),
-                Source::Unknown => false,
-            };
-            let original = format.is_none() && Format::from_path(output).is_none_or(same_kind);
-            let buf = match dec.file().filter(|_| original) {
-                Some(file) => file.map_err(|e| fail(input, e))?,
-                None => {
-                    let mut buf = Vec::new();
-                    subwave::write_mesh(&mut buf, &dec.mesh, &dec.quantization, fmt)
-                        .map_err(|e| fail(output, e))?;
-                    buf
-                }
-            };
-            write_output(output, &buf)?;
-            Ok(ExitCode::SUCCESS)
+            }
         }
         Command::Info { file, json } => {
             let bytes = read_input(file)?;
@@ -504,63 +858,15 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
             input,
             coding,
             json,
-        } => verify(cli, input, coding.bits, &coding.options(), *json),
-    }
-}
-
-fn quant_json(q: &Quantization) -> serde_json::Value {
-    match *q {
-        Quantization::Decimal { decimals } => json!({"kind": "decimal", "decimals": decimals}),
-        Quantization::Float { width, exponent } => json!({
-            "kind": "float",
-            "width": match width { subwave::FloatWidth::F32 => 32, subwave::FloatWidth::F64 => 64 },
-            "exponent": exponent,
-        }),
-        Quantization::Grid { bits, origin, step } => json!({
-            "kind": "grid", "bits": bits, "origin": origin, "step": step,
-        }),
-    }
-}
-
-fn bpv(bytes: usize, vertices: u64) -> f64 {
-    if vertices == 0 {
-        0.0
-    } else {
-        bytes as f64 * 8.0 / vertices as f64
+        } => verify(cli, input, coding, *json),
     }
 }
 
 fn print_info(info: &subwave::Info, as_json: bool) {
     let h = &info.header;
-    let bits_per_vertex = bpv(info.bytes, h.vertices);
+    let bits_per_vertex = subwave::json::bits_per_vertex(info.bytes, h.vertices);
     if as_json {
-        let v = json!({
-            "format_version": info.version,
-            "vertices": h.vertices,
-            "faces": h.faces,
-            "corners": h.corners,
-            "base_vertices": h.base_vertices,
-            "base_faces": h.base_faces,
-            "levels": h.levels,
-            "family": h.family.name(),
-            "poles": h.poles,
-            "disc_transform": h.disc.name(),
-            "transform": h.transform.name(),
-            "fit_bits": match h.transform {
-                subwave::Transform::Fit { bits } => Some(bits),
-                _ => None,
-            },
-            "quantization": quant_json(&h.quantization),
-            "keep_order": h.has_order,
-            "value_map": h.has_value_map,
-            "sections": info.sections.iter().map(|s| match s.mode {
-                Some(m) => json!({"kind": s.kind, "bytes": s.bytes, "mode": m, "unbinned": s.unbinned, "joint": s.joint, "zero_slots": s.zero_slots}),
-                None => json!({"kind": s.kind, "bytes": s.bytes}),
-            }).collect::<Vec<_>>(),
-            "bytes": info.bytes,
-            "bits_per_vertex": bits_per_vertex,
-        });
-        println!("{v}");
+        println!("{}", subwave::json::info(info));
         return;
     }
     println!("format version  {}", info.version);
@@ -625,20 +931,17 @@ fn print_info(info: &subwave::Info, as_json: bool) {
     );
 }
 
-fn verify(
-    cli: &Cli,
-    input: &str,
-    bits: Option<u8>,
-    opts: &EncodeOptions,
-    as_json: bool,
-) -> Result<ExitCode, Failure> {
-    let progress = Progress::new();
+fn verify(cli: &Cli, input: &str, coding: &Coding, as_json: bool) -> Result<ExitCode, Failure> {
+    let progress = Progress::new(false);
     progress.stage("reading");
     let bytes = read_input(input)?;
     check_kind(input, &bytes)?;
-    let loaded = subwave::load(&bytes, bits).map_err(|e| fail(input, e))?;
+    let loaded = subwave::load(&bytes, coding.bits).map_err(|e| fail(input, e))?;
     warn_dropped(cli.quiet, input, &loaded);
-    progress.stage("encoding");
+    let opts = &EncodeOptions {
+        progress: progress.encoder(),
+        ..coding.options(loaded.mesh.vertex_count())
+    };
     let t0 = Instant::now();
     let enc = subwave::encode_to_vec(&loaded.mesh, &loaded.quantization, opts)
         .map_err(|e| fail(input, e))?;
@@ -666,7 +969,7 @@ fn verify(
             "vertices": n,
             "faces": loaded.mesh.face_count(),
             "bytes": enc.bytes.len(),
-            "bits_per_vertex": bpv(enc.bytes.len(), n),
+            "bits_per_vertex": subwave::json::bits_per_vertex(enc.bytes.len(), n),
             "encode_ms": encode_ms,
             "encode_threads": opts.threads.max(1),
             "decode_ms": decode_ms,
@@ -674,7 +977,7 @@ fn verify(
             "levels": enc.header.levels,
             "family": enc.header.family.name(),
             "transform": enc.header.transform.name(),
-            "quantization": quant_json(&loaded.quantization),
+            "quantization": subwave::json::quantization(&loaded.quantization),
             "lossless": exact && grid_error.is_none(),
             "max_error": grid_error.map(|e| e.0),
         });
@@ -686,7 +989,7 @@ fn verify(
             n,
             loaded.mesh.face_count(),
             enc.bytes.len(),
-            bpv(enc.bytes.len(), n),
+            subwave::json::bits_per_vertex(enc.bytes.len(), n),
             encode_ms,
             opts.threads.max(1),
             decode_ms,

@@ -448,7 +448,7 @@ fn nothing_is_clobbered_or_half_written() {
         .to_string_lossy()
         .ends_with(".subwave-tmp")));
     // An output extension that names no mesh format is an error.
-    let r = run(&["decompress", o, tmp("guard.stl").to_str().unwrap()]);
+    let r = run(&["decompress", o, tmp("guard.xyz").to_str().unwrap()]);
     assert_eq!(r.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&r.stderr).contains("no mesh format"));
 }
@@ -466,4 +466,96 @@ fn a_file_whose_extension_and_content_disagree_is_refused() {
     ]);
     assert_eq!(r.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&r.stderr).contains("the extension says PLY"));
+}
+
+#[test]
+fn a_batch_codes_every_file_and_names_the_ones_that_fail() {
+    let root = tmp("batch");
+    let _ = std::fs::remove_dir_all(&root);
+    let src = root.join("in");
+    std::fs::create_dir_all(src.join("deeper")).unwrap();
+    for name in ["cube_cc4.obj", "floats_cc2.ply", "cube_cc2.stl"] {
+        std::fs::copy(corpus(name), src.join(name)).unwrap();
+    }
+    std::fs::copy(corpus("open_cc2.obj"), src.join("deeper/open_cc2.obj")).unwrap();
+    std::fs::write(src.join("notes.txt"), "not a mesh, not taken by -r").unwrap();
+    std::fs::write(src.join("broken.obj"), "hello\n").unwrap();
+    let out = root.join("out");
+    let (s, o) = (src.to_str().unwrap(), out.to_str().unwrap());
+    // A folder needs -r.
+    let r = run(&["compress", s, "-o", o]);
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("use -r"));
+    // With -r: every mesh file, the broken one named, the others done, exit 1.
+    let r = run(&["-q", "compress", "-r", s, "-o", o, "--threads", "2"]);
+    let err = String::from_utf8_lossy(&r.stderr).to_string();
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(err.contains("compressed 4 of 5 files"), "{err}");
+    assert!(
+        err.contains("1 failed") && err.contains("broken.obj"),
+        "{err}"
+    );
+    for name in [
+        "cube_cc4.obj",
+        "floats_cc2.ply",
+        "cube_cc2.stl",
+        "deeper/open_cc2.obj",
+    ] {
+        assert!(
+            out.join("in").join(format!("{name}.swv")).exists(),
+            "{name}"
+        );
+    }
+    assert!(!out.join("in/notes.txt.swv").exists());
+    // Back: NAME.swv -> NAME, and the values are the inputs'.
+    let back = root.join("back");
+    let r = run(&["-q", "decompress", "-r", o, "-o", back.to_str().unwrap()]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    for name in [
+        "cube_cc4.obj",
+        "floats_cc2.ply",
+        "cube_cc2.stl",
+        "deeper/open_cc2.obj",
+    ] {
+        let a = subwave::load(&std::fs::read(src.join(name)).unwrap(), None).unwrap();
+        let b = subwave::load(
+            &std::fs::read(back.join("out/in").join(name)).unwrap(),
+            None,
+        )
+        .unwrap();
+        assert_eq!(a.mesh.vertex_count(), b.mesh.vertex_count(), "{name}");
+        let values = |l: &subwave::Loaded| {
+            let mut v: Vec<[u64; 3]> = (0..l.mesh.vertex_count())
+                .map(|i| std::array::from_fn(|k| subwave_value_bits(l, i, k)))
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(values(&a), values(&b), "{name}");
+    }
+    // A second run refuses to overwrite, unless forced; several inputs need -o.
+    let cube = corpus("cube_cc4.obj");
+    let r = run(&["compress", cube.to_str().unwrap(), "-o", o]);
+    assert!(r.status.success());
+    let r = run(&["compress", cube.to_str().unwrap(), "-o", o]);
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("already exists"));
+    let r = run(&["compress", cube.to_str().unwrap(), "a", "b"]);
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("-o DIR"));
+}
+
+/// A vertex's coordinate as the bits of the value it denotes (f64).
+fn subwave_value_bits(l: &subwave::Loaded, v: usize, k: usize) -> u64 {
+    match (l.mesh.floats.get(v), l.quantization) {
+        (
+            Some(f),
+            subwave::Quantization::Float {
+                width: subwave::FloatWidth::F32,
+                ..
+            },
+        ) => (f32::from_bits(f[k] as u32) as f64).to_bits(),
+        (Some(f), _) => f[k],
+        (None, q) => q.value_f64(l.mesh.positions[v][k], k).to_bits(),
+    }
 }

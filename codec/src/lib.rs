@@ -38,7 +38,7 @@ pub mod io;
 
 pub use error::{Error, Result};
 pub use mesh::{Mesh, MAX_COORD};
-pub use quant::{integerize, FloatWidth, Quantization, RawCoords};
+pub use quant::{integerize, Decimal, FloatWidth, Quantization, RawCoords, MAX_DECIMALS};
 pub use sections::head::{Header, Source, Transform};
 pub use subwave_container::{Limits, FORMAT_VERSION};
 pub use topology::Family;
@@ -50,5 +50,5 @@ mod encoder;
 mod info;
 
 pub use decoder::{decode, DecodeOptions, Decoded};
-pub use encoder::{encode, encode_file, EncodeOptions, Encoded, TransformChoice};
+pub use encoder::{encode, encode_file, EncodeOptions, Encoded, Progress, Stage, TransformChoice};
 pub use info::{inspect, Info, SectionInfo};

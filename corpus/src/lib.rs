@@ -293,6 +293,39 @@ impl PolyMesh {
         out
     }
 
+    /// Writes a binary STL: each face as a fan of triangles, positions and facet normals
+    /// in binary32, a zero attribute word.
+    pub fn to_stl(&self) -> Vec<u8> {
+        let tris: Vec<[u32; 3]> = self
+            .faces
+            .iter()
+            .flat_map(|f| (1..f.len() - 1).map(move |i| [f[0], f[i], f[i + 1]]))
+            .collect();
+        let mut out = vec![b' '; 80];
+        out[..24].copy_from_slice(b"subwave corpus generator");
+        out.extend_from_slice(&(tris.len() as u32).to_le_bytes());
+        for t in &tris {
+            let p = t.map(|v| self.positions[v as usize].map(|x| x as f32));
+            let (u, w) = (
+                [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]],
+                [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]],
+            );
+            let n = [
+                u[1] * w[2] - u[2] * w[1],
+                u[2] * w[0] - u[0] * w[2],
+                u[0] * w[1] - u[1] * w[0],
+            ];
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+                .sqrt()
+                .max(f32::MIN_POSITIVE);
+            for x in n.iter().map(|x| x / len).chain(p.into_iter().flatten()) {
+                out.extend_from_slice(&x.to_le_bytes());
+            }
+            out.extend_from_slice(&[0, 0]);
+        }
+        out
+    }
+
     /// Writes OBJ text with `decimals` decimals.
     pub fn to_obj(&self, decimals: usize) -> String {
         let mut s = String::with_capacity(self.positions.len() * 40 + self.faces.len() * 30);
@@ -534,6 +567,10 @@ pub fn small_corpus() -> Vec<(&'static str, Vec<u8>)> {
         "floats_cc2.ply",
         floats.to_ply_f32(&[-0.0, 2.3283064e-10, 1e-40]),
     ));
+    // STL: triangles, each corner a copy of its position (a refined cube's quads split).
+    let mut tris = cube().refined(2);
+    tris.displace(0.05, 0.002, &mut rng);
+    out.push(("cube_cc2.stl", tris.to_stl()));
     out
 }
 

@@ -23,7 +23,7 @@ pub fn list(dir: &Path) -> Vec<PathBuf> {
                 .filter(|p| {
                     matches!(
                         p.extension().and_then(|e| e.to_str()),
-                        Some("obj" | "ply" | "off")
+                        Some("obj" | "ply" | "off" | "stl")
                     )
                 })
                 .collect()

@@ -55,6 +55,57 @@ pub struct EncodeOptions {
     /// candidate families and transforms at once. The container is the same for every
     /// count; each thread holds a coding's working memory.
     pub threads: usize,
+    /// Where the encoder reports what it is doing (nothing by default).
+    pub progress: Progress,
+}
+
+/// What the encoder is doing, as reported to a [`Progress`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// Looking for the subdivision hierarchy (or hierarchies) in the mesh.
+    Recovering,
+    /// Coding a hierarchy's `level` (1-based) of `levels` with `transform`; `auto` codes
+    /// several candidates, each through its levels.
+    Level {
+        /// The transform's name.
+        transform: &'static str,
+        /// The level being coded, from the coarsest (1).
+        level: usize,
+        /// The hierarchy's levels.
+        levels: usize,
+    },
+    /// Coding the mesh without a hierarchy.
+    Flat,
+    /// Writing the container.
+    Container,
+}
+
+/// A callback for the encoder's [`Stage`]s (from any of its threads); the default
+/// reports nowhere.
+#[derive(Clone, Default)]
+pub struct Progress(Option<std::sync::Arc<dyn Fn(Stage) + Send + Sync>>);
+
+impl Progress {
+    /// Reports each stage to `f`.
+    pub fn new(f: impl Fn(Stage) + Send + Sync + 'static) -> Self {
+        Progress(Some(std::sync::Arc::new(f)))
+    }
+
+    pub(crate) fn report(&self, stage: Stage) {
+        if let Some(f) = &self.0 {
+            f(stage);
+        }
+    }
+}
+
+impl std::fmt::Debug for Progress {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(if self.0.is_some() {
+            "Progress(callback)"
+        } else {
+            "Progress(none)"
+        })
+    }
 }
 
 impl Default for EncodeOptions {
@@ -67,6 +118,7 @@ impl Default for EncodeOptions {
             disc: None,
             value_map: None,
             threads: 1,
+            progress: Progress::default(),
         }
     }
 }
@@ -258,15 +310,20 @@ fn encode_with(
     flat_h.has_value_map = vmap.is_some();
     flat_h.has_template = tmpl.is_some();
     let best = if opts.max_levels > 0 {
+        opts.progress.report(Stage::Recovering);
         best_hierarchy(mesh, opts, &flat_h)?
     } else {
         None
     };
     let (payloads, order) = match best {
-        Some((p, canon)) => (p, canon.order),
-        None => best_flat(mesh, opts, &flat_h),
+        Some((p, order)) => (p, order),
+        None => {
+            opts.progress.report(Stage::Flat);
+            best_flat(mesh, opts, &flat_h)
+        }
     };
     let fbit = float_bits(mesh, q, &order)?;
+    opts.progress.report(Stage::Container);
     let (bytes, sections) = write_container(&payloads, vmap, fbit.as_deref(), tmpl)?;
     let header = payloads.header;
     Ok(Encoded {
@@ -310,18 +367,17 @@ fn float_bits(mesh: &Mesh, q: &Quantization, order: &[u32]) -> Result<Option<Vec
     Ok(Some(fbit::encode(decoded, width, exponent)))
 }
 
-/// The hierarchy coding that codes `mesh` smallest, with the canonical hierarchy it was
-/// made from; `None` when no hierarchy is found.
+/// The hierarchy coding that codes `mesh` smallest, with the canonical order of the
+/// hierarchy it was made from; `None` when no hierarchy is found.
 fn best_hierarchy(
     mesh: &Mesh,
     opts: &EncodeOptions,
     flat_h: &Header,
-) -> Result<Option<(Payloads, Canonical)>> {
+) -> Result<Option<(Payloads, Vec<u32>)>> {
     let mut topo = Topo::new(mesh.vertex_count());
     topo.idx = mesh.faces.clone();
     topo.starts = mesh.face_starts.clone();
-    let mut best: Option<Payloads> = None;
-    let mut chosen: Option<Canonical> = None;
+    let mut best: Option<(Payloads, Vec<u32>)> = None;
     let (want_cc, want_sqrt2) = match opts.transform {
         TransformChoice::Auto => (true, true),
         TransformChoice::Fixed(w) => (!w.is_sqrt2(), w.is_sqrt2()),
@@ -333,8 +389,10 @@ fn best_hierarchy(
     // the input's order is kept: then as recovered, which makes the order cheap.
     let gates = !opts.keep_order;
     // Per family: its candidate hierarchies, the transform that compares them, and
-    // the family's other transforms (tried on the better candidate with `auto`).
-    let mut families: Vec<(Vec<Canonical>, Wavelet, &[Wavelet])> = Vec::new();
+    // the family's other transforms (tried on the better candidate with `auto`). The
+    // sqrt(2) family is recovered by the job that codes it, so that on one thread the
+    // Catmull-Clark family's hierarchies are gone before it is (memory).
+    let mut families: Vec<FamilyJob> = Vec::new();
     if want_cc {
         let mut canons = Vec::new();
         for rec in topology::cc::recover_all(mesh.vertex_count(), &topo, max) {
@@ -357,26 +415,20 @@ fn best_hierarchy(
                     let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
                     p.order = Some(order_section(&canon.order, faces, rotations));
                 }
-                if best.as_ref().is_none_or(|b| p.size() < b.size()) {
-                    best = Some(p);
-                    chosen = Some(canon.clone());
+                if best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
+                    best = Some((p, canon.order.clone()));
                 }
             }
         }
         // A mesh and its dual can both be the base: compare them with one transform.
-        if !fit_only {
-            families.push((canons, Wavelet::Bicubic, &Wavelet::ALL));
+        if !fit_only && !canons.is_empty() {
+            families.push(FamilyJob::Ready(canons, Wavelet::Bicubic, &Wavelet::ALL));
         }
     }
     if want_sqrt2 {
-        let canons: Vec<Canonical> = topology::sqrt2::recover(&topo, max)
-            .and_then(|rec| topology::sqrt2::canonicalise(&rec, &topo, gates).ok())
-            .into_iter()
-            .collect();
-        families.push((canons, Wavelet::Sqrt2Lazy, &Wavelet::SQRT2));
+        families.push(FamilyJob::Sqrt2);
     }
     // The families code apart; on several threads at once, each with its share.
-    families.retain(|(canons, ..)| !canons.is_empty());
     let threads = opts.threads.max(1);
     let share = (threads / families.len().max(1)).max(1);
     // Each family is taken once, by the thread that codes it (on one thread, in
@@ -387,19 +439,42 @@ fn best_hierarchy(
         .collect();
     let coded = par_map(&jobs, threads, |job| {
         let taken = job.lock().map(|mut j| j.take()).ok().flatten();
-        let (canons, first, others) = taken.expect("each family is coded once");
-        code_family(mesh, opts, flat_h, canons, first, others, share)
+        let (canons, first, others) = match taken.expect("each family is coded once") {
+            FamilyJob::Ready(canons, first, others) => (canons, first, others),
+            FamilyJob::Sqrt2 => {
+                let canons: Vec<Canonical> = topology::sqrt2::recover(&topo, max)
+                    .and_then(|rec| topology::sqrt2::canonicalise(&rec, &topo, gates).ok())
+                    .into_iter()
+                    .collect();
+                (canons, Wavelet::Sqrt2Lazy, &Wavelet::SQRT2[..])
+            }
+        };
+        if canons.is_empty() {
+            return Ok::<_, Error>(None);
+        }
+        // Only the order of the hierarchy is kept.
+        Ok(
+            code_family(mesh, opts, flat_h, canons, first, others, share)?
+                .map(|(p, canon)| (p, canon.order)),
+        )
     });
     for family in coded {
-        let Some((p, canon)) = family? else {
+        let Some((p, order)) = family? else {
             continue;
         };
-        if best.as_ref().is_none_or(|b| p.size() < b.size()) {
-            best = Some(p);
-            chosen = Some(canon);
+        if best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
+            best = Some((p, order));
         }
     }
-    Ok(best.zip(chosen))
+    Ok(best)
+}
+
+/// A family's candidate hierarchies for [`best_hierarchy`]: recovered, with the
+/// transform that compares them and the family's others; or the sqrt(2) family, to be
+/// recovered.
+enum FamilyJob {
+    Ready(Vec<Canonical>, Wavelet, &'static [Wavelet]),
+    Sqrt2,
 }
 
 /// The flat coding (no levels): faces as the connectivity coder's gates visit them
@@ -506,18 +581,59 @@ mod tests {
         let pos = canonical_positions(&mesh, &canon);
         let d = DiscTransform::None;
         for w in [Wavelet::Bicubic, Wavelet::Interp4, Wavelet::Lazy] {
-            let free = code_hierarchy(&canon, &pos, w, d, &header, true, None, UNBOUNDED).unwrap();
+            let free = code_hierarchy(
+                &canon,
+                &pos,
+                w,
+                d,
+                &header,
+                true,
+                None,
+                UNBOUNDED,
+                &Progress::default(),
+            )
+            .unwrap();
             let plan = free.modes();
             for modes in [None, Some(plan)] {
-                let whole =
-                    code_hierarchy(&canon, &pos, w, d, &header, true, modes.clone(), UNBOUNDED)
-                        .unwrap();
+                let whole = code_hierarchy(
+                    &canon,
+                    &pos,
+                    w,
+                    d,
+                    &header,
+                    true,
+                    modes.clone(),
+                    UNBOUNDED,
+                    &Progress::default(),
+                )
+                .unwrap();
                 let n = whole.coded();
-                let fit = code_hierarchy(&canon, &pos, w, d, &header, true, modes.clone(), n)
-                    .unwrap_or_else(|| panic!("fits its own size {w:?} {:?} {n}", modes));
+                let fit = code_hierarchy(
+                    &canon,
+                    &pos,
+                    w,
+                    d,
+                    &header,
+                    true,
+                    modes.clone(),
+                    n,
+                    &Progress::default(),
+                )
+                .unwrap_or_else(|| panic!("fits its own size {w:?} {:?} {n}", modes));
                 assert_eq!((fit.base, fit.levels), (whole.base, whole.levels), "{w:?}");
                 assert!(
-                    code_hierarchy(&canon, &pos, w, d, &header, true, modes, n - 1).is_none(),
+                    code_hierarchy(
+                        &canon,
+                        &pos,
+                        w,
+                        d,
+                        &header,
+                        true,
+                        modes,
+                        n - 1,
+                        &Progress::default()
+                    )
+                    .is_none(),
                     "{w:?}"
                 );
             }

@@ -17,6 +17,7 @@ pub(crate) fn code_hierarchy(
     rotated: bool,
     modes: Option<Vec<u8>>,
     bound: usize,
+    progress: &Progress,
 ) -> Option<Payloads> {
     let mut x = pos.clone();
     // The coarse values of each level, as the decoder will have them when it reads the
@@ -60,7 +61,19 @@ pub(crate) fn code_hierarchy(
     // Bytes the levels may take: a coding over the bound is not wanted.
     let mut room = bound.checked_sub(base_bytes.len())?;
     let mut level_bytes = Vec::with_capacity(canon.levels.len());
-    for (((l, c), t), ph) in canon.levels.iter().zip(&coarse).zip(&targets).zip(&phases) {
+    for (i, (((l, c), t), ph)) in canon
+        .levels
+        .iter()
+        .zip(&coarse)
+        .zip(&targets)
+        .zip(&phases)
+        .enumerate()
+    {
+        progress.report(Stage::Level {
+            transform: w.name(),
+            level: i + 1,
+            levels: canon.levels.len(),
+        });
         let t = t.as_deref();
         let b = levl::encode(l, canon.family, &x, c, &mut models, t, ph.as_ref(), room)?;
         room -= b.len();
@@ -215,7 +228,17 @@ fn best_candidate(
             let order_len = order.as_ref().map_or(0, Vec::len);
             b.0.size().saturating_sub(order_len + 1)
         });
-        if let Some(mut p) = code_hierarchy(&canon, &pos, first, disc, flat_h, true, None, bound) {
+        if let Some(mut p) = code_hierarchy(
+            &canon,
+            &pos,
+            first,
+            disc,
+            flat_h,
+            true,
+            None,
+            bound,
+            &opts.progress,
+        ) {
             p.order = order;
             if fam_best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
                 fam_best = Some((p, canon, pos));
@@ -256,7 +279,17 @@ pub(crate) fn code_family(
     // Codes the chosen hierarchy with (w, d) and keeps it if smaller.
     let try_code = |p: &mut Payloads, w: Wavelet, d: DiscTransform, rotated: bool| {
         let bound = p.coded().saturating_sub(1);
-        if let Some(mut q) = code_hierarchy(&canon, &pos, w, d, flat_h, rotated, None, bound) {
+        if let Some(mut q) = code_hierarchy(
+            &canon,
+            &pos,
+            w,
+            d,
+            flat_h,
+            rotated,
+            None,
+            bound,
+            &opts.progress,
+        ) {
             q.order = p.order.clone();
             if q.coded() < p.coded() {
                 *p = q;
@@ -276,7 +309,17 @@ pub(crate) fn code_family(
         // each coding only where it fits its own bound, as coded alone it would have
         // (a coding within a bound is the same coding under any wider one).
         let code = |&(w, d): &(Wavelet, DiscTransform), bound: usize| {
-            code_hierarchy(&canon, &pos, w, d, flat_h, true, Some(modes.clone()), bound)
+            code_hierarchy(
+                &canon,
+                &pos,
+                w,
+                d,
+                flat_h,
+                true,
+                Some(modes.clone()),
+                bound,
+                &opts.progress,
+            )
         };
         let widest = p.coded().saturating_sub(1).max(margin);
         let mut ahead = if threads > 1 {

@@ -1,4 +1,4 @@
-//! Reading and writing OBJ, PLY (ASCII and binary) and OFF, keeping polygons as they
+//! Reading and writing OBJ, PLY (ASCII and binary), OFF and STL (ASCII and binary), keeping polygons as they
 //! are and every number exact.
 //!
 //! OBJ is read by this crate's own reader rather than `tobj`: `tobj` renumbers vertices
@@ -8,6 +8,7 @@
 mod obj;
 mod off;
 mod ply;
+mod stl;
 pub(crate) mod template;
 
 use std::collections::BTreeSet;
@@ -30,27 +31,40 @@ pub enum Format {
     PlyBinaryBigEndian,
     /// Object File Format.
     Off,
+    /// STL, ASCII.
+    StlAscii,
+    /// STL, binary (little-endian binary32 positions).
+    StlBinary,
 }
 
 impl Format {
-    /// The format a file name's extension names, if any (`.obj`, `.ply`, `.off`).
-    /// `.ply` gives [`Format::PlyBinary`]; callers choose ASCII where they prefer it.
+    /// The format a file name's extension names, if any (`.obj`, `.ply`, `.off`,
+    /// `.stl`, in any case). `.ply` and `.stl` give the binary variant; callers choose
+    /// ASCII where they prefer it.
     pub fn from_path(path: &str) -> Option<Format> {
         let ext = path.rsplit_once('.')?.1.to_ascii_lowercase();
         match ext.as_str() {
             "obj" => Some(Format::Obj),
             "ply" => Some(Format::PlyBinary),
             "off" => Some(Format::Off),
+            "stl" => Some(Format::StlBinary),
             _ => None,
         }
     }
 
-    /// Guesses the format from a file's first bytes: `ply`, `OFF` (after any comment
-    /// lines), else OBJ.
+    /// Guesses the format from a file's bytes: `ply`; a binary STL (an 84-byte head
+    /// whose facet count accounts for the file's length); `solid` (ASCII STL); `OFF`
+    /// (after any comment lines); else OBJ.
     pub fn sniff(bytes: &[u8]) -> Format {
         let head = &bytes[..bytes.len().min(4096)];
         if head.starts_with(b"ply") {
             return Format::PlyAscii;
+        }
+        if stl::is_binary(bytes) {
+            return Format::StlBinary;
+        }
+        if stl::is_ascii(head) {
+            return Format::StlAscii;
         }
         // The first line that is neither blank nor a comment.
         let first = head
@@ -78,7 +92,14 @@ impl Format {
             Format::PlyBinary => "PLY (binary little-endian)",
             Format::PlyBinaryBigEndian => "PLY (binary big-endian)",
             Format::Off => "OFF",
+            Format::StlAscii => "STL (ASCII)",
+            Format::StlBinary => "STL (binary)",
         }
+    }
+
+    /// Whether this is one of the STL variants.
+    pub fn is_stl(self) -> bool {
+        matches!(self, Format::StlAscii | Format::StlBinary)
     }
 
     /// Whether this is one of the PLY variants.
@@ -107,7 +128,7 @@ pub struct RawMesh {
 }
 
 /// Reads a mesh file from bytes. The format is sniffed from the content. A file with
-/// nothing in it, or that is no OBJ, PLY or OFF, is an error.
+/// nothing in it, or that is no OBJ, PLY, OFF or STL, is an error.
 pub fn read_mesh(bytes: &[u8]) -> Result<RawMesh> {
     if bytes.trim_ascii().is_empty() {
         return Err(Error::MeshFile("the file is empty: no mesh in it".into()));
@@ -115,9 +136,13 @@ pub fn read_mesh(bytes: &[u8]) -> Result<RawMesh> {
     let mut m = match Format::sniff(bytes) {
         Format::Off => off::read(bytes)?,
         Format::Obj => obj::read(bytes)?,
+        Format::StlAscii | Format::StlBinary => stl::read(bytes)?,
         _ => ply::read(bytes)?,
     };
     check_faces(&mut m)?;
+    // The faces grew as they were read: give back the room they did not fill.
+    m.topology.faces.shrink_to_fit();
+    m.topology.face_starts.shrink_to_fit();
     Ok(m)
 }
 
@@ -163,6 +188,7 @@ pub(crate) fn template_of(
             ply::template(bytes, &mut b)?
         }
         Format::Off => off::template(bytes, &mut b)?,
+        Format::StlAscii | Format::StlBinary => stl::template(bytes, &mut b)?,
     }
     template::checked(b, bytes)
 }
@@ -175,6 +201,8 @@ pub fn write_mesh<W: Write>(out: W, mesh: &Mesh, q: &Quantization, format: Forma
         Format::Off => off::write(&mut out, mesh, q)?,
         Format::PlyAscii => ply::write(&mut out, mesh, q, false)?,
         Format::PlyBinary | Format::PlyBinaryBigEndian => ply::write(&mut out, mesh, q, true)?,
+        Format::StlAscii => stl::write(&mut out, mesh, q, false)?,
+        Format::StlBinary => stl::write(&mut out, mesh, q, true)?,
     }
     out.flush()?;
     Ok(())

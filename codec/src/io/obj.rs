@@ -46,7 +46,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         syntax(
             "OBJ",
             line_of(bytes, e.valid_up_to()),
-            "not UTF-8 text: not an OBJ file (subwave reads OBJ, PLY and OFF)",
+            "not UTF-8 text: not an OBJ file (subwave reads OBJ, PLY, OFF and STL)",
         )
     })?;
     let mut coords = TextCoords::default();
@@ -91,7 +91,12 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             }
             "f" | "fo" => {
                 read_face(tok, lineno, coords.len(), &mut face, &mut dropped)?;
-                topo.push_face(&face);
+                if face.len() >= 3 {
+                    topo.push_face(&face);
+                } else {
+                    // A face of one or two corners is a point or a line, not a polygon.
+                    dropped.insert("faces of fewer than 3 corners".to_string());
+                }
             }
             "vt" => {
                 dropped.insert("texture coordinates".to_string());
@@ -125,7 +130,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                 return Err(syntax(
                     "OBJ",
                     lineno,
-                    format!("'{other}' is no OBJ statement: not an OBJ file (subwave reads OBJ, PLY and OFF)"),
+                    format!("'{other}' is no OBJ statement: not an OBJ file (subwave reads OBJ, PLY, OFF and STL)"),
                 ));
             }
         }
@@ -166,7 +171,7 @@ fn join_continued<'a>(
 
 /// An `f` statement's corners (`v`, `v/vt`, `v/vt/vn`, `v//vn`; negative numbers count
 /// back from the `nv` vertices so far) into `face`, noting texture coordinates and
-/// normals as dropped.
+/// normals as dropped. The caller checks that there are at least 3.
 fn read_face<'a>(
     tok: impl Iterator<Item = &'a str>,
     lineno: usize,
@@ -204,13 +209,6 @@ fn read_face<'a>(
             ));
         }
         face.push(idx as u32);
-    }
-    if face.len() < 3 {
-        return Err(syntax(
-            "OBJ",
-            lineno,
-            format!("face has {} corners; faces need at least 3", face.len()),
-        ));
     }
     Ok(())
 }
@@ -283,7 +281,8 @@ pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
                     at = e;
                 }
             }
-            b"f" | b"fo" => {
+            // As the reader: a face of fewer than 3 corners is not coded.
+            b"f" | b"fo" if tokens(code).count() >= 4 => {
                 for (s, e) in toks {
                     b.literal(&line[at..s]);
                     let slash = line[s..e]

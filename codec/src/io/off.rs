@@ -9,33 +9,71 @@ use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::quant::{Quantization, TextCoords};
 
+/// An OFF body's statements: lines without comments, blank ones skipped, with their
+/// 1-based numbers. A record (the counts, a vertex, a face) is one line, or several
+/// where a line holds fewer values than the record needs (libigl writes faces so).
+struct Records<'a, I: Iterator<Item = (usize, &'a str)>> {
+    lines: I,
+}
+
+impl<'a, I: Iterator<Item = (usize, &'a str)>> Records<'a, I> {
+    /// The next record of at least `need` values (the first one's count read by
+    /// `need_of`, when given): its tokens and its first line's number; `None` at the end.
+    fn next(
+        &mut self,
+        need: usize,
+        need_of: Option<fn(&str) -> usize>,
+        tokens: &mut Vec<&'a str>,
+    ) -> Option<usize> {
+        tokens.clear();
+        let (n, l) = self.lines.next()?;
+        tokens.extend(l.split_ascii_whitespace());
+        loop {
+            let want = match (need_of, tokens.first()) {
+                (Some(f), Some(t)) => 1 + f(t),
+                _ => need,
+            };
+            if tokens.len() >= want {
+                return Some(n);
+            }
+            match self.lines.next() {
+                Some((_, l)) => tokens.extend(l.split_ascii_whitespace()),
+                None => return Some(n),
+            }
+        }
+    }
+}
+
 pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     let text = std::str::from_utf8(bytes).map_err(|_| {
         Error::MeshFile("OFF file is not UTF-8 text (binary OFF is not supported)".into())
     })?;
     // Statements, with comments and blank lines removed, keeping line numbers.
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(n, l)| (n + 1, l.split('#').next().unwrap_or("").trim()))
-        .filter(|(_, l)| !l.is_empty());
-    let (ln, first) = lines
-        .next()
+    let mut records = Records {
+        lines: text
+            .lines()
+            .enumerate()
+            .map(|(n, l)| (n + 1, l.split('#').next().unwrap_or("").trim()))
+            .filter(|(_, l)| !l.is_empty()),
+    };
+    let mut toks = Vec::new();
+    let ln = records
+        .next(1, None, &mut toks)
         .ok_or_else(|| Error::MeshFile("OFF file is empty".into()))?;
-    let mut tok = first.split_ascii_whitespace();
     let mut dropped = BTreeSet::new();
-    let extra_per_vertex = keyword(tok.next().unwrap_or(""), ln, &mut dropped)?;
-    let mut header: Vec<&str> = tok.collect();
+    // The keyword, with the counts after it on its line, or glued to it (`OFF8 6 12`).
+    let (kw, glued) = split_keyword(toks[0]);
+    let extra_per_vertex = keyword(kw, ln, &mut dropped)?;
+    let mut header: Vec<&str> = glued.into_iter().chain(toks[1..].iter().copied()).collect();
     if header.first() == Some(&"BINARY") {
         return Err(Error::Unsupported("binary OFF".into()));
     }
     let mut count_line = ln;
     if header.is_empty() {
-        let (n, l) = lines
-            .next()
+        count_line = records
+            .next(2, None, &mut toks)
             .ok_or_else(|| syntax("OFF", ln, "missing the vertex and face counts"))?;
-        count_line = n;
-        header = l.split_ascii_whitespace().collect();
+        header = toks.clone();
     }
     let count = |i: usize, what: &str| -> Result<usize> {
         header
@@ -61,29 +99,33 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     }
     let mut coords = TextCoords::default();
     for i in 0..nv {
-        let (n, l) = lines
-            .next()
+        let n = records
+            .next(3, None, &mut toks)
             .ok_or_else(|| Error::MeshFile(format!("OFF file ends after {i} of {nv} vertices")))?;
-        let mut t = l.split_ascii_whitespace();
-        let mut p = [""; 3];
-        for (k, slot) in p.iter_mut().enumerate() {
-            *slot = t
-                .next()
-                .ok_or_else(|| syntax("OFF", n, format!("vertex has {k} coordinates, needs 3")))?;
+        if toks.len() < 3 {
+            let k = toks.len();
+            return Err(syntax(
+                "OFF",
+                n,
+                format!("vertex has {k} coordinates, needs 3"),
+            ));
         }
-        coords.push(p).map_err(|e| syntax("OFF", n, e))?;
-        let extra = t.count();
-        if extra > 0 && extra_per_vertex == 0 {
+        coords
+            .push([toks[0], toks[1], toks[2]])
+            .map_err(|e| syntax("OFF", n, e))?;
+        if toks.len() > 3 && extra_per_vertex == 0 {
             dropped.insert("per-vertex extra values".to_string());
         }
     }
     let mut topo = Mesh::new();
     let mut face = Vec::new();
+    // A face's corner count; a bad one is reported by read_face.
+    let corners: fn(&str) -> usize = |t| t.parse::<usize>().unwrap_or(0);
     for i in 0..nf {
-        let (n, l) = lines
-            .next()
+        let n = records
+            .next(1, Some(corners), &mut toks)
             .ok_or_else(|| Error::MeshFile(format!("OFF file ends after {i} of {nf} faces")))?;
-        read_face(l, n, nv, &mut face, &mut dropped)?;
+        read_face(&toks, n, nv, &mut face, &mut dropped)?;
         topo.push_face(&face);
     }
     let (coords, inexact) = coords.finish();
@@ -94,6 +136,17 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         dropped,
         inexact,
     })
+}
+
+/// A first token split into the keyword and, where the counts follow it without a
+/// space (`OFF8`), the first count.
+fn split_keyword(t: &str) -> (&str, Option<&str>) {
+    match t.find("OFF") {
+        Some(i) if i + 3 < t.len() && t.as_bytes()[i + 3].is_ascii_digit() => {
+            (&t[..i + 3], Some(&t[i + 3..]))
+        }
+        _ => (t, None),
+    }
 }
 
 /// The OFF keyword (`[ST][C][N]OFF`): how many values each vertex line has after its
@@ -121,15 +174,15 @@ fn keyword(kw: &str, ln: usize, dropped: &mut BTreeSet<String>) -> Result<usize>
     Ok(extra_per_vertex)
 }
 
-/// One face line (`k v1 .. vk [colour]`), its vertices (below `nv`) into `face`.
+/// One face record (`k v1 .. vk [colour]`), its vertices (below `nv`) into `face`.
 fn read_face(
-    l: &str,
+    toks: &[&str],
     n: usize,
     nv: usize,
     face: &mut Vec<u32>,
     dropped: &mut BTreeSet<String>,
 ) -> Result<()> {
-    let mut t = l.split_ascii_whitespace();
+    let mut t = toks.iter();
     let k: usize = t
         .next()
         .and_then(|s| s.parse().ok())

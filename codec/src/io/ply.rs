@@ -108,6 +108,20 @@ impl<'a> Body<'a> {
         std::str::from_utf8(&self.data[start..self.pos]).map_err(|_| err("body is not ASCII text"))
     }
 
+    /// In an ASCII body, after a record: goes past the end of its line (a record is a
+    /// line; some writers put more values on it than the header names). Whether there
+    /// were such values.
+    fn end_line(&mut self) -> bool {
+        let rest = &self.data[self.pos..];
+        let end = rest
+            .iter()
+            .position(|&c| c == b'\n')
+            .map_or(rest.len(), |e| e + 1);
+        let extra = !rest[..end].trim_ascii().is_empty();
+        self.pos += end;
+        extra
+    }
+
     fn take<const N: usize>(&mut self) -> Result<[u8; N]> {
         if self.remaining() < N {
             return Err(err("file ends before all elements were read"));
@@ -357,6 +371,9 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                     }
                 }
             }
+            if mode == Mode::Ascii && body.end_line() {
+                dropped.insert(format!("values past the end of a '{}' record", el.name));
+            }
             if is_vertex {
                 if mode == Mode::Ascii {
                     text.push(toks).map_err(err)?;
@@ -366,9 +383,8 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             }
         }
     }
-    if !have_vertices {
-        return Err(err("no vertex element"));
-    }
+    // A file without a vertex element is an empty mesh (its header says so); a face
+    // element then refers to vertices that are not there, which check_faces reports.
     let (coords, inexact) = if mode == Mode::Ascii {
         text.finish()
     } else {
@@ -407,13 +423,16 @@ fn read_list(
         f.clear();
     }
     for _ in 0..n {
+        let Some(f) = face.as_deref_mut() else {
+            // Another list (texture coordinates per corner, say): its items of any type.
+            body.num(ity)?;
+            continue;
+        };
         let i = body.int(ity, "vertex index")?;
-        if let Some(f) = face.as_deref_mut() {
-            if !(0..u32::MAX as i64).contains(&i) {
-                return Err(err(format!("vertex index {i} is out of range")));
-            }
-            f.push(i as u32);
+        if !(0..u32::MAX as i64).contains(&i) {
+            return Err(err(format!("vertex index {i} is out of range")));
         }
+        f.push(i as u32);
     }
     Ok(())
 }
@@ -645,6 +664,16 @@ pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
                         }
                     }
                 }
+            }
+            if mode == Mode::Ascii {
+                // The rest of the record's line, as the reader skips it.
+                let rest = &bytes[pos..];
+                let end = rest
+                    .iter()
+                    .position(|&c| c == b'\n')
+                    .map_or(rest.len(), |e| e + 1);
+                b.literal(&rest[..end]);
+                pos += end;
             }
         }
     }

@@ -33,8 +33,12 @@ const COORD_F32_BE: u8 = 10;
 const COORD_F64_BE: u8 = 11;
 /// The next corner index as a 32-bit integer, big-endian.
 const INDEX_32_BE: u8 = 12;
+/// The next corner's vertex's three coordinates as binary32, little-endian (STL).
+const CORNER_F32_LE: u8 = 13;
+/// The next corner's vertex's three coordinates as text, a space before each (STL).
+const CORNER_TEXT: u8 = 14;
 /// Bytes at most this are markers; a literal one is escaped.
-const LAST_MARKER: u8 = 12;
+const LAST_MARKER: u8 = 14;
 
 /// Builds a template while a format's walker reads the file.
 pub(super) struct Builder<'m> {
@@ -147,6 +151,60 @@ impl<'m> Builder<'m> {
     }
 }
 
+impl Builder<'_> {
+    /// The next corner's vertex's coordinates, as text: each a gap and a token.
+    fn corner_coords_text(&mut self, v: usize) -> String {
+        let mut t = String::new();
+        for k in 0..3 {
+            t.push(' ');
+            format_coord(self.mesh, v, k, self.q, &mut t);
+        }
+        t
+    }
+
+    /// The next corner's position, stored as three binary32 little-endian `bytes`.
+    pub(super) fn corner_f32(&mut self, bytes: &[u8]) {
+        let c = self.corner;
+        self.corner += 1;
+        let want = self.mesh.faces.get(c).map(|&v| {
+            let mut w = [0u8; 12];
+            for k in 0..3 {
+                let x = value_f32(self.mesh, v as usize, k, self.q);
+                w[4 * k..4 * k + 4].copy_from_slice(&x.to_le_bytes());
+            }
+            w
+        });
+        if want.as_ref().map(|w| &w[..]) == Some(bytes) {
+            self.out.push(CORNER_F32_LE);
+        } else {
+            self.out.push(SKIP_INDEX);
+            self.literal(bytes);
+        }
+    }
+
+    /// The next corner's position, written as three (gap, token) pairs.
+    pub(super) fn corner_text(&mut self, parts: [(&[u8], &[u8]); 3]) {
+        let c = self.corner;
+        self.corner += 1;
+        let mut written = Vec::new();
+        for (gap, tok) in parts {
+            written.extend_from_slice(gap);
+            written.extend_from_slice(tok);
+        }
+        let want = self
+            .mesh
+            .faces
+            .get(c)
+            .map(|&v| self.corner_coords_text(v as usize));
+        if want.as_deref().map(str::as_bytes) == Some(&written[..]) {
+            self.out.push(CORNER_TEXT);
+        } else {
+            self.out.push(SKIP_INDEX);
+            self.literal(&written);
+        }
+    }
+}
+
 /// A builder for a template of a file of about `len` bytes.
 pub(super) fn builder<'m>(mesh: &'m Mesh, q: &'m Quantization, len: usize) -> Builder<'m> {
     Builder::new(mesh, q, len / 2)
@@ -212,6 +270,20 @@ pub(crate) fn expand(t: &[u8], mesh: &Mesh, q: &Quantization) -> Result<Vec<u8>>
                     INDEX_TEXT_0 => out.extend_from_slice(v.to_string().as_bytes()),
                     INDEX_32_LE => out.extend_from_slice(&v.to_le_bytes()),
                     _ => out.extend_from_slice(&v.to_be_bytes()),
+                }
+            }
+            CORNER_F32_LE | CORNER_TEXT => {
+                let v =
+                    next_corner(&mut corner).ok_or_else(|| bad("more corners than faces have"))?;
+                for k in 0..3 {
+                    if b == CORNER_TEXT {
+                        text.clear();
+                        text.push(' ');
+                        format_coord(mesh, v as usize, k, q, &mut text);
+                        out.extend_from_slice(text.as_bytes());
+                    } else {
+                        out.extend_from_slice(&value_f32(mesh, v as usize, k, q).to_le_bytes());
+                    }
                 }
             }
             SKIP_COORD => {

@@ -67,6 +67,10 @@ pub enum Source {
     PlyBinary,
     /// OFF.
     Off,
+    /// ASCII STL.
+    StlAscii,
+    /// Binary STL.
+    StlBinary,
 }
 
 impl Source {
@@ -77,6 +81,8 @@ impl Source {
             Source::PlyAscii => 2,
             Source::PlyBinary => 3,
             Source::Off => 4,
+            Source::StlAscii => 5,
+            Source::StlBinary => 6,
         }
     }
 
@@ -86,6 +92,8 @@ impl Source {
             2 => Source::PlyAscii,
             3 => Source::PlyBinary,
             4 => Source::Off,
+            5 => Source::StlAscii,
+            6 => Source::StlBinary,
             _ => Source::Unknown,
         }
     }

@@ -109,15 +109,9 @@ pub(super) fn merge(nv: usize, depth: usize, parts: &[(&[u32], &Chain)]) -> Reco
             for f in 0..step.coarse.nf() {
                 let face = step.coarse.face(f);
                 let p = map[step.face_points[f] as usize];
-                let k = face.len();
-                // Every directed edge names the face: the canonical order may start anywhere.
-                for i in 0..k {
-                    face_points[level].insert(
-                        coarse_ids[face[i] as usize],
-                        coarse_ids[face[(i + 1) % k] as usize],
-                        p,
-                    );
-                }
+                // The face by its key: the canonical order may start anywhere.
+                let (a, b) = super::face_key(face, |v| coarse_ids[v as usize]);
+                face_points[level].insert(a, b, p);
             }
             if l + 1 == depth {
                 for f in 0..step.coarse.nf() {

@@ -550,7 +550,7 @@ pub struct Recovered {
     /// Per level (1 = first refinement): coarse edge (input numbers, smaller first) ->
     /// its edge point's input number.
     pub edge_points: Vec<PairMap>,
-    /// Per level: coarse face, named by one directed edge (input numbers) -> its face
+    /// Per level: coarse face, named by its [`face_key`] (input numbers) -> its face
     /// point's input number.
     pub face_points: Vec<PairMap>,
     /// Polar hierarchies: the poles (input numbers), the same vertices at every level;
@@ -639,8 +639,22 @@ pub(crate) fn base_numbering(
     (order, base)
 }
 
+/// A face's key in a [`PairMap`]: its directed edge that starts at its smallest vertex
+/// (as `id` numbers its corners), the same wherever the face's corners start.
+#[inline]
+pub(crate) fn face_key(face: &[u32], id: impl Fn(u32) -> u32) -> (u32, u32) {
+    let k = face.len();
+    let (i, a) = face
+        .iter()
+        .map(|&v| id(v))
+        .enumerate()
+        .min_by_key(|&(_, v)| v)
+        .unwrap_or((0, 0));
+    (a, face.get((i + 1) % k.max(1)).map_or(0, |&v| id(v)))
+}
+
 /// Appends the input number of every coarse face's point, in face order: `points` maps
-/// a face's first directed edge (input numbers, through `order`) to its point.
+/// a face's [`face_key`] (input numbers, through `order`) to its point.
 pub(crate) fn push_face_points(
     lvl: &Level,
     order: &[u32],
@@ -648,9 +662,9 @@ pub(crate) fn push_face_points(
     next: &mut Vec<u32>,
 ) -> Result<()> {
     for f in 0..lvl.nf() {
-        let face = lvl.coarse.face(f);
+        let (a, b) = face_key(lvl.coarse.face(f), |v| order[v as usize]);
         let p = points
-            .get(order[face[0] as usize], order[face[1] as usize])
+            .get(a, b)
             .ok_or_else(|| Error::InvalidMesh("inconsistent hierarchy (face point)".into()))?;
         next.push(p);
     }
@@ -719,15 +733,14 @@ pub(crate) struct FaceIndex(PairMap);
 
 impl FaceIndex {
     pub(crate) fn new(input: &Topo) -> FaceIndex {
-        let mut by_edge = PairMap::with_capacity(input.idx.len() + 4);
+        // One entry per face, by its face_key (a quarter of the entries of every
+        // directed edge, for the memory of large meshes).
+        let mut by_key = PairMap::with_capacity(input.nf() + 4);
         for f in 0..input.nf() {
-            let face = input.face(f);
-            let k = face.len();
-            for i in 0..k {
-                by_edge.insert(face[i], face[(i + 1) % k], f as u32);
-            }
+            let (a, b) = face_key(input.face(f), |v| v);
+            by_key.insert(a, b, f as u32);
         }
-        FaceIndex(by_edge)
+        FaceIndex(by_key)
     }
 
     /// [`check_matches`] with this index of `input`.
@@ -741,10 +754,8 @@ impl FaceIndex {
             let c = fine.face(f);
             let k = c.len();
             let first = order[c[0] as usize];
-            let g = self
-                .0
-                .get(first, order[c[1] as usize])
-                .ok_or_else(mismatch)? as usize;
+            let (a, b) = face_key(c, |v| order[v as usize]);
+            let g = self.0.get(a, b).ok_or_else(mismatch)? as usize;
             let face = input.face(g);
             let r = face.iter().position(|&v| v == first).ok_or_else(mismatch)?;
             let same = face.len() == k && (0..k).all(|i| face[(r + i) % k] == order[c[i] as usize]);

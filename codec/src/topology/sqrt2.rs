@@ -341,10 +341,10 @@ pub fn recover(topo: &Topo, max_levels: usize) -> Option<Recovered> {
         chains.push(chain);
     }
     let mut base = Topo::new(n);
-    // Level l's map holds every directed edge of its coarse faces.
+    // Level l's map holds each of its coarse faces by its key.
     let mut face_points: Vec<PairMap> = (1..=depth)
         .map(|l| {
-            let n = chains.iter().map(|c| c[depth - l].topo.idx.len()).sum();
+            let n = chains.iter().map(|c| c[depth - l].topo.nf()).sum();
             PairMap::with_capacity(n)
         })
         .collect();
@@ -358,16 +358,9 @@ pub fn recover(topo: &Topo, max_levels: usize) -> Option<Recovered> {
             let c = &chain[depth - l];
             let map = &mut face_points[l - 1];
             for f in 0..c.topo.nf() {
-                let face = c.topo.face(f);
-                let k = face.len();
                 let p = verts[c.points[f] as usize];
-                for i in 0..k {
-                    map.insert(
-                        verts[face[i] as usize],
-                        verts[face[(i + 1) % k] as usize],
-                        p,
-                    );
-                }
+                let (a, b) = super::face_key(c.topo.face(f), |v| verts[v as usize]);
+                map.insert(a, b, p);
             }
         }
     }

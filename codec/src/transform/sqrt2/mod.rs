@@ -50,6 +50,14 @@ impl Rows {
         self.den.push(den);
     }
 
+    /// Gives back the room the rows grew into (they stay for the level's transform).
+    fn shrink(&mut self) {
+        self.starts.shrink_to_fit();
+        self.src.shrink_to_fit();
+        self.w.shrink_to_fit();
+        self.den.shrink_to_fit();
+    }
+
     fn term(&mut self, src: u32, w: i32) {
         self.src.push(src);
         self.w.push(w);
@@ -123,8 +131,10 @@ impl<'a> Plan<'a> {
                 topo,
             };
             plan.predict = predict_rows(level, &nb);
+            plan.predict.shrink();
             if w == Wavelet::Ir2w {
                 plan.update = ir2w_update(level, &nb);
+                plan.update.shrink();
             }
         }
         plan

@@ -1,0 +1,62 @@
+//! JSON descriptions of containers, as `subwave info --json` prints them and the Python
+//! package's `info` returns them.
+
+use serde_json::{json, Value};
+use subwave_codec::{FloatWidth, Info, Quantization, Transform};
+
+/// Bits per vertex of `bytes` for `vertices` (0 for an empty mesh).
+pub fn bits_per_vertex(bytes: usize, vertices: u64) -> f64 {
+    if vertices == 0 {
+        0.0
+    } else {
+        bytes as f64 * 8.0 / vertices as f64
+    }
+}
+
+/// A quantisation: `{"kind": "decimal", "decimals": d}`, `{"kind": "float", "width": 32
+/// or 64, "exponent": e}` or `{"kind": "grid", "bits", "origin", "step"}`.
+pub fn quantization(q: &Quantization) -> Value {
+    match *q {
+        Quantization::Decimal { decimals } => json!({"kind": "decimal", "decimals": decimals}),
+        Quantization::Float { width, exponent } => json!({
+            "kind": "float",
+            "width": match width { FloatWidth::F32 => 32, FloatWidth::F64 => 64 },
+            "exponent": exponent,
+        }),
+        Quantization::Grid { bits, origin, step } => json!({
+            "kind": "grid", "bits": bits, "origin": origin, "step": step,
+        }),
+    }
+}
+
+/// Everything [`crate::inspect`] tells of a container: counts, family, transform,
+/// quantisation, flags and each section's kind and size (a level section's mode too).
+pub fn info(info: &Info) -> Value {
+    let h = &info.header;
+    json!({
+        "format_version": info.version,
+        "vertices": h.vertices,
+        "faces": h.faces,
+        "corners": h.corners,
+        "base_vertices": h.base_vertices,
+        "base_faces": h.base_faces,
+        "levels": h.levels,
+        "family": h.family.name(),
+        "poles": h.poles,
+        "disc_transform": h.disc.name(),
+        "transform": h.transform.name(),
+        "fit_bits": match h.transform {
+            Transform::Fit { bits } => Some(bits),
+            _ => None,
+        },
+        "quantization": quantization(&h.quantization),
+        "keep_order": h.has_order,
+        "value_map": h.has_value_map,
+        "sections": info.sections.iter().map(|s| match s.mode {
+            Some(m) => json!({"kind": s.kind, "bytes": s.bytes, "mode": m, "unbinned": s.unbinned, "joint": s.joint, "zero_slots": s.zero_slots}),
+            None => json!({"kind": s.kind, "bytes": s.bytes}),
+        }).collect::<Vec<_>>(),
+        "bytes": info.bytes,
+        "bits_per_vertex": bits_per_vertex(info.bytes, h.vertices),
+    })
+}
