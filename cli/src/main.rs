@@ -21,7 +21,9 @@ Examples:
   subwave info cube.swv --json
   subwave verify corpus/cube_cc4.obj                     compress + decompress in memory
   subwave verify scan.ply --bits 16 --json               grid error bound, sizes, times
-  subwave info cube.swv                                  sections, levels, transform";
+  subwave info cube.swv                                  sections, levels, transform
+  subwave compress -r models/ -o packed/                 every mesh file in models/
+  subwave decompress packed/*.swv -o meshes/             packed/NAME.swv -> meshes/NAME";
 
 #[derive(Parser)]
 #[command(
@@ -47,17 +49,8 @@ enum Command {
     /// files into a folder (`-o DIR`).
     #[command(after_help = EXAMPLES)]
     Compress {
-        /// IN OUT (a mesh file and its container; - for standard input or output), or
-        /// with -o DIR any number of mesh files (and folders, with -r).
-        #[arg(required = true, num_args = 1..)]
-        files: Vec<String>,
-        /// Write each input NAME to DIR/NAME.swv (created if missing).
-        #[arg(short = 'o', long = "output-dir", value_name = "DIR")]
-        output_dir: Option<String>,
-        /// With -o: take the mesh files (.obj, .ply, .off, .stl) inside folders, at
-        /// any depth, keeping their relative paths under DIR.
-        #[arg(short, long)]
-        recursive: bool,
+        #[command(flatten)]
+        io: Files,
         /// Store the input's vertex and face order so decompression restores it.
         #[arg(long)]
         keep_order: bool,
@@ -67,17 +60,8 @@ enum Command {
     /// Decompress a .swv container into a mesh file, or many into a folder (`-o DIR`).
     #[command(after_help = EXAMPLES)]
     Decompress {
-        /// IN OUT (a container and its mesh file; - for standard input or output), or
-        /// with -o DIR any number of containers (and folders, with -r).
-        #[arg(required = true, num_args = 1..)]
-        files: Vec<String>,
-        /// Write each input NAME.swv to DIR/NAME (created if missing); a NAME without a
-        /// mesh extension gets its source format's.
-        #[arg(short = 'o', long = "output-dir", value_name = "DIR")]
-        output_dir: Option<String>,
-        /// With -o: take the .swv files inside folders, at any depth.
-        #[arg(short, long)]
-        recursive: bool,
+        #[command(flatten)]
+        io: Files,
         /// Output format. By default the output's extension says (.obj, .off; .ply and
         /// .stl are ASCII for decimal values and binary for float values, so values
         /// stay exact), else the input's format.
@@ -109,6 +93,24 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+/// The files `compress` and `decompress` take: IN OUT, or a batch into a folder.
+#[derive(clap::Args)]
+struct Files {
+    /// IN OUT (- for standard input or output), or with -o DIR any number of inputs
+    /// (and folders, with -r).
+    #[arg(required = true, num_args = 1..)]
+    files: Vec<String>,
+    /// Write the outputs into DIR (created if missing): compress writes NAME.swv for
+    /// each input NAME, decompress NAME for each NAME.swv (a NAME without a mesh
+    /// extension gets its source format's).
+    #[arg(short = 'o', long = "output-dir", value_name = "DIR")]
+    output_dir: Option<String>,
+    /// With -o: take the files inside folders, at any depth (compress: .obj, .ply, .off,
+    /// .stl; decompress: .swv), keeping their paths under DIR.
+    #[arg(short, long)]
+    recursive: bool,
 }
 
 /// How `compress` and `verify` code a mesh.
@@ -806,9 +808,12 @@ fn warn_dropped(quiet: bool, file: &str, loaded: &subwave::Loaded) {
 fn run(cli: &Cli) -> Result<ExitCode, Failure> {
     match &cli.command {
         Command::Compress {
-            files,
-            output_dir,
-            recursive,
+            io:
+                Files {
+                    files,
+                    output_dir,
+                    recursive,
+                },
             keep_order,
             coding,
         } => {
@@ -827,9 +832,12 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
             }
         }
         Command::Decompress {
-            files,
-            output_dir,
-            recursive,
+            io:
+                Files {
+                    files,
+                    output_dir,
+                    recursive,
+                },
             format,
             max_level,
             threads,
