@@ -264,3 +264,33 @@ pub fn decode_twice(data: &[u8]) {
         assert_eq!(a, b);
     }
 }
+
+/// Any bytes that read as a mesh file (OBJ, PLY, OFF, STL; small ones, so that the
+/// fuzzer explores the readers rather than the coder) come back byte for byte from a
+/// container made with the file's order and bytes (SPEC.md 11), and value for value
+/// without them; bytes that do not read are refused with an error.
+pub fn whole_file(data: &[u8]) {
+    let Ok(m) = crate::load(data, None) else {
+        return;
+    };
+    if m.mesh.vertex_count() > 4096 || m.mesh.faces.len() > 16384 {
+        return;
+    }
+    let opts = EncodeOptions {
+        keep_order: true,
+        source: m.source(),
+        max_levels: 3,
+        ..Default::default()
+    };
+    let Ok(enc) = crate::encode_file(&m.mesh, &m.quantization, &opts, data, m.format) else {
+        // A mesh the codec cannot take (values beyond its range) is refused, not lost.
+        return;
+    };
+    let dec = crate::decode_slice(&enc.bytes).expect("own output decodes");
+    assert_eq!(dec.mesh, m.mesh, "the mesh in the file's order");
+    let file = dec
+        .file()
+        .expect("a file template")
+        .expect("the template expands");
+    assert!(file == data, "the file's bytes come back");
+}

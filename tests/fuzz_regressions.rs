@@ -8,13 +8,14 @@ use subwave::fuzz_harness as h;
 
 type Harness = fn(&[u8]);
 
-const TARGETS: [(&str, Harness); 6] = [
+const TARGETS: [(&str, Harness); 7] = [
     ("decode_tight", h::decode_tight),
     ("container_parse", h::container_parse),
     ("roundtrip_mesh", h::roundtrip_mesh),
     ("lifting_roundtrip", h::lifting_roundtrip),
     ("coder_roundtrip", h::coder_roundtrip),
     ("decode_twice", h::decode_twice),
+    ("whole_file", h::whole_file),
 ];
 
 #[test]
@@ -55,6 +56,23 @@ fn harnesses_hold_on_fixed_inputs() {
             })
             .collect();
         inputs.push(bytes);
+    }
+    // Mesh files: the project's own, and each cut short.
+    for e in std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus"))
+        .unwrap()
+        .flatten()
+        .filter(|e| {
+            let mesh = e
+                .path()
+                .extension()
+                .is_some_and(|x| ["obj", "ply", "off", "stl"].iter().any(|m| x == *m));
+            mesh && e.metadata().is_ok_and(|m| m.len() < 20_000)
+        })
+    {
+        let file = std::fs::read(e.path()).unwrap();
+        for cut in (0..file.len()).step_by(97).chain([file.len()]) {
+            h::whole_file(&file[..cut]);
+        }
     }
     for data in &inputs {
         for (_, harness) in TARGETS {

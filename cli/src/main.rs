@@ -21,6 +21,7 @@ Examples:
   subwave info cube.swv --json
   subwave verify corpus/cube_cc4.obj                     compress + decompress in memory
   subwave verify scan.ply --bits 16 --json               grid error bound, sizes, times
+  subwave verify scan.ply --repeat 9                     median times of 9 runs
   subwave info cube.swv                                  sections, levels, transform
   subwave compress -r models/ -o packed/                 every mesh file in models/
   subwave decompress packed/*.swv -o meshes/             packed/NAME.swv -> meshes/NAME";
@@ -92,6 +93,10 @@ enum Command {
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
+        /// Encode and decode N times in this process and report the median times (the
+        /// first runs warm the caches; every result is checked).
+        #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+        repeat: u32,
     },
 }
 
@@ -866,7 +871,8 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
             input,
             coding,
             json,
-        } => verify(cli, input, coding, *json),
+            repeat,
+        } => verify(cli, input, coding, *json, *repeat),
     }
 }
 
@@ -939,7 +945,19 @@ fn print_info(info: &subwave::Info, as_json: bool) {
     );
 }
 
-fn verify(cli: &Cli, input: &str, coding: &Coding, as_json: bool) -> Result<ExitCode, Failure> {
+/// The median of some timings (the upper one of an even count's middle two).
+fn median_ms(mut t: Vec<f64>) -> f64 {
+    t.sort_by(f64::total_cmp);
+    t.get(t.len() / 2).copied().unwrap_or(0.0)
+}
+
+fn verify(
+    cli: &Cli,
+    input: &str,
+    coding: &Coding,
+    as_json: bool,
+    repeat: u32,
+) -> Result<ExitCode, Failure> {
     let progress = Progress::new(false);
     progress.stage("reading");
     let bytes = read_input(input)?;
@@ -950,14 +968,28 @@ fn verify(cli: &Cli, input: &str, coding: &Coding, as_json: bool) -> Result<Exit
         progress: progress.encoder(),
         ..coding.options(loaded.mesh.vertex_count())
     };
-    let t0 = Instant::now();
-    let enc = subwave::encode_to_vec(&loaded.mesh, &loaded.quantization, opts)
-        .map_err(|e| fail(input, e))?;
-    let encode_ms = t0.elapsed().as_secs_f64() * 1e3;
-    progress.stage("decoding");
-    let t1 = Instant::now();
-    let dec = subwave::decode_slice(&enc.bytes).map_err(|e| fail(input, e))?;
-    let decode_ms = t1.elapsed().as_secs_f64() * 1e3;
+    let (mut encode_times, mut decode_times) = (Vec::new(), Vec::new());
+    let mut last = None;
+    for _ in 0..repeat {
+        let t0 = Instant::now();
+        let enc = subwave::encode_to_vec(&loaded.mesh, &loaded.quantization, opts)
+            .map_err(|e| fail(input, e))?;
+        encode_times.push(t0.elapsed().as_secs_f64() * 1e3);
+        progress.stage("decoding");
+        let t1 = Instant::now();
+        let dec = subwave::decode_slice(&enc.bytes).map_err(|e| fail(input, e))?;
+        decode_times.push(t1.elapsed().as_secs_f64() * 1e3);
+        // The coding is deterministic: every run writes the same container.
+        if last
+            .as_ref()
+            .is_some_and(|(e, _): &(subwave::Encoded, _)| e.bytes != enc.bytes)
+        {
+            return Err(fail(input, "two encodings of the same mesh differ"));
+        }
+        last = Some((enc, dec));
+    }
+    let (enc, dec) = last.expect("repeat is at least 1");
+    let (encode_ms, decode_ms) = (median_ms(encode_times), median_ms(decode_times));
     drop(progress);
     let check = subwave::compare_up_to_order(&loaded.mesh, &dec.mesh, &enc.order);
     let exact = check.is_ok() && dec.quantization == loaded.quantization;
@@ -981,6 +1013,7 @@ fn verify(cli: &Cli, input: &str, coding: &Coding, as_json: bool) -> Result<Exit
             "encode_ms": encode_ms,
             "encode_threads": opts.threads.max(1),
             "decode_ms": decode_ms,
+            "repeat": repeat,
             "exact": exact,
             "levels": enc.header.levels,
             "family": enc.header.family.name(),
@@ -992,7 +1025,7 @@ fn verify(cli: &Cli, input: &str, coding: &Coding, as_json: bool) -> Result<Exit
         println!("{v}");
     } else {
         println!(
-            "{}: {} vertices, {} faces -> {} bytes, {:.3} bits per vertex; encode {:.1} ms ({} threads), decode {:.1} ms; {}",
+            "{}: {} vertices, {} faces -> {} bytes, {:.3} bits per vertex; encode {:.1} ms ({} threads), decode {:.1} ms{}; {}",
             Path::new(input).file_name().map_or(input.into(), |f| f.to_string_lossy()),
             n,
             loaded.mesh.face_count(),
@@ -1001,6 +1034,11 @@ fn verify(cli: &Cli, input: &str, coding: &Coding, as_json: bool) -> Result<Exit
             encode_ms,
             opts.threads.max(1),
             decode_ms,
+            if repeat > 1 {
+                format!(" (medians of {repeat})")
+            } else {
+                String::new()
+            },
             match (exact, grid_error) {
                 (false, _) => "MISMATCH".to_string(),
                 (true, None) => "exact".to_string(),

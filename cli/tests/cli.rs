@@ -559,3 +559,17 @@ fn subwave_value_bits(l: &subwave::Loaded, v: usize, k: usize) -> u64 {
         (None, q) => q.value_f64(l.mesh.positions[v][k], k).to_bits(),
     }
 }
+
+#[test]
+fn verify_repeats_and_reports_medians() {
+    let cube = corpus("cube_cc4.obj");
+    let v = json(&run(&["verify", cube.to_str().unwrap(), "--repeat", "3", "--json"]));
+    assert_eq!(v["repeat"], 3);
+    assert_eq!(v["exact"], true);
+    assert!(v["decode_ms"].as_f64().unwrap() > 0.0);
+    let text = run(&["verify", cube.to_str().unwrap(), "--repeat", "2"]);
+    assert!(text.status.success());
+    assert!(String::from_utf8_lossy(&text.stdout).contains("medians of 2"));
+    let bad = run(&["verify", cube.to_str().unwrap(), "--repeat", "0"]);
+    assert_eq!(bad.status.code(), Some(2));
+}
