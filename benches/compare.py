@@ -8,6 +8,13 @@ zstd, xz) from a peers CSV written by ../shared/tools/peers/peers.py.
 Runs `subwave verify --json --threads 1` (in-memory encode/decode, exactness check;
 one thread, as issue 4's speed targets are measured) and, with
 --keep-order, `subwave compress --keep-order` for the cost of the stored order.
+
+    python3 benches/compare.py --speed [MESH...] [--repeats 15]
+
+times subwave (the Python package, `pip install ./python`) and Draco cl10 (DracoPy) side
+by side in this process at 16 bits, encode and decode alternating, one thread, and
+prints the medians and ratios as a table for benches/RESULTS.md (default meshes:
+armadillo_cc5, bunny_cc4 and jacksboro_grid257 of ../shared/corpus).
 """
 import argparse, csv, json, os, statistics, subprocess, sys, tempfile
 
@@ -37,7 +44,28 @@ def load_peers(path):
                 peers[(r["mesh"], int(r["bits"]), r["peer"])] = r
     return peers
 
+def speed(args):
+    """Side by side with DracoPy, in process (benches/python_decode.py does the timing)."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import python_decode
+
+    paths, repeats = list(args), 15
+    if "--repeats" in paths:
+        i = paths.index("--repeats")
+        repeats = int(paths[i + 1])
+        del paths[i : i + 2]
+    paths = paths or [os.path.join(python_decode.SHARED, m) for m in python_decode.DEFAULT]
+    rows = python_decode.side_by_side(paths, repeats, encode=True)
+    print("| mesh | vertices | subwave bytes | Draco cl10 bytes | subwave encode ms | Draco encode ms | encode speed vs Draco | subwave decode ms | Draco decode ms | decode speed vs Draco |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for r in rows:
+        print(f"| {r[0]} | {r[1]} | {r[2]} | {r[3]} | {r[7]:.1f} | {r[8]:.1f} | {r[9]:.2f} x | {r[4]:.1f} | {r[5]:.1f} | {r[6]:.2f} x |")
+    print(f"\nmedians: encode {statistics.median(r[9] for r in rows):.2f} x, decode {statistics.median(r[6] for r in rows):.2f} x Draco cl10's speed")
+
+
 def main():
+    if "--speed" in sys.argv[1:]:
+        return speed([a for a in sys.argv[1:] if a != "--speed"])
     ap = argparse.ArgumentParser()
     ap.add_argument("paths", nargs="+")
     ap.add_argument("--bits", default="16,12", help="comma list; 'exact' for the file's own values")

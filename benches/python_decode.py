@@ -40,30 +40,52 @@ def triangles(mesh):
     )
 
 
+def side_by_side(paths, repeats, encode=False):
+    """Per mesh: (name, vertices, subwave bytes, Draco bytes, subwave decode ms, Draco
+    decode ms, decode speed ratio, subwave encode ms, Draco encode ms, encode speed
+    ratio); medians of `repeats` alternating runs, one thread. Encode times only with
+    `encode` (else None)."""
+    import DracoPy
+
+    rows = []
+    for path in paths:
+        mesh = subwave.read(path)
+        tris = triangles(mesh)
+        v32 = mesh.vertices.astype(np.float32)
+        enc = {
+            "subwave": lambda: subwave.compress(
+                mesh.vertices, mesh.flat_faces, face_offsets=mesh.face_offsets, bits=16, threads=1
+            ),
+            "draco": lambda: DracoPy.encode(v32, tris, quantization_bits=16, compression_level=10),
+        }
+        swv, drc = enc["subwave"](), enc["draco"]()
+        dec = {"subwave": lambda: subwave.decompress(swv), "draco": lambda: DracoPy.decode(drc)}
+        times = {(k, n): [] for k in ("dec", "enc") for n in ("subwave", "draco")}
+        for _ in range(repeats):
+            for name in ("subwave", "draco"):
+                for kind, fns in (("dec", dec), ("enc", enc)):
+                    if kind == "enc" and not encode:
+                        continue
+                    t = time.perf_counter()
+                    fns[name]()
+                    times[(kind, name)].append((time.perf_counter() - t) * 1e3)
+        med = {k: statistics.median(v) if v else None for k, v in times.items()}
+        s, d = med[("dec", "subwave")], med[("dec", "draco")]
+        es, ed = med[("enc", "subwave")], med[("enc", "draco")]
+        rows.append(
+            (os.path.basename(path), len(mesh.vertices), len(swv), len(drc), s, d, d / s, es, ed, ed / es if encode else None)
+        )
+    return rows
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("meshes", nargs="*")
     ap.add_argument("--repeats", type=int, default=15)
     ap.add_argument("--markdown", action="store_true")
     args = ap.parse_args()
-    import DracoPy
-
     paths = args.meshes or [os.path.join(SHARED, m) for m in DEFAULT]
-    rows = []
-    for path in paths:
-        mesh = subwave.read(path)
-        swv = subwave.compress(mesh.vertices, mesh.flat_faces, face_offsets=mesh.face_offsets, bits=16)
-        drc = DracoPy.encode(
-            mesh.vertices.astype(np.float32), triangles(mesh), quantization_bits=16, compression_level=10
-        )
-        times = {"subwave": [], "draco": []}
-        for _ in range(args.repeats):
-            for name, fn in (("subwave", lambda: subwave.decompress(swv)), ("draco", lambda: DracoPy.decode(drc))):
-                t = time.perf_counter()
-                fn()
-                times[name].append((time.perf_counter() - t) * 1e3)
-        s, d = statistics.median(times["subwave"]), statistics.median(times["draco"])
-        rows.append((os.path.basename(path), len(mesh.vertices), len(swv), len(drc), s, d, d / s))
+    rows = side_by_side(paths, args.repeats)
     if args.markdown:
         print("| mesh | vertices | subwave bytes | Draco cl10 bytes | subwave.decompress ms | DracoPy.decode ms | speed vs Draco |")
         print("|---|---:|---:|---:|---:|---:|---:|")
