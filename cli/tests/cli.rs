@@ -563,7 +563,13 @@ fn subwave_value_bits(l: &subwave::Loaded, v: usize, k: usize) -> u64 {
 #[test]
 fn verify_repeats_and_reports_medians() {
     let cube = corpus("cube_cc4.obj");
-    let v = json(&run(&["verify", cube.to_str().unwrap(), "--repeat", "3", "--json"]));
+    let v = json(&run(&[
+        "verify",
+        cube.to_str().unwrap(),
+        "--repeat",
+        "3",
+        "--json",
+    ]));
     assert_eq!(v["repeat"], 3);
     assert_eq!(v["exact"], true);
     assert!(v["decode_ms"].as_f64().unwrap() > 0.0);
