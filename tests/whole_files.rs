@@ -168,3 +168,53 @@ fn hostile_templates_are_errors() {
         }
     }
 }
+
+/// Every mesh file below `dir`, at any depth.
+fn files_below(dir: &Path) -> Vec<PathBuf> {
+    let mut out = files_in(dir);
+    if let Ok(rd) = std::fs::read_dir(dir) {
+        for e in rd.flatten().filter(|e| e.path().is_dir()) {
+            out.extend(files_below(&e.path()));
+        }
+    }
+    out
+}
+
+/// Public files nobody here wrote (issue 35): copies of trimesh's `models/` and of
+/// `libigl-tutorial-data`, made at run time in the folder `SUBWAVE_PUBLIC_MESHES` names
+/// (they are not committed; `benches/public_files.py` surveys the same folders). Every
+/// file is read, comes back value for value in the default mode and byte for byte with
+/// its own bytes.
+#[test]
+fn public_files_are_accepted_and_come_back() {
+    let Some(dir) = std::env::var_os("SUBWAVE_PUBLIC_MESHES") else {
+        eprintln!("SUBWAVE_PUBLIC_MESHES not set; skipping");
+        return;
+    };
+    let files = files_below(Path::new(&dir));
+    assert!(!files.is_empty(), "no mesh files below {dir:?}");
+    let mut failures = Vec::new();
+    for f in &files {
+        let name = f.display().to_string();
+        let bytes = std::fs::read(f).unwrap();
+        let exact = (|| {
+            let m = subwave::load(&bytes, None).map_err(|e| e.to_string())?;
+            let enc = subwave::encode_to_vec(&m.mesh, &m.quantization, &EncodeOptions::default())
+                .map_err(|e| e.to_string())?;
+            let dec = subwave::decode_slice(&enc.bytes).map_err(|e| e.to_string())?;
+            if dec.quantization != m.quantization {
+                return Err("quantisation differs".to_string());
+            }
+            subwave::compare_up_to_order(&m.mesh, &dec.mesh, &enc.order)
+        })();
+        if let Err(e) = exact.and_then(|_| round_trip(&name, &bytes).map(|_| ())) {
+            failures.push(format!("{name}: {e}"));
+        }
+    }
+    eprintln!(
+        "public files: {} of {} accepted and exact",
+        files.len() - failures.len(),
+        files.len()
+    );
+    assert!(failures.is_empty(), "{failures:#?}");
+}

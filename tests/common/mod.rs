@@ -21,10 +21,9 @@ pub fn list(dir: &Path) -> Vec<PathBuf> {
         .map(|rd| {
             rd.filter_map(|e| e.ok().map(|e| e.path()))
                 .filter(|p| {
-                    matches!(
-                        p.extension().and_then(|e| e.to_str()),
-                        Some("obj" | "ply" | "off" | "stl")
-                    )
+                    let ext = p.extension().and_then(|e| e.to_str());
+                    let ext = ext.map(str::to_ascii_lowercase);
+                    matches!(ext.as_deref(), Some("obj" | "ply" | "off" | "stl"))
                 })
                 .collect()
         })
