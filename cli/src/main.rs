@@ -512,9 +512,9 @@ fn batch(
                             compress(cli, input, &out_name, *keep_order, coding, true, &quiet)?
                         }
                         Job::Decompress { format, max_level } => {
-                            let out_name = match (format, Format::from_path(&out_name)) {
-                                (None, None) => with_source_extension(input, &out_name)?,
-                                _ => out_name.into_owned(),
+                            let out_name = match Format::from_path(&out_name) {
+                                None => with_extension(input, &out_name, *format)?,
+                                Some(_) => out_name.into_owned(),
                             };
                             decompress(cli, input, &out_name, *format, *max_level, &quiet)?
                         }
@@ -574,15 +574,29 @@ fn batch(
     })
 }
 
-/// `out`, with the extension of the format `container` was compressed from.
-fn with_source_extension(container: &str, out: &str) -> Result<String, Failure> {
-    let bytes = read_input(container)?;
-    let info = subwave::inspect(&bytes, &Limits::default()).map_err(|e| fail(container, e))?;
-    let ext = match subwave::default_output_format(info.header.source) {
-        Format::Obj => "obj",
-        Format::Off => "off",
-        f if f.is_stl() => "stl",
-        _ => "ply",
+/// `out`, with the extension of `format`, or where none is given of the format
+/// `container` was compressed from.
+fn with_extension(
+    container: &str,
+    out: &str,
+    format: Option<OutFormat>,
+) -> Result<String, Failure> {
+    let ext = match format {
+        Some(OutFormat::Obj) => "obj",
+        Some(OutFormat::Off) => "off",
+        Some(OutFormat::Ply | OutFormat::PlyAscii) => "ply",
+        Some(OutFormat::Stl | OutFormat::StlAscii) => "stl",
+        None => {
+            let bytes = read_input(container)?;
+            let info =
+                subwave::inspect(&bytes, &Limits::default()).map_err(|e| fail(container, e))?;
+            match subwave::default_output_format(info.header.source) {
+                Format::Obj => "obj",
+                Format::Off => "off",
+                f if f.is_stl() => "stl",
+                _ => "ply",
+            }
+        }
     };
     Ok(format!("{out}.{ext}"))
 }
