@@ -62,10 +62,7 @@ fn harnesses_hold_on_fixed_inputs() {
         .unwrap()
         .flatten()
         .filter(|e| {
-            let mesh = e
-                .path()
-                .extension()
-                .is_some_and(|x| ["obj", "ply", "off", "stl"].iter().any(|m| x == *m));
+            let mesh = subwave::Format::from_path(&e.path().to_string_lossy()).is_some();
             mesh && e.metadata().is_ok_and(|m| m.len() < 20_000)
         })
     {

@@ -220,6 +220,20 @@ fn parse_value_map(s: &str) -> Result<ValueMapArg, String> {
     }
 }
 
+impl OutFormat {
+    /// The format `--format` names.
+    fn format(self) -> Format {
+        match self {
+            OutFormat::Obj => Format::Obj,
+            OutFormat::Ply => Format::PlyBinary,
+            OutFormat::PlyAscii => Format::PlyAscii,
+            OutFormat::Off => Format::Off,
+            OutFormat::Stl => Format::StlBinary,
+            OutFormat::StlAscii => Format::StlAscii,
+        }
+    }
+}
+
 /// Vertices above which `--threads 0` codes on one thread, to bound memory.
 const LARGE_MESH: usize = 500_000;
 
@@ -393,9 +407,6 @@ fn pair(files: &[String], recursive: bool) -> Result<(&str, &str), Failure> {
     }
 }
 
-/// Mesh file extensions a batch compresses in folders.
-const MESH_EXTENSIONS: [&str; 4] = ["obj", "ply", "off", "stl"];
-
 /// The batch's inputs, each with its path relative to the output folder: files as
 /// named, and with `recursive` the files of `wanted` extensions in folders.
 fn batch_inputs(
@@ -462,7 +473,9 @@ fn batch(
             .is_some_and(|e| exts.iter().any(|x| e.eq_ignore_ascii_case(x)))
     };
     let inputs = match job {
-        Job::Compress { .. } => batch_inputs(files, recursive, &|p| has_ext(p, &MESH_EXTENSIONS))?,
+        Job::Compress { .. } => batch_inputs(files, recursive, &|p| {
+            Format::from_path(&p.to_string_lossy()).is_some()
+        })?,
         Job::Decompress { .. } => batch_inputs(files, recursive, &|p| has_ext(p, &["swv"]))?,
     };
     // Each output's path: NAME.swv, or NAME without its .swv.
@@ -581,24 +594,16 @@ fn with_extension(
     out: &str,
     format: Option<OutFormat>,
 ) -> Result<String, Failure> {
-    let ext = match format {
-        Some(OutFormat::Obj) => "obj",
-        Some(OutFormat::Off) => "off",
-        Some(OutFormat::Ply | OutFormat::PlyAscii) => "ply",
-        Some(OutFormat::Stl | OutFormat::StlAscii) => "stl",
+    let format = match format {
+        Some(f) => f.format(),
         None => {
             let bytes = read_input(container)?;
             let info =
                 subwave::inspect(&bytes, &Limits::default()).map_err(|e| fail(container, e))?;
-            match subwave::default_output_format(info.header.source) {
-                Format::Obj => "obj",
-                Format::Off => "off",
-                f if f.is_stl() => "stl",
-                _ => "ply",
-            }
+            subwave::default_output_format(info.header.source)
         }
     };
-    Ok(format!("{out}.{ext}"))
+    Ok(format!("{out}.{}", format.extension()))
 }
 
 /// Compresses `input` into `output` (`in_batch`: on one thread, the batch's files being
@@ -661,9 +666,10 @@ fn decompress(
         ));
     }
     // Binary only where it may be written; text formats go to a terminal.
-    let lower = output.to_ascii_lowercase();
-    let binary = matches!(format, Some(OutFormat::Ply | OutFormat::Stl))
-        || (format.is_none() && (lower.ends_with(".ply") || lower.ends_with(".stl")));
+    let binary = match format {
+        Some(f) => matches!(f.format(), Format::PlyBinary | Format::StlBinary),
+        None => Format::from_path(output).is_some_and(|f| f.is_ply() || f.is_stl()),
+    };
     check_output(input, output, binary, cli.force)?;
     progress.stage("reading");
     let bytes = read_input(input)?;
@@ -674,32 +680,17 @@ fn decompress(
     };
     let dec = subwave::decode(&bytes, &opts).map_err(|e| fail(input, e))?;
     let fmt = match format {
-        Some(OutFormat::Obj) => Format::Obj,
-        Some(OutFormat::Ply) => Format::PlyBinary,
-        Some(OutFormat::PlyAscii) => Format::PlyAscii,
-        Some(OutFormat::Off) => Format::Off,
-        Some(OutFormat::Stl) => Format::StlBinary,
-        Some(OutFormat::StlAscii) => Format::StlAscii,
-        None => {
-            let src = subwave::default_output_format(dec.header.source);
-            // PLY and STL keep the values exact: ASCII for decimals (binary floats
-            // cannot hold them), binary for float and grid values.
-            let binary_exact = dec.quantization.prefers_f32()
-                || matches!(dec.quantization, Quantization::Float { .. });
-            match Format::from_path(output) {
-                Some(f) if f.is_ply() => match dec.quantization {
-                    Quantization::Decimal { .. } => Format::PlyAscii,
-                    _ => Format::PlyBinary,
-                },
-                Some(f) if f.is_stl() => match dec.quantization.prefers_f32() {
-                    true => Format::StlBinary,
-                    false => Format::StlAscii,
-                },
-                Some(f) => f,
-                None if src.is_stl() && !binary_exact => Format::StlAscii,
-                None => src,
-            }
-        }
+        Some(f) => f.format(),
+        // PLY and STL named by the output keep the values exact: ASCII where binary
+        // floats cannot hold them. Else the input's own format (an STL, too, as one
+        // that holds them).
+        None => match Format::from_path(output) {
+            Some(f) => f.exact_for(&dec.quantization),
+            None => match subwave::default_output_format(dec.header.source) {
+                src if src.is_stl() => src.exact_for(&dec.quantization),
+                src => src,
+            },
+        },
     };
     progress.stage("writing");
     // The input file itself where the container keeps it and the output is of its kind

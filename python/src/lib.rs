@@ -360,11 +360,7 @@ fn write<'py>(
             ))
         })?;
         let (mesh, q) = integer_mesh(&raw, faces, offsets, None)?;
-        let format = match format {
-            f if f.is_ply() && !matches!(q, Quantization::Float { .. }) => Format::PlyAscii,
-            f if f.is_stl() && !q.prefers_f32() => Format::StlAscii,
-            f => f,
-        };
+        let format = format.exact_for(&q);
         let mut out = Vec::new();
         subwave::write_mesh(&mut out, &mesh, &q, format)?;
         std::fs::write(path, out)

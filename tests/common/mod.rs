@@ -20,11 +20,7 @@ pub fn list(dir: &Path) -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
         .map(|rd| {
             rd.filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| {
-                    let ext = p.extension().and_then(|e| e.to_str());
-                    let ext = ext.map(str::to_ascii_lowercase);
-                    matches!(ext.as_deref(), Some("obj" | "ply" | "off" | "stl"))
-                })
+                .filter(|p| subwave::Format::from_path(&p.to_string_lossy()).is_some())
                 .collect()
         })
         .unwrap_or_default();

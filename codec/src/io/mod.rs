@@ -97,6 +97,31 @@ impl Format {
         }
     }
 
+    /// The file name extension of the format (without the dot).
+    pub fn extension(self) -> &'static str {
+        match self {
+            Format::Obj => "obj",
+            Format::Off => "off",
+            Format::PlyAscii | Format::PlyBinary | Format::PlyBinaryBigEndian => "ply",
+            Format::StlAscii | Format::StlBinary => "stl",
+        }
+    }
+
+    /// This format, or its ASCII variant where binary floats cannot hold values on `q`
+    /// exactly: decimals in PLY (binary PLY writes floats), anything but binary32
+    /// values in STL.
+    pub fn exact_for(self, q: &Quantization) -> Format {
+        match self {
+            Format::PlyBinary | Format::PlyBinaryBigEndian
+                if matches!(q, Quantization::Decimal { .. }) =>
+            {
+                Format::PlyAscii
+            }
+            Format::StlBinary if !q.prefers_f32() => Format::StlAscii,
+            f => f,
+        }
+    }
+
     /// Whether this is one of the STL variants.
     pub fn is_stl(self) -> bool {
         matches!(self, Format::StlAscii | Format::StlBinary)

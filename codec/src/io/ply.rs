@@ -83,6 +83,12 @@ fn err(what: impl std::fmt::Display) -> Error {
     Error::MeshFile(format!("PLY: {what}"))
 }
 
+/// Bytes up to and with the first line break of `rest` (all of it without one): what
+/// an ASCII record's line has left after its values.
+fn line_len(rest: &[u8]) -> usize {
+    super::lines_with_ends(rest).next().map_or(0, <[u8]>::len)
+}
+
 struct Body<'a> {
     data: &'a [u8],
     pos: usize,
@@ -113,10 +119,7 @@ impl<'a> Body<'a> {
     /// were such values.
     fn end_line(&mut self) -> bool {
         let rest = &self.data[self.pos..];
-        let end = rest
-            .iter()
-            .position(|&c| c == b'\n')
-            .map_or(rest.len(), |e| e + 1);
+        let end = line_len(rest);
         let extra = !rest[..end].trim_ascii().is_empty();
         self.pos += end;
         extra
@@ -668,10 +671,7 @@ pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
             if mode == Mode::Ascii {
                 // The rest of the record's line, as the reader skips it.
                 let rest = &bytes[pos..];
-                let end = rest
-                    .iter()
-                    .position(|&c| c == b'\n')
-                    .map_or(rest.len(), |e| e + 1);
+                let end = line_len(rest);
                 b.literal(&rest[..end]);
                 pos += end;
             }

@@ -152,55 +152,53 @@ impl<'m> Builder<'m> {
 }
 
 impl Builder<'_> {
-    /// The next corner's vertex's coordinates, as text: each a gap and a token.
-    fn corner_coords_text(&mut self, v: usize) -> String {
-        let mut t = String::new();
-        for k in 0..3 {
-            t.push(' ');
-            format_coord(self.mesh, v, k, self.q, &mut t);
-        }
-        t
-    }
-
-    /// The next corner's position, stored as three binary32 little-endian `bytes`.
-    pub(super) fn corner_f32(&mut self, bytes: &[u8]) {
+    /// The next corner's position, written in the file as `bytes` (STL): marker
+    /// `marker` ([`CORNER_F32_LE`] or [`CORNER_TEXT`]) where the corner's vertex writes
+    /// it the same way.
+    fn corner(&mut self, marker: u8, bytes: &[u8]) {
         let c = self.corner;
         self.corner += 1;
         let want = self.mesh.faces.get(c).map(|&v| {
-            let mut w = [0u8; 12];
-            for k in 0..3 {
-                let x = value_f32(self.mesh, v as usize, k, self.q);
-                w[4 * k..4 * k + 4].copy_from_slice(&x.to_le_bytes());
-            }
+            let mut w = Vec::with_capacity(bytes.len());
+            write_corner(marker, self.mesh, v as usize, self.q, &mut w);
             w
         });
-        if want.as_ref().map(|w| &w[..]) == Some(bytes) {
-            self.out.push(CORNER_F32_LE);
+        if want.as_deref() == Some(bytes) {
+            self.out.push(marker);
         } else {
             self.out.push(SKIP_INDEX);
             self.literal(bytes);
         }
     }
 
+    /// The next corner's position, stored as three binary32 little-endian `bytes`.
+    pub(super) fn corner_f32(&mut self, bytes: &[u8]) {
+        self.corner(CORNER_F32_LE, bytes);
+    }
+
     /// The next corner's position, written as three (gap, token) pairs.
     pub(super) fn corner_text(&mut self, parts: [(&[u8], &[u8]); 3]) {
-        let c = self.corner;
-        self.corner += 1;
         let mut written = Vec::new();
         for (gap, tok) in parts {
             written.extend_from_slice(gap);
             written.extend_from_slice(tok);
         }
-        let want = self
-            .mesh
-            .faces
-            .get(c)
-            .map(|&v| self.corner_coords_text(v as usize));
-        if want.as_deref().map(str::as_bytes) == Some(&written[..]) {
-            self.out.push(CORNER_TEXT);
+        self.corner(CORNER_TEXT, &written);
+    }
+}
+
+/// What a corner marker writes for vertex `v`: its three coordinates as binary32
+/// little-endian ([`CORNER_F32_LE`]), or as text each after one space ([`CORNER_TEXT`]).
+fn write_corner(marker: u8, mesh: &Mesh, v: usize, q: &Quantization, out: &mut Vec<u8>) {
+    let mut text = String::new();
+    for k in 0..3 {
+        if marker == CORNER_TEXT {
+            text.clear();
+            text.push(' ');
+            format_coord(mesh, v, k, q, &mut text);
+            out.extend_from_slice(text.as_bytes());
         } else {
-            self.out.push(SKIP_INDEX);
-            self.literal(&written);
+            out.extend_from_slice(&value_f32(mesh, v, k, q).to_le_bytes());
         }
     }
 }
@@ -275,16 +273,7 @@ pub(crate) fn expand(t: &[u8], mesh: &Mesh, q: &Quantization) -> Result<Vec<u8>>
             CORNER_F32_LE | CORNER_TEXT => {
                 let v =
                     next_corner(&mut corner).ok_or_else(|| bad("more corners than faces have"))?;
-                for k in 0..3 {
-                    if b == CORNER_TEXT {
-                        text.clear();
-                        text.push(' ');
-                        format_coord(mesh, v as usize, k, q, &mut text);
-                        out.extend_from_slice(text.as_bytes());
-                    } else {
-                        out.extend_from_slice(&value_f32(mesh, v as usize, k, q).to_le_bytes());
-                    }
-                }
+                write_corner(b, mesh, v as usize, q, &mut out);
             }
             SKIP_COORD => {
                 next_coord(&mut coord).ok_or_else(|| bad("more coordinates than vertices"))?;
