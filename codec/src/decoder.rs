@@ -9,7 +9,7 @@ use crate::sections::{base, fbit, levl, ordr, tmpl};
 use crate::topology::Family;
 use crate::topology::{self, Level, Topo};
 use crate::transform::fit;
-use crate::transform::level::{Direction, LevelTransform, Scheme};
+use crate::transform::level::{LevelTransform, Scheme};
 use crate::transform::Wavelet;
 use crate::Limits;
 use subwave_container::{Container, SectionKind};
@@ -364,7 +364,7 @@ impl Synthesis<'_> {
         // memory, which is smaller than making them after. Modes 6 and 9 read the
         // predictions' phases (SPEC.md 10.6, 10.9).
         let phased = levl::reads_phases(payload);
-        let t = LevelTransform::new(&self.scheme, &level, l, x, Direction::Synthesis, phased);
+        let t = LevelTransform::new(&self.scheme, &level, l, x, phased);
         // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
         let targets = levl::reads_targets(payload)
             .then(|| t.tangent_targets(&level, x))

@@ -16,7 +16,7 @@ use crate::sections::head::{Header, Source, Transform};
 use crate::sections::vmap::ValueMap;
 use crate::sections::{base, fbit, levl, ordr, tmpl};
 use crate::topology::{self, Canonical, Family, Topo};
-use crate::transform::level::{Direction, LevelTransform, Scheme};
+use crate::transform::level::{LevelTransform, Scheme};
 use crate::transform::polar::DiscTransform;
 use crate::transform::{fit, Wavelet};
 use subwave_container::{ContainerWriter, SectionKind};
@@ -374,9 +374,14 @@ fn best_hierarchy(
     opts: &EncodeOptions,
     flat_h: &Header,
 ) -> Result<Option<(Payloads, Vec<u32>)>> {
-    let mut topo = Topo::new(mesh.vertex_count());
-    topo.idx = mesh.faces.clone();
-    topo.starts = mesh.face_starts.clone();
+    // The input's faces as a topology, for recovery only: each family makes its own
+    // and drops it before coding (the memory of large meshes).
+    let input_topo = || {
+        let mut topo = Topo::new(mesh.vertex_count());
+        topo.idx = mesh.faces.clone();
+        topo.starts = mesh.face_starts.clone();
+        topo
+    };
     let mut best: Option<(Payloads, Vec<u32>)> = None;
     let (want_cc, want_sqrt2) = match opts.transform {
         TransformChoice::Auto => (true, true),
@@ -394,9 +399,12 @@ fn best_hierarchy(
     // Catmull-Clark family's hierarchies are gone before it is (memory).
     let mut families: Vec<FamilyJob> = Vec::new();
     if want_cc {
+        let topo = input_topo();
         let mut canons = Vec::new();
         for rec in topology::cc::recover_all(mesh.vertex_count(), &topo, max) {
             canons.push(topology::canonicalise(&rec, gates)?);
+            // Every candidate but the one in hand waits with its levels stowed.
+            canons.iter_mut().skip(1).for_each(Canonical::stow);
         }
         // Polar levels take the Catmull-Clark transforms (SPEC.md 8.6).
         canons.extend(topology::polar::recover_all(
@@ -405,19 +413,25 @@ fn best_hierarchy(
             max,
             gates,
         ));
+        canons.iter_mut().skip(1).for_each(Canonical::stow);
+        drop(topo);
         // The subdivision fit, on each candidate whose finest level is near a
         // subdivision (every candidate when asked for by name).
         let try_fit = matches!(opts.transform, TransformChoice::Auto | TransformChoice::Fit);
-        for canon in canons.iter().filter(|_| try_fit) {
+        for (i, canon) in canons.iter_mut().enumerate().filter(|_| try_fit) {
+            canon.unstow()?;
             let pos = canonical_positions(mesh, canon);
             if let Some(mut p) = code_fit(canon, &pos, flat_h, &FIT_BITS, !fit_only) {
                 if opts.keep_order {
-                    let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
+                    let (faces, rotations) = face_order(mesh, &canon.fine(), &canon.order)?;
                     p.order = Some(order_section(&canon.order, faces, rotations));
                 }
                 if best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
                     best = Some((p, canon.order.clone()));
                 }
+            }
+            if i > 0 {
+                canon.stow();
             }
         }
         // A mesh and its dual can both be the base: compare them with one transform.
@@ -442,8 +456,9 @@ fn best_hierarchy(
         let (canons, first, others) = match taken.expect("each family is coded once") {
             FamilyJob::Ready(canons, first, others) => (canons, first, others),
             FamilyJob::Sqrt2 => {
+                let topo = input_topo();
                 let canons: Vec<Canonical> = topology::sqrt2::recover(&topo, max)
-                    .and_then(|rec| topology::sqrt2::canonicalise(&rec, &topo, gates).ok())
+                    .and_then(|rec| topology::sqrt2::canonicalise(rec, &topo, gates).ok())
                     .into_iter()
                     .collect();
                 (canons, Wavelet::Sqrt2Lazy, &Wavelet::SQRT2[..])
@@ -578,12 +593,11 @@ mod tests {
         };
         let q = Quantization::Decimal { decimals: 0 };
         let header = flat_header(&mesh, &q, &EncodeOptions::default());
-        let pos = canonical_positions(&mesh, &canon);
         let d = DiscTransform::None;
         for w in [Wavelet::Bicubic, Wavelet::Interp4, Wavelet::Lazy] {
             let free = code_hierarchy(
                 &canon,
-                &pos,
+                &mesh,
                 w,
                 d,
                 &header,
@@ -597,7 +611,7 @@ mod tests {
             for modes in [None, Some(plan)] {
                 let whole = code_hierarchy(
                     &canon,
-                    &pos,
+                    &mesh,
                     w,
                     d,
                     &header,
@@ -610,7 +624,7 @@ mod tests {
                 let n = whole.coded();
                 let fit = code_hierarchy(
                     &canon,
-                    &pos,
+                    &mesh,
                     w,
                     d,
                     &header,
@@ -624,7 +638,7 @@ mod tests {
                 assert!(
                     code_hierarchy(
                         &canon,
-                        &pos,
+                        &mesh,
                         w,
                         d,
                         &header,

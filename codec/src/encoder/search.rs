@@ -3,14 +3,14 @@
 
 use super::*;
 
-/// Codes a canonical hierarchy with wavelet `w` (SPEC.md 9, 10), trying the rotated
+/// Codes a canonical hierarchy of `mesh` with wavelet `w` (SPEC.md 9, 10), trying the rotated
 /// level modes (10.5) when `rotated`, each level in its mode from `modes` where given
 /// (every open mode where not); `None` if a lifted value leaves the supported range or
 /// the BASE and LEVL payloads would take more than `bound` bytes.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn code_hierarchy(
     canon: &Canonical,
-    pos: &[Vec<i64>; 3],
+    mesh: &Mesh,
     w: Wavelet,
     disc: DiscTransform,
     header: &Header,
@@ -19,13 +19,10 @@ pub(crate) fn code_hierarchy(
     bound: usize,
     progress: &Progress,
 ) -> Option<Payloads> {
-    let mut x = pos.clone();
-    // The coarse values of each level, as the decoder will have them when it reads the
-    // level's details.
-    let mut coarse: Vec<[Vec<i64>; 3]> = vec![Default::default(); canon.levels.len()];
-    // sqrt(2) levels: their tangent targets (SPEC.md 10.3), from the same coarse values;
+    // The positions in canonical order, gathered for each coding rather than held
+    // beside the hierarchy (the memory of large meshes).
+    let mut x = canonical_positions(mesh, canon);
     // sqrt2-lazy levels: their predictions' phases (10.6).
-    let mut targets: Vec<Option<Vec<[i64; 3]>>> = vec![None; canon.levels.len()];
     let mut phases: Vec<Option<crate::transform::phase::Phases>> = vec![None; canon.levels.len()];
     let scheme = Scheme {
         family: canon.family,
@@ -37,7 +34,7 @@ pub(crate) fn code_hierarchy(
         // As the decoder: sqrt2-lazy keeps the coarse values, so one prediction per
         // face serves the analysis and the tangent targets; the other sqrt(2)
         // transforms take a plan; polar levels code the poles' discs first (SPEC.md 9.9).
-        let mut t = LevelTransform::new(&scheme, level, l, &x, Direction::Analysis, true);
+        let mut t = LevelTransform::new(&scheme, level, l, &x, true);
         // The phases of modes 6 and 9 (SPEC.md 10.6): sqrt2-lazy's from its predictions,
         // a predict-only Catmull-Clark level's from the fine values (the decoder makes
         // them as it reads the level).
@@ -48,8 +45,6 @@ pub(crate) fn code_hierarchy(
                 .map(|p| p.phases(&x, level.ne() + level.nf(), true)),
         };
         t.analyse(level, canon.family.fine_nv(level), &mut x);
-        coarse[l] = std::array::from_fn(|k| x[k][..level.nv].to_vec());
-        targets[l] = t.tangent_targets(level, &coarse[l]);
     }
     if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
         return None;
@@ -61,23 +56,38 @@ pub(crate) fn code_hierarchy(
     // Bytes the levels may take: a coding over the bound is not wanted.
     let mut room = bound.checked_sub(base_bytes.len())?;
     let mut level_bytes = Vec::with_capacity(canon.levels.len());
-    for (i, (((l, c), t), ph)) in canon
-        .levels
-        .iter()
-        .zip(&coarse)
-        .zip(&targets)
-        .zip(&phases)
-        .enumerate()
-    {
+    // Level by level, coarse first, as the decoder goes: `x[k][..nv]` holds the level's
+    // coarse values as the decoder has them when it reads the level's details, and the
+    // level, once coded, is synthesised in place into the next one's (its details are
+    // then no longer wanted). No copy of any level's coarse values is kept (the memory of
+    // large meshes).
+    let last = canon.levels.len().saturating_sub(1);
+    for (i, (level, ph)) in canon.levels.iter().zip(&phases).enumerate() {
         progress.report(Stage::Level {
             transform: w.name(),
             level: i + 1,
             levels: canon.levels.len(),
         });
-        let t = t.as_deref();
-        let b = levl::encode(l, canon.family, &x, c, &mut models, t, ph.as_ref(), room)?;
+        let t = LevelTransform::new(&scheme, level, i, &x, false);
+        // sqrt(2) levels: their tangent targets (SPEC.md 10.3) from the coarse values.
+        let targets = t.tangent_targets(level, &x);
+        // The finest level is not synthesised: its transform goes before it is coded.
+        let t = (i < last).then_some(t);
+        let b = levl::encode(
+            level,
+            canon.family,
+            &x,
+            &x,
+            &mut models,
+            targets.as_deref(),
+            ph.as_ref(),
+            room,
+        )?;
         room -= b.len();
         level_bytes.push(b);
+        if let Some(t) = t {
+            t.synthesise(level, &mut x);
+        }
     }
     header.disc = if canon.poles.is_empty() {
         DiscTransform::None
@@ -200,11 +210,11 @@ pub(crate) fn code_fit(
     best
 }
 
-/// A hierarchy's coding, the hierarchy, and the mesh's positions in its canonical order.
-type Candidate = (Payloads, Canonical, [Vec<i64>; 3]);
+/// A hierarchy's coding and the hierarchy.
+type Candidate = (Payloads, Canonical);
 
 /// Of a family's candidate hierarchies, the one that codes smallest with transform
-/// `first`: its coding and its positions in canonical order.
+/// `first`, and its coding.
 fn best_candidate(
     mesh: &Mesh,
     opts: &EncodeOptions,
@@ -212,13 +222,17 @@ fn best_candidate(
     canons: Vec<Canonical>,
     first: Wavelet,
 ) -> Result<Option<Candidate>> {
-    let mut fam_best: Option<(Payloads, Canonical, [Vec<i64>; 3])> = None;
-    for canon in canons {
-        let pos = canonical_positions(mesh, &canon);
+    let mut fam_best: Option<Candidate> = None;
+    for mut canon in canons {
+        // One candidate's levels at a time: the best so far waits stowed.
+        if let Some((_, best)) = fam_best.as_mut() {
+            best.stow();
+        }
+        canon.unstow()?;
         // code_hierarchy drops the disc transform of a hierarchy without poles.
         let disc = opts.disc.unwrap_or(DiscTransform::None);
         let order = if opts.keep_order {
-            let (faces, rotations) = face_order(mesh, &canon.fine, &canon.order)?;
+            let (faces, rotations) = face_order(mesh, &canon.fine(), &canon.order)?;
             Some(order_section(&canon.order, faces, rotations))
         } else {
             None
@@ -230,7 +244,7 @@ fn best_candidate(
         });
         if let Some(mut p) = code_hierarchy(
             &canon,
-            &pos,
+            mesh,
             first,
             disc,
             flat_h,
@@ -241,9 +255,12 @@ fn best_candidate(
         ) {
             p.order = order;
             if fam_best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
-                fam_best = Some((p, canon, pos));
+                fam_best = Some((p, canon));
             }
         }
+    }
+    if let Some((_, best)) = fam_best.as_mut() {
+        best.unstow()?;
     }
     Ok(fam_best)
 }
@@ -269,7 +286,7 @@ pub(crate) fn code_family(
         TransformChoice::Fixed(w) => w,
     };
     let fam_best = best_candidate(mesh, opts, flat_h, canons, first)?;
-    let Some((mut p, canon, pos)) = fam_best else {
+    let Some((mut p, canon)) = fam_best else {
         return Ok(None);
     };
     // Codings of one hierarchy share their ORDR section (the order depends on the
@@ -281,7 +298,7 @@ pub(crate) fn code_family(
         let bound = p.coded().saturating_sub(1);
         if let Some(mut q) = code_hierarchy(
             &canon,
-            &pos,
+            mesh,
             w,
             d,
             flat_h,
@@ -311,7 +328,7 @@ pub(crate) fn code_family(
         let code = |&(w, d): &(Wavelet, DiscTransform), bound: usize| {
             code_hierarchy(
                 &canon,
-                &pos,
+                mesh,
                 w,
                 d,
                 flat_h,

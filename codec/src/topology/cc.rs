@@ -154,18 +154,37 @@ pub(crate) fn components(nv: usize, topo: &Topo) -> Vec<(Vec<u32>, Topo)> {
             }
         }
     }
+    // Each face's component (in order of first face), and each component's faces and
+    // corners, so that the copies are sized once (the memory of large meshes).
     let mut comp_of_root = vec![usize::MAX; nv];
-    let mut out: Vec<(Vec<u32>, Topo)> = Vec::new();
-    let mut local = vec![NONE; nv];
+    let mut sizes: Vec<(usize, usize)> = Vec::new();
+    let mut comp_of_face = Vec::with_capacity(topo.nf());
     for f in 0..topo.nf() {
         let face = topo.face(f);
-        let r = find(&mut parent, face[0]);
-        if comp_of_root[r as usize] == usize::MAX {
-            comp_of_root[r as usize] = out.len();
-            out.push((Vec::new(), Topo::new(0)));
+        let r = find(&mut parent, face[0]) as usize;
+        if comp_of_root[r] == usize::MAX {
+            comp_of_root[r] = sizes.len();
+            sizes.push((0, 0));
         }
-        let c = comp_of_root[r as usize];
-        let (ids, t) = &mut out[c];
+        let c = comp_of_root[r];
+        sizes[c].0 += 1;
+        sizes[c].1 += face.len();
+        comp_of_face.push(c as u32);
+    }
+    drop((parent, comp_of_root));
+    let mut out: Vec<(Vec<u32>, Topo)> = sizes
+        .iter()
+        .map(|&(faces, corners)| {
+            let mut t = Topo::new(0);
+            t.starts.reserve_exact(faces);
+            t.idx.reserve_exact(corners);
+            (Vec::new(), t)
+        })
+        .collect();
+    let mut local = vec![NONE; nv];
+    for (f, &c) in comp_of_face.iter().enumerate() {
+        let face = topo.face(f);
+        let (ids, t) = &mut out[c as usize];
         let start = t.idx.len();
         for &v in face {
             if local[v as usize] == NONE {
@@ -179,6 +198,7 @@ pub(crate) fn components(nv: usize, topo: &Topo) -> Vec<(Vec<u32>, Topo)> {
     }
     for (ids, t) in &mut out {
         t.nv = ids.len();
+        ids.shrink_to_fit();
     }
     out
 }
@@ -230,14 +250,30 @@ pub(super) fn two_colour(
     adj: &[u32],
     members: &[bool],
 ) -> Option<Vec<u8>> {
+    two_colour_with(n, members, |v, out| {
+        out.extend_from_slice(&adj[starts[v as usize] as usize..starts[v as usize + 1] as usize])
+    })
+}
+
+/// [`two_colour`] over the graph whose neighbours of `v` `neighbours(v, out)` appends to
+/// `out` (repeats allowed): the same colouring for the same edges, without a CSR
+/// adjacency (the memory of large meshes).
+pub(super) fn two_colour_with(
+    n: usize,
+    members: &[bool],
+    neighbours: impl Fn(u32, &mut Vec<u32>),
+) -> Option<Vec<u8>> {
     let mut colour = vec![2u8; n];
     let first = members.iter().position(|&m| m)?;
     colour[first] = 0;
     let mut queue = VecDeque::from([first as u32]);
     let mut reached = 1usize;
+    let mut around = Vec::new();
     while let Some(v) = queue.pop_front() {
         let c = colour[v as usize];
-        for &w in &adj[starts[v as usize] as usize..starts[v as usize + 1] as usize] {
+        around.clear();
+        neighbours(v, &mut around);
+        for &w in &around {
             match colour[w as usize] {
                 2 => {
                     colour[w as usize] = 1 - c;
@@ -290,19 +326,7 @@ pub(super) fn candidates(t: &Topo) -> Vec<Coarsening> {
             return Vec::new();
         }
     }
-    let mut edge_pairs = Vec::with_capacity(nf * 4);
-    for f in 0..nf {
-        let q = t.face(f);
-        for i in 0..4 {
-            edge_pairs.push((q[i], q[(i + 1) % 4]));
-        }
-    }
-    let (es, eadj) = adjacency(n, &edge_pairs);
-    let all = vec![true; n];
-    let Some(colour) = two_colour(n, &es, &eadj, &all) else {
-        return Vec::new();
-    };
-    // Quads per vertex.
+    // Quads per vertex: the graphs coloured below are walked through them.
     let mut vq_starts = vec![0u32; n + 1];
     for &v in &t.idx {
         vq_starts[v as usize + 1] += 1;
@@ -318,22 +342,29 @@ pub(super) fn candidates(t: &Topo) -> Vec<Coarsening> {
             fill[v as usize] += 1;
         }
     }
+    drop(fill);
+    // Each quad of v with v at corner i: its corner at offset `at` from i, for every
+    // offset in `offsets`.
+    let around = |v: u32, offsets: &[usize], out: &mut Vec<u32>| {
+        for &q in &vq[vq_starts[v as usize] as usize..vq_starts[v as usize + 1] as usize] {
+            let quad = t.face(q as usize);
+            if let Some(i) = quad.iter().position(|&x| x == v) {
+                out.extend(offsets.iter().map(|&at| quad[(i + at) % 4]));
+            }
+        }
+    };
+    // The edges' graph: a vertex's neighbours are the corners beside it in its quads.
+    let all = vec![true; n];
+    let Some(colour) = two_colour_with(n, &all, |v, out| around(v, &[1, 3], out)) else {
+        return Vec::new();
+    };
+    drop(all);
     let mut out = Vec::new();
     for e_colour in [1 - colour[0], colour[0]] {
-        // The other class: one diagonal of every quad.
-        let diag: Vec<(u32, u32)> = (0..nf)
-            .map(|f| {
-                let q = t.face(f);
-                if colour[q[0] as usize] != e_colour {
-                    (q[0], q[2])
-                } else {
-                    (q[1], q[3])
-                }
-            })
-            .collect();
+        // The other class: one diagonal of every quad, between its corners of that
+        // class (a vertex's neighbours are the corners opposite it in its quads).
         let members: Vec<bool> = colour.iter().map(|&c| c != e_colour).collect();
-        let (ds, dadj) = adjacency(n, &diag);
-        let Some(vf) = two_colour(n, &ds, &dadj, &members) else {
+        let Some(vf) = two_colour_with(n, &members, |v, out| around(v, &[2], out)) else {
             continue;
         };
         let smallest = members.iter().position(|&m| m).unwrap_or(0);
@@ -554,14 +585,20 @@ mod tests {
                     .collect::<std::collections::BTreeSet<_>>()
                     .len();
                 assert_eq!(rec.base.nf() + used, base.nf() + base.nv);
-                let canon = canonicalise(&rec, true).unwrap();
+                let mut canon = canonicalise(&rec, true).unwrap();
                 assert_eq!(
-                    face_set(&canon.fine, Some(&canon.order)),
+                    face_set(&canon.fine(), Some(&canon.order)),
                     face_set(&input, None)
                 );
                 let mut sorted = canon.order.clone();
                 sorted.sort();
                 assert_eq!(sorted, (0..input.nv as u32).collect::<Vec<_>>());
+                // Stowed levels come back the same.
+                let levels = canon.levels.clone();
+                canon.stow();
+                assert!(canon.levels.is_empty());
+                canon.unstow().unwrap();
+                assert_eq!(canon.levels, levels);
             }
         }
     }
@@ -607,7 +644,7 @@ mod tests {
         assert_eq!(rec.levels(), 1);
         let canon = canonicalise(&rec, true).unwrap();
         assert_eq!(
-            face_set(&canon.fine, Some(&canon.order)),
+            face_set(&canon.fine(), Some(&canon.order)),
             face_set(&u, None)
         );
     }

@@ -413,11 +413,7 @@ impl Level {
                     .enumerate()
                     .flat_map(|(e, &[a, b])| [(a, e as u32), (b, e as u32)]),
             );
-            let coarse = &level.coarse;
-            (level.vf_starts, level.vert_faces) = csr(
-                nv,
-                (0..coarse.nf()).flat_map(|f| coarse.face(f).iter().map(move |&v| (v, f as u32))),
-            );
+            (level.vf_starts, level.vert_faces) = vertex_faces(&level.coarse);
         }
         level
     }
@@ -522,6 +518,15 @@ impl Level {
 }
 
 /// Compressed lists: for each key in `0..n`, its values in insertion order.
+/// Per vertex of `topo`: the faces it is a corner of, once per corner, in face order
+/// (CSR: the starts, `nv + 1` entries, and the lists).
+pub(crate) fn vertex_faces(topo: &Topo) -> (Vec<u32>, Vec<u32>) {
+    csr(
+        topo.nv,
+        (0..topo.nf()).flat_map(|f| topo.face(f).iter().map(move |&v| (v, f as u32))),
+    )
+}
+
 pub(crate) fn csr<T: Copy + Default>(
     n: usize,
     pairs: impl Iterator<Item = (u32, T)> + Clone,
@@ -573,8 +578,6 @@ pub struct Canonical {
     pub base: Topo,
     /// One [`Level`] per refinement, coarse first.
     pub levels: Vec<Level>,
-    /// The finest topology, canonical numbering.
-    pub fine: Topo,
     /// `order[c]` = the input number of canonical vertex `c` (finest level).
     pub order: Vec<u32>,
     /// Which refinement the levels follow: Catmull-Clark, polar (Catmull-Clark with
@@ -583,6 +586,66 @@ pub struct Canonical {
     /// Polar hierarchies (SPEC.md 8.6): the poles in canonical numbers, increasing;
     /// empty for every other hierarchy.
     pub poles: Vec<u32>,
+    /// The number of levels [`Canonical::stow`] freed (0 when they are here).
+    stowed: usize,
+}
+
+impl Canonical {
+    /// The finest topology, canonical numbering: made again from the finest level when
+    /// asked for (only keeping the input's order needs it), not held beside the levels
+    /// (the memory of large meshes).
+    pub fn fine(&self) -> Topo {
+        debug_assert_eq!(self.stowed, 0, "the levels are stowed");
+        match self.levels.last() {
+            None => self.base.clone(),
+            Some(l) => self.fine_of(l),
+        }
+    }
+
+    /// The fine topology of one of the hierarchy's levels, as canonicalisation made it.
+    fn fine_of(&self, level: &Level) -> Topo {
+        if self.family == Family::Sqrt2 {
+            return sqrt2::fine(level);
+        }
+        let n = self.poles.iter().map(|&p| p as usize + 1).max().unwrap_or(0);
+        let mut pole = vec![false; n];
+        for &p in &self.poles {
+            pole[p as usize] = true;
+        }
+        level.fine_with(&pole)
+    }
+
+    /// Frees the levels, keeping what makes them again ([`Canonical::unstow`]): a
+    /// candidate hierarchy that waits while another is coded holds its base and order
+    /// only (the memory of large meshes).
+    pub fn stow(&mut self) {
+        if !self.levels.is_empty() {
+            self.stowed = self.levels.len();
+            self.levels = Vec::new();
+        }
+    }
+
+    /// Makes the levels that [`Canonical::stow`] freed again, the same as
+    /// canonicalisation made them (each from the one before, from the base).
+    pub fn unstow(&mut self) -> Result<()> {
+        let n = std::mem::take(&mut self.stowed);
+        self.levels.reserve_exact(n);
+        for _ in 0..n {
+            let level = match self.levels.last() {
+                Some(prev) if self.family == Family::Sqrt2 => sqrt2::next_level_of(prev, false)?,
+                Some(prev) => Level::new(&self.fine_of(prev))?,
+                None => {
+                    let mut level = Level::new(&self.base)?;
+                    if self.family == Family::Sqrt2 {
+                        level.free_vertex_adjacency();
+                    }
+                    level
+                }
+            };
+            self.levels.push(level);
+        }
+        Ok(())
+    }
 }
 
 /// The canonical base numbering (SPEC.md 8.2): base vertices in order of first use
@@ -709,7 +772,6 @@ pub fn canonicalise(rec: &Recovered, gates: bool) -> Result<Canonical> {
     Ok(Canonical {
         base,
         levels,
-        fine: cur,
         order,
         family: if poles.is_empty() {
             Family::Cc
@@ -717,6 +779,7 @@ pub fn canonicalise(rec: &Recovered, gates: bool) -> Result<Canonical> {
             Family::Polar
         },
         poles,
+        stowed: 0,
     })
 }
 

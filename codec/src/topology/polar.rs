@@ -37,7 +37,7 @@ pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize, gates: bool) -> Ve
     recs.into_iter()
         .filter_map(|rec| {
             let canon = canonicalise(&rec, gates).ok()?;
-            index.check(&canon.fine, &canon.order, topo).ok()?;
+            index.check(&canon.fine(), &canon.order, topo).ok()?;
             Some(canon)
         })
         .collect()
@@ -295,8 +295,13 @@ mod tests {
             let fine = refine(&base, &poles, levels);
             for seed in 1..4 {
                 let input = shuffle(&fine, seed);
-                let canon = recover(input.nv, &input, 16).expect("a polar hierarchy");
+                let mut canon = recover(input.nv, &input, 16).expect("a polar hierarchy");
                 assert_eq!(canon.levels.len(), levels);
+                // Stowed levels come back the same (the poles' triangles included).
+                let kept = canon.levels.clone();
+                canon.stow();
+                canon.unstow().unwrap();
+                assert_eq!(canon.levels, kept);
                 assert_eq!(canon.poles.len(), poles.len());
                 assert_eq!(canon.base.nf(), base.nf());
                 // Canonical poles are base vertices whose faces are all triangles.
@@ -307,7 +312,7 @@ mod tests {
                     assert!(!faces.is_empty());
                     assert!(faces.iter().all(|&f| canon.base.face(f).len() == 3));
                 }
-                check_matches(&canon.fine, &canon.order, &input).unwrap();
+                check_matches(&canon.fine(), &canon.order, &input).unwrap();
                 // The level cap.
                 let capped = recover(input.nv, &input, 1).unwrap();
                 assert_eq!(capped.levels.len(), 1);

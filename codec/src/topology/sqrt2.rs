@@ -56,6 +56,38 @@ fn fine_of_edges(nv: usize, nf: usize, edges: &[[u32; 2]], edge_faces: &[[u32; 2
 /// which never reads them), as if [`Level::free_vertex_adjacency`] had been called.
 pub fn next_level(level: Level, lists: bool) -> crate::error::Result<Level> {
     let fine_topo = fine(&level);
+    let parts = next_edges(&level, &fine_topo);
+    drop(level);
+    finish_next(fine_topo, parts, lists)
+}
+
+/// [`next_level`] of a level that stays (the encoder keeps every level of a hierarchy).
+pub fn next_level_of(level: &Level, lists: bool) -> crate::error::Result<Level> {
+    let fine_topo = fine(level);
+    let parts = next_edges(level, &fine_topo);
+    finish_next(fine_topo, parts, lists)
+}
+
+/// The fine level's edges, their faces and the faces' edges, numbered as
+/// [`Level::new`] numbers them; `None` unless every face of `level` has distinct corners.
+type NextEdges = (Vec<[u32; 2]>, Vec<[u32; 2]>, Vec<u32>);
+
+fn finish_next(fine_topo: Topo, parts: Option<NextEdges>, lists: bool) -> crate::error::Result<Level> {
+    let Some((edges, edge_faces, face_edges)) = parts else {
+        let mut next = Level::new(&fine_topo)?;
+        if !lists {
+            next.free_vertex_adjacency();
+        }
+        return Ok(next);
+    };
+    Ok(Level::from_edges(
+        fine_topo, edges, edge_faces, face_edges, lists,
+    ))
+}
+
+/// See [`NextEdges`]: a fine edge joins a corner's vertex to its face's point, so it is
+/// numbered by the corner.
+fn next_edges(level: &Level, fine_topo: &Topo) -> Option<NextEdges> {
     let topo = &level.coarse;
     let distinct = (0..topo.nf()).all(|f| {
         let face = topo.face(f);
@@ -64,12 +96,7 @@ pub fn next_level(level: Level, lists: bool) -> crate::error::Result<Level> {
             .all(|(i, v)| !face[i + 1..].contains(v))
     });
     if !distinct {
-        drop(level);
-        let mut next = Level::new(&fine_topo)?;
-        if !lists {
-            next.free_vertex_adjacency();
-        }
-        return Ok(next);
+        return None;
     }
     // Per coarse edge, its two occurrences as (corner, next corner) slots, in face order.
     let mut occ = vec![[[NONE; 2]; 2]; level.ne()];
@@ -113,10 +140,7 @@ pub fn next_level(level: Level, lists: bool) -> crate::error::Result<Level> {
             face_edges.push(id[c]);
         }
     }
-    drop((occ, id, level));
-    Ok(Level::from_edges(
-        fine_topo, edges, edge_faces, face_edges, lists,
-    ))
+    Some((edges, edge_faces, face_edges))
 }
 
 /// Number of fine vertices of a sqrt(2) step.
@@ -369,31 +393,44 @@ pub fn recover(topo: &Topo, max_levels: usize) -> Option<Recovered> {
 
 /// Canonicalises a recovered sqrt(2) hierarchy (SPEC.md 8.5) and checks that its finest
 /// level is `input`'s faces (each once, up to corner rotation).
-pub fn canonicalise(rec: &Recovered, input: &Topo, gates: bool) -> Result<Canonical> {
+pub fn canonicalise(mut rec: Recovered, input: &Topo, gates: bool) -> Result<Canonical> {
     let finer = rec.face_points.iter().flat_map(|m| m.values());
     let (mut order, base) = base_numbering(&rec.base, finer, gates);
-    let mut levels = Vec::with_capacity(rec.levels());
-    let mut cur = base.clone();
+    let mut levels: Vec<Level> = Vec::with_capacity(rec.levels());
     for l in 0..rec.levels() {
-        let lvl = Level::new(&cur)?;
+        // Without per-vertex lists (sqrt2-sym makes its vertices' face lists for the
+        // level it transforms); after the first, each level from the one before without
+        // looking edges up (the memory of large meshes).
+        let lvl = match levels.last() {
+            None => {
+                let mut lvl = Level::new(&base)?;
+                lvl.free_vertex_adjacency();
+                lvl
+            }
+            Some(prev) => next_level_of(prev, false)?,
+        };
         if !closed(&lvl) {
             return Err(Error::InvalidMesh("sqrt(2) level with a boundary".into()));
         }
         let mut next = order.clone();
         push_face_points(&lvl, &order, &rec.face_points[l], &mut next)?;
-        cur = fine(&lvl);
+        // Each level's map freed once read (the memory of large meshes).
+        rec.face_points[l] = PairMap::with_capacity(0);
         levels.push(lvl);
         order = next;
     }
+    drop(rec);
     // The finest level must be the input, face for face.
-    check_matches(&cur, &order, input)?;
+    let finest = levels.last().map_or_else(|| base.clone(), fine);
+    check_matches(&finest, &order, input)?;
+    drop(finest);
     Ok(Canonical {
         base,
         levels,
-        fine: cur,
         order,
         family: super::Family::Sqrt2,
         poles: Vec::new(),
+        stowed: 0,
     })
 }
 
@@ -560,8 +597,22 @@ mod tests {
                 "the dual base has 8 vertices and 10 faces"
             );
             assert_eq!(used(&rec.base), 8);
-            let canon = canonicalise(&rec, &s, true).unwrap();
+            let mut canon = canonicalise(rec, &s, true).unwrap();
             assert_eq!(canon.levels.len(), depth);
+            // Each level is the refinement of the one before as `Level::new` builds it
+            // (without per-vertex lists), and stowed levels come back the same.
+            let mut cur = canon.base.clone();
+            for level in &canon.levels {
+                let mut built = Level::new(&cur).unwrap();
+                built.free_vertex_adjacency();
+                assert_eq!(level, &built, "depth {depth}");
+                cur = fine(level);
+            }
+            let levels = canon.levels.clone();
+            canon.stow();
+            assert!(canon.levels.is_empty() || depth == 0);
+            canon.unstow().unwrap();
+            assert_eq!(canon.levels, levels, "unstowed at depth {depth}");
         }
     }
 }

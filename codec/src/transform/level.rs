@@ -22,15 +22,6 @@ pub(crate) struct Scheme<'p> {
     pub disc: DiscTransform,
 }
 
-/// Which way a level is transformed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Direction {
-    /// Fine values to coarse values and details (the encoder).
-    Analysis,
-    /// Back (the decoder).
-    Synthesis,
-}
-
 /// One level's transform, prepared once for its three axes.
 pub(crate) enum LevelTransform<'a> {
     /// sqrt2-lazy (SPEC.md 9.6): each face point's prediction from the coarse values
@@ -43,8 +34,8 @@ pub(crate) enum LevelTransform<'a> {
     },
     /// sqrt2-sym (9.8), and ir2w's analysis (9.7): the lifting plan.
     Sqrt2Plan(Plan<'a>),
-    /// ir2w's synthesis: one pass of its own after the details, which builds no plan
-    /// ([`sqrt2::ir2w_synthesise`]).
+    /// ir2w: one pass of its own each way, which builds no plan
+    /// ([`sqrt2::ir2w_analyse`], [`sqrt2::ir2w_synthesise`]).
     Ir2w,
     /// Catmull-Clark and polar levels (9.2-9.5, 9.9, 9.11, 9.12).
     Cc {
@@ -66,28 +57,27 @@ pub(crate) enum LevelTransform<'a> {
 }
 
 impl<'a> LevelTransform<'a> {
-    /// Prepares level `index` (0 = the coarsest) of a hierarchy coded with `scheme`, in
-    /// `direction`. `x` holds at least the level's coarse values (sqrt2-lazy predicts
+    /// Prepares level `index` (0 = the coarsest) of a hierarchy coded with `scheme`, for
+    /// either direction. `x` holds at least the level's coarse values (sqrt2-lazy predicts
     /// from them); with `phases`, sqrt2-lazy also finds its predictions' phases.
     pub(crate) fn new(
         scheme: &Scheme<'_>,
         level: &'a Level,
         index: usize,
         x: &[Vec<i64>; 3],
-        direction: Direction,
         phases: bool,
     ) -> LevelTransform<'a> {
         let w = scheme.wavelet;
         match scheme.family {
-            Family::Sqrt2 => match (w, direction) {
-                (Wavelet::Sqrt2Lazy, _) => {
+            Family::Sqrt2 => match w {
+                Wavelet::Sqrt2Lazy => {
                     let (predictions, phases) = sqrt2::predictions_with(level, x, phases);
                     LevelTransform::Sqrt2Lazy {
                         predictions,
                         phases,
                     }
                 }
-                (Wavelet::Ir2w, Direction::Synthesis) => LevelTransform::Ir2w,
+                Wavelet::Ir2w => LevelTransform::Ir2w,
                 _ => LevelTransform::Sqrt2Plan(Plan::new(level, w)),
             },
             Family::Cc | Family::Polar | Family::None => {
@@ -170,7 +160,7 @@ impl<'a> LevelTransform<'a> {
                     plan.analyse(&mut xs[..fine]);
                 }
             }
-            LevelTransform::Ir2w => unreachable!("ir2w analyses through its plan"),
+            LevelTransform::Ir2w => sqrt2::ir2w_analyse(level, x),
             LevelTransform::Cc {
                 w,
                 stencils,

@@ -118,13 +118,15 @@ pub(super) fn joint_correction(n: [i128; 3], frac: [i16; 3]) -> Option<([i64; 3]
 /// `x[k][nv..]`; `None` if a correction (mode 8's) is beyond the bound of a detail (the
 /// numerators then fit 64 bits).
 pub(super) fn corrections(level: &Level, x: &[Vec<i64>; 3], w: &Weights) -> Option<Vec<[i64; 3]>> {
-    (0..level.ne() + level.nf())
-        .map(|i| {
-            let n = correction_sums(level, x, w, i);
-            correction(n)?;
-            Some(n.map(|v| v as i64))
-        })
-        .collect()
+    // Sized once (collecting into an Option would grow the vector to twice its length).
+    let nd = level.ne() + level.nf();
+    let mut out = Vec::with_capacity(nd);
+    for i in 0..nd {
+        let n = correction_sums(level, x, w, i);
+        correction(n)?;
+        out.push(n.map(|v| v as i64));
+    }
+    Some(out)
 }
 
 /// Modes 8 and 9's weights after the mode byte (SPEC.md 10.8), whether the mask's joint

@@ -338,7 +338,7 @@ pub(super) fn edge_offset(level: &Level, coarse: &[Vec<i64>; 3], e: usize) -> Op
 #[derive(Clone, Copy)]
 pub(super) struct RotFrame {
     pub(super) rot: Rotation,
-    pub(super) offset: Option<[i64; 3]>,
+    pub(super) offset: Option<[i64; 2]>,
 }
 
 impl RotFrame {
@@ -354,7 +354,10 @@ impl RotFrame {
     ) -> Self {
         let rot = Rotation::new(n, tangent_ref(level, coarse, fd));
         let offset = if offset && family != Family::Sqrt2 && fd < level.ne() {
-            edge_offset(level, coarse, fd).map(|v| rot.forward(v))
+            edge_offset(level, coarse, fd).map(|v| {
+                let [_, a, b] = rot.forward(v);
+                [a, b]
+            })
         } else {
             None
         };
@@ -367,29 +370,106 @@ impl RotFrame {
         match (mode, self.offset) {
             (Mode::Shifted(a, b), Some(w)) => [
                 0,
-                crate::transform::round_div(a as i128 * w[1] as i128, 128),
-                crate::transform::round_div(b as i128 * w[2] as i128, 128),
+                crate::transform::round_div(a as i128 * w[0] as i128, 128),
+                crate::transform::round_div(b as i128 * w[1] as i128, 128),
             ],
             _ => [0; 3],
         }
     }
 }
 
+/// A detail's normal frame as [`frame`] gives it, packed in 16 bytes (the reduced
+/// normal fits 32 bits): the encoder keeps one per detail for a level's modes rather
+/// than the coarse faces' 128-bit normals (48 bytes a face), for the memory of large
+/// meshes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct NormalFrame {
+    /// The axis coded first; 3 where the normal is zero (no frame).
+    axis: u8,
+    n: [i32; 3],
+}
+
+impl NormalFrame {
+    /// Packs what [`frame`] gives.
+    pub(super) fn pack(fr: Option<(usize, [i64; 3])>) -> NormalFrame {
+        match fr {
+            Some((k, n)) => NormalFrame {
+                axis: k as u8,
+                n: n.map(|v| v as i32),
+            },
+            None => NormalFrame { axis: 3, n: [0; 3] },
+        }
+    }
+
+    /// What [`frame`] gave.
+    pub(super) fn get(self) -> Option<(usize, [i64; 3])> {
+        (self.axis < 3).then(|| (self.axis as usize, self.n.map(i64::from)))
+    }
+}
+
+/// Every detail's normal frame (SPEC.md 10.2), once per level for the encoder's
+/// framed and rotated modes: detail `i` is frame detail `fd` = `i` (Catmull-Clark,
+/// polar) or the edge count plus `i` (sqrt(2): every detail is a face point).
+pub(super) fn normal_frames(level: &Level, coarse: &[Vec<i64>; 3], family: Family) -> Vec<NormalFrame> {
+    let normals = face_normals(level, coarse);
+    let ne = if family == Family::Sqrt2 { level.ne() } else { 0 };
+    (0..family.details(level))
+        .map(|i| NormalFrame::pack(frame(level, &normals, ne + i)))
+        .collect()
+}
+
+/// Every detail's [`RotFrame`] for the encoder's rotated modes, made once per level and
+/// stored in two parts (the memory of large meshes): the rotations per detail, and the
+/// edge offsets per edge detail (none on sqrt(2) levels).
+#[derive(Default)]
+pub(super) struct RotFrames {
+    rots: Vec<Option<Rotation>>,
+    offsets: Vec<Option<[i64; 2]>>,
+}
+
+impl RotFrames {
+    /// Number of details.
+    pub(super) fn len(&self) -> usize {
+        self.rots.len()
+    }
+
+    /// Detail `i`'s frame; `None` where its coarse normal is zero.
+    pub(super) fn get(&self, i: usize) -> Option<RotFrame> {
+        Some(RotFrame {
+            rot: (*self.rots.get(i)?)?,
+            offset: self.offsets.get(i).copied().flatten(),
+        })
+    }
+
+    /// Every detail's frame, in order.
+    pub(super) fn iter(&self) -> impl Iterator<Item = Option<RotFrame>> + '_ {
+        (0..self.len()).map(|i| self.get(i))
+    }
+}
+
 /// Every detail's [`RotFrame`] (`None` where the coarse normal is zero), computed once
-/// per level for all the encoder's rotated modes, from the coarse faces' `normals`.
+/// per level for all the encoder's rotated modes, from the details' normal `frames`.
 pub(super) fn rot_frames(
     level: &Level,
     coarse: &[Vec<i64>; 3],
-    normals: &[[i128; 3]],
+    frames: &[NormalFrame],
     family: Family,
-) -> Vec<Option<RotFrame>> {
+) -> RotFrames {
     let ne = if family == Family::Sqrt2 { level.ne() } else { 0 };
-    (0..family.details(level))
-        .map(|i| {
-            let fd = ne + i;
-            frame(level, normals, fd).map(|(_, n)| RotFrame::new(level, coarse, family, fd, n, true))
-        })
-        .collect()
+    let edges = if family == Family::Sqrt2 { 0 } else { level.ne() };
+    let mut out = RotFrames {
+        rots: Vec::with_capacity(frames.len()),
+        offsets: Vec::with_capacity(edges.min(frames.len())),
+    };
+    for (i, f) in frames.iter().enumerate() {
+        let fd = ne + i;
+        let made = f.get().map(|(_, n)| RotFrame::new(level, coarse, family, fd, n, true));
+        out.rots.push(made.map(|r| r.rot));
+        if i < edges {
+            out.offsets.push(made.and_then(|r| r.offset));
+        }
+    }
+    out
 }
 
 /// The encoder's choice of mode 5's shift weights for a level (not normative): for
@@ -397,7 +477,7 @@ pub(super) fn rot_frames(
 pub(super) fn shift_weights(
     level: &Level,
     x: &[Vec<i64>; 3],
-    frames: &[Option<RotFrame>],
+    frames: &RotFrames,
 ) -> (u8, u8) {
     let mut cost = [[0u64; 9]; 2];
     for (i, f) in frames.iter().enumerate() {
@@ -411,7 +491,7 @@ pub(super) fn shift_weights(
         let d = rot.forward([x[0][level.nv + i], x[1][level.nv + i], x[2][level.nv + i]]);
         for (slot, c) in cost.iter_mut().enumerate() {
             for (q, cq) in c.iter_mut().enumerate() {
-                let p = crate::transform::round_div(q as i128 * w[slot + 1] as i128, 128);
+                let p = crate::transform::round_div(q as i128 * w[slot] as i128, 128);
                 *cq += class_of(d[slot + 1].saturating_sub(p)) as u64;
             }
         }

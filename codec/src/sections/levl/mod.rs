@@ -111,10 +111,10 @@ pub fn rotated(payload: &[u8]) -> bool {
 /// What [`encode`] makes once per level for the modes that read it.
 #[derive(Default)]
 struct Prepared {
-    /// The coarse faces' normals, for the normal-frame and rotated modes.
-    normals: Vec<[i128; 3]>,
+    /// The details' normal frames, for the normal-frame and rotated modes.
+    normals: Vec<NormalFrame>,
     /// The rotated modes' frames (normals included), per detail.
-    frames: Vec<Option<RotFrame>>,
+    frames: RotFrames,
     /// Modes 8 and 9's correction numerators, per detail (from the level's one set of
     /// weights).
     corrections: Vec<[i64; 3]>,

@@ -39,6 +39,31 @@ fn refined(times: usize) -> Level {
     Level::new(&t).unwrap()
 }
 
+/// The encoder's packed per-detail normal frames are the decoder's frames from the
+/// faces' normals, detail for detail, for both families' detail numbering, small and
+/// large values (the reduced normals fill 24 bits, some negative).
+#[test]
+fn packed_normal_frames_are_the_frames() {
+    let level = refined(2);
+    for (seed, bits) in [(1u64, 6u32), (5, 20), (9, 53)] {
+        let x: [Vec<i64>; 3] = std::array::from_fn(|k| pseudo(seed + k as u64, level.nv, bits));
+        let normals = face_normals(&level, &x);
+        for (family, ne) in [(Family::Cc, 0), (Family::Sqrt2, level.ne())] {
+            let packed = normal_frames(&level, &x, family);
+            assert_eq!(packed.len(), family.details(&level));
+            let mut wide = 0;
+            for (i, p) in packed.iter().enumerate() {
+                let want = frame(&level, &normals, ne + i);
+                assert_eq!(p.get(), want, "{family:?} detail {i}, {bits}-bit values");
+                wide += want.is_some_and(|(_, n)| n.iter().any(|v| v.abs() >= 1 << 23)) as usize;
+            }
+            if bits > 6 {
+                assert!(wide > 0, "{family:?}: no normal reaches 24 bits");
+            }
+        }
+    }
+}
+
 /// Newell's normal in 64 bits where it fits, else in 128: the same integers.
 #[test]
 fn face_normals_agree_with_128_bit_arithmetic() {
@@ -327,7 +352,7 @@ fn body_within(
     mode: Mode<'_>,
     limit: usize,
 ) -> Option<Vec<u8>> {
-    let normals = face_normals(level, coarse);
+    let normals = normal_frames(level, coarse, Family::Cc);
     let prep = Prepared {
         frames: rot_frames(level, coarse, &normals, Family::Cc),
         normals,
@@ -373,7 +398,7 @@ fn rotated_modes_round_trip() {
             };
         }
     }
-    let frames = rot_frames(&level, &coarse, &face_normals(&level, &coarse), Family::Cc);
+    let frames = rot_frames(&level, &coarse, &normal_frames(&level, &coarse, Family::Cc), Family::Cc);
     let out_of_range = frames.iter().enumerate().any(|(i, f)| {
         f.as_ref().is_some_and(|f| {
             let d = std::array::from_fn(|k| x[k][level.nv + i]);
@@ -410,7 +435,7 @@ fn follow_faces(level: &Level, coarse: &[Vec<i64>; 3], x: &mut [Vec<i64>; 3]) {
 fn shifted_mode_predicts_edge_points_that_follow_their_faces() {
     let (level, coarse, mut x) = rotated_fixture(4);
     follow_faces(&level, &coarse, &mut x);
-    let frames = rot_frames(&level, &coarse, &face_normals(&level, &coarse), Family::Cc);
+    let frames = rot_frames(&level, &coarse, &normal_frames(&level, &coarse, Family::Cc), Family::Cc);
     assert_eq!(shift_weights(&level, &x, &frames), (4, 4));
     let plain = code_in_mode(&level, &coarse, &x, Mode::Rotated);
     let shifted = code_in_mode(&level, &coarse, &x, Mode::Shifted(4, 4));
@@ -498,7 +523,7 @@ fn forced_zero(
         _ => Vec::new(),
     };
     let prep = Prepared {
-        normals: face_normals(level, coarse),
+        normals: normal_frames(level, coarse, family),
         corrections,
         ..Default::default()
     };

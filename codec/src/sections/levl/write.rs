@@ -227,7 +227,7 @@ fn candidates<'t>(
     }
     if rotated {
         modes.push(Mode::Rotated);
-        prep.normals = face_normals(level, coarse);
+        prep.normals = normal_frames(level, coarse, family);
         prep.frames = rot_frames(level, coarse, &prep.normals, family);
         match shift_weights(level, x, &prep.frames) {
             (0, 0) => {}
@@ -239,7 +239,7 @@ fn candidates<'t>(
     }
     // The normals, once for every mode that reads them.
     if prep.normals.is_empty() && modes.iter().any(|m| m.framed()) {
-        prep.normals = face_normals(level, coarse);
+        prep.normals = normal_frames(level, coarse, family);
     }
     (modes, prep)
 }
@@ -283,7 +283,7 @@ pub(super) fn encode_mode(
     let framed = mode.framed() && !rotated;
     if (rotated && prep.frames.len() != nd)
         || (corrected && prep.corrections.len() != nd)
-        || (framed && prep.normals.len() != level.nf())
+        || (framed && prep.normals.len() != nd)
     {
         return None;
     }
@@ -300,10 +300,10 @@ pub(super) fn encode_mode(
     mags.resize(nv, [UNKNOWN; 3]);
     mags.resize(nv + nd, [0; 3]);
     for i in 0..nd {
-        let (class, bins, fd) = contexts(level, mags, family, i);
+        let (class, bins, _) = contexts(level, mags, family, i);
         let mut d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
         let fr = if framed {
-            frame(level, &prep.normals, fd)
+            prep.normals[i].get()
         } else {
             None
         };
@@ -324,12 +324,7 @@ pub(super) fn encode_mode(
                 return None;
             }
         }
-        if let Some(f) = prep
-            .frames
-            .get(i)
-            .and_then(Option::as_ref)
-            .filter(|_| rotated)
-        {
+        if let Some(f) = rotated.then(|| prep.frames.get(i)).flatten() {
             let (r, pred) = (f.rot.forward(d), f.pred(mode));
             if r.iter().any(|v| v.abs() > MAX_LIFTED) {
                 return None;

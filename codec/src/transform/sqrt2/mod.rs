@@ -85,6 +85,9 @@ pub struct Plan<'a> {
     /// The level (sqrt2-sym reads its faces and its vertices' face lists as it goes,
     /// rather than storing rows beside them).
     level: &'a Level,
+    /// sqrt2-sym on a level without per-vertex lists (the encoder's sqrt(2) levels
+    /// free them): its vertices' face lists, made for the transform (CSR).
+    vert_faces: Option<(Vec<u32>, Vec<u32>)>,
 }
 
 /// Valences (ring lengths) and the neighbour of corner `c` at ring offset `j`.
@@ -123,7 +126,11 @@ impl<'a> Plan<'a> {
             predict: Rows::new(),
             update: Rows::new(),
             level,
+            vert_faces: None,
         };
+        if w == Wavelet::Sqrt2Sym && level.vf_starts.is_empty() {
+            plan.vert_faces = Some(crate::topology::vertex_faces(&level.coarse));
+        }
         if let Wavelet::Sqrt2Lazy | Wavelet::Ir2w = w {
             let rings = Rings::from_level(level);
             let nb = Neighbours {
@@ -216,9 +223,17 @@ impl<'a> Plan<'a> {
         }
     }
 
+    /// Vertex `v`'s faces, once per corner.
+    fn v_faces(&self, v: usize) -> &[u32] {
+        match &self.vert_faces {
+            Some((starts, faces)) => &faces[starts[v] as usize..starts[v + 1] as usize],
+            None => self.level.v_faces(v),
+        }
+    }
+
     /// Vertex `v`'s face count (once per corner) and the sum of its faces' values.
     fn own_sum<T: Sample>(&self, v: usize, x: &[T]) -> (usize, T::Acc) {
-        let faces = self.level.v_faces(v);
+        let faces = self.v_faces(v);
         let mut s = T::Acc::default();
         for &f in faces {
             s += x[self.nv + f as usize].acc();
@@ -246,7 +261,7 @@ impl<'a> Plan<'a> {
     fn ring_sum<T: Sample>(&self, v: usize, x: &[T]) -> (usize, T::Acc) {
         let level = self.level;
         let (mut r, mut s) = (0, T::Acc::default());
-        for &f in level.v_faces(v) {
+        for &f in self.v_faces(v) {
             let face = level.coarse.face(f as usize);
             let fe = level.f_edges(f as usize);
             for (i, &e) in fe.iter().enumerate() {
@@ -604,6 +619,38 @@ pub fn ir2w_synthesise(level: &Level, x: &mut [Vec<i64>; 3]) {
     }
 }
 
+/// The encoder's ir2w analysis of a level, all three axes: the exact inverse of
+/// [`ir2w_synthesise`] (and the same numbers as a [`Plan`]'s analysis) without storing
+/// prediction or update rows (the memory of large meshes): every face point
+/// `f -= P_f` from the fine vertex values, then every coarse vertex `v -= U_v` from the
+/// details.
+pub fn ir2w_analyse(level: &Level, x: &mut [Vec<i64>; 3]) {
+    let rings = Rings::from_level(level);
+    let nb = Neighbours {
+        rings: &rings,
+        topo: &level.coarse,
+    };
+    let nv = level.nv;
+    let small = small_values(x, nv);
+    for f in 0..level.nf() {
+        let (p, _) = face_prediction::<false>(&level.coarse, &nb, f, x, small);
+        for (xk, p) in x.iter_mut().zip(p) {
+            xk[nv + f] = xk[nv + f].minus(p);
+        }
+    }
+    let mut acc = vec![0i128; nv];
+    for xk in x.iter_mut() {
+        ir2w_terms(level, &nb, |f, v, w| {
+            if let Some(a) = acc.get_mut(v as usize) {
+                *a += xk[nv + f].weighted(w as i128);
+            }
+        });
+        for (xv, a) in xk.iter_mut().zip(acc.iter_mut()) {
+            *xv = xv.minus(i64::round(std::mem::take(a), ONE));
+        }
+    }
+}
+
 #[cfg(test)]
 mod prediction_tests {
     use super::*;
@@ -782,11 +829,11 @@ mod tests {
         }
     }
 
-    /// The decoder's ir2w pass (update scattered by face, predictions added in place)
-    /// gives the plan's synthesis (gathered rows) exactly, and inverts its analysis, on
+    /// The ir2w passes (update scattered by face, predictions made in place) give the
+    /// plan's analysis and synthesis (gathered rows) exactly, and invert each other, on
     /// valences 3 to 5, also with values near the range bound.
     #[test]
-    fn ir2w_pass_is_the_plans_synthesis() {
+    fn ir2w_passes_are_the_plans_transforms() {
         let mut t = prism_with_triangles();
         for depth in 0..4 {
             let level = Level::new(&t).unwrap();
@@ -800,6 +847,9 @@ mod tests {
                     plan.analyse(xk);
                 }
                 assert_ne!(x, orig);
+                let mut passed = orig.clone();
+                ir2w_analyse(&level, &mut passed);
+                assert_eq!(passed, x, "analysis pass at depth {depth}, {bits} bits");
                 let mut gathered = x.clone();
                 for xk in gathered.iter_mut() {
                     plan.synthesise(xk);
