@@ -15,6 +15,17 @@ times subwave (the Python package, `pip install ./python`) and Draco cl10 (Draco
 by side in this process at 16 bits, encode and decode alternating, one thread, and
 prints the medians and ratios as a table for benches/RESULTS.md (default meshes:
 armadillo_cc5, bunny_cc4 and jacksboro_grid257 of ../shared/corpus).
+
+    python3 benches/compare.py --whole-files [DIR]
+
+the whole-file table (issue 30) over the OBJ and PLY files of DIR (default
+../shared/corpus/blender): the file's size; subwave's default container (positions and
+faces: the rest of the file is dropped) and its `--keep-order` container (the same bytes
+back, checked); `xz -9e` and `zstd -19` of the file; and, as the lossy reference, Draco
+cl10 (DracoPy) of the mesh as trimesh loads it (vertices split at UV and normal seams)
+with 16-bit positions, 12-bit UVs and 10-bit normals, colours as they are (needs
+`pip install DracoPy trimesh scipy pillow numpy`; a file it cannot take shows `-`, the
+reason on stderr). Medians of keep-order / xz per format.
 """
 import argparse, csv, json, os, statistics, subprocess, sys, tempfile
 
@@ -63,9 +74,78 @@ def speed(args):
     print(f"\nmedians: encode {statistics.median(r[9] for r in rows):.2f} x, decode {statistics.median(r[6] for r in rows):.2f} x Draco cl10's speed")
 
 
+def draco_whole(path):
+    """Draco cl10 bytes of a file as trimesh loads it (None when it cannot)."""
+    try:
+        import DracoPy, numpy as np, trimesh
+    except ImportError as e:
+        print(f"draco: {e}", file=sys.stderr)
+        return None
+    try:
+        m = trimesh.load(path, process=False, force="mesh")
+    except Exception as e:
+        print(f"draco: {os.path.basename(path)}: trimesh: {e}", file=sys.stderr)
+        return None
+    kw = dict(quantization_bits=16, compression_level=10)
+    uv = getattr(m.visual, "uv", None)
+    if uv is not None and len(uv) == len(m.vertices):
+        kw.update(tex_coord=np.asarray(uv, dtype=np.float64), tex_coord_quantization_bits=12)
+    head = open(path, "rb").read()
+    has_normals = b"\nvn " in head if path.endswith(".obj") else b" nx\n" in head.split(b"end_header")[0]
+    if has_normals:
+        n = np.asarray(m.vertex_normals, dtype=np.float64)
+        if len(n) == len(m.vertices):
+            kw.update(normals=n, normal_quantization_bits=10)
+    colors = getattr(m.visual, "vertex_colors", None) if m.visual.kind == "vertex" else None
+    if colors is not None and len(colors) == len(m.vertices):
+        kw.update(colors=np.asarray(colors, dtype=np.uint8))
+    try:
+        return len(DracoPy.encode(np.asarray(m.vertices), np.asarray(m.faces), **kw))
+    except Exception as e:
+        print(f"draco: {os.path.basename(path)}: {e}", file=sys.stderr)
+        return None
+
+
+def whole_files(args):
+    """The whole-file table: subwave default and --keep-order, xz, zstd, Draco."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    folder = args[0] if args else os.path.join(root, "..", "shared", "corpus", "blender")
+    exe = subwave_bin()
+    files = sorted(f for f in os.listdir(folder) if f.endswith((".obj", ".ply")))
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in files:
+            path = os.path.join(folder, name)
+            raw = open(path, "rb").read()
+            out = {}
+            for tag, extra in [("default", []), ("keep", ["--keep-order"])]:
+                swv = os.path.join(tmp, tag + ".swv")
+                subprocess.run([exe, "-q", "compress", path, swv, "-f"] + extra, check=True)
+                out[tag] = os.path.getsize(swv)
+            back = os.path.join(tmp, "back" + os.path.splitext(name)[1])
+            subprocess.run([exe, "-q", "decompress", os.path.join(tmp, "keep.swv"), back, "-f"], check=True)
+            exact = open(back, "rb").read() == raw
+            xz = len(subprocess.run(["xz", "-9e", "-c"], input=raw, capture_output=True, check=True).stdout)
+            zst = len(subprocess.run(["zstd", "-19", "-c", "-q"], input=raw, capture_output=True, check=True).stdout)
+            rows.append((name, len(raw), out["default"], out["keep"], exact, xz, zst, draco_whole(path)))
+    print("| file | bytes | subwave default | subwave --keep-order | same bytes back | xz -9e | zstd -19 | Draco cl10 (q16/12/10, lossy) | keep-order / xz |")
+    print("|---|---:|---:|---:|---|---:|---:|---:|---:|")
+    for r in rows:
+        d = "-" if r[7] is None else str(r[7])
+        print(f"| {r[0]} | {r[1]} | {r[2]} | {r[3]} | {'yes' if r[4] else 'NO'} | {r[5]} | {r[6]} | {d} | {r[3] / r[5]:.3f} |")
+    for ext in (".obj", ".ply"):
+        sel = [r for r in rows if r[0].endswith(ext)]
+        if sel:
+            print(f"\n{ext[1:].upper()}: {len(sel)} files, {sum(r[4] for r in sel)} byte-exact; median keep-order / xz -9e "
+                  f"{statistics.median(r[3] / r[5] for r in sel):.3f}, default / xz -9e {statistics.median(r[2] / r[5] for r in sel):.3f}")
+    return 0 if all(r[4] for r in rows) else 1
+
+
 def main():
     if "--speed" in sys.argv[1:]:
         return speed([a for a in sys.argv[1:] if a != "--speed"])
+    if "--whole-files" in sys.argv[1:]:
+        return whole_files([a for a in sys.argv[1:] if a != "--whole-files"])
     ap = argparse.ArgumentParser()
     ap.add_argument("paths", nargs="+")
     ap.add_argument("--bits", default="16,12", help="comma list; 'exact' for the file's own values")
