@@ -33,7 +33,7 @@ pub use subwave_codec::{
     decode, encode, encode_file, inspect, integerize, Decimal, DecodeOptions, Decoded,
     DiscTransform, EncodeOptions, Encoded, Error, Family, FloatWidth, Header, Info, Limits, Mesh,
     Progress, Quantization, RawCoords, Result, SectionInfo, Source, Stage, Transform,
-    TransformChoice, Wavelet, FORMAT_VERSION, MAX_COORD, MAX_DECIMALS,
+    TransformChoice, Wavelet, DEFAULT_EFFORT, FORMAT_VERSION, MAX_COORD, MAX_DECIMALS, MAX_EFFORT,
 };
 
 /// A mesh file read and turned into integers.

@@ -33,6 +33,9 @@ fn hashes() -> String {
                 &EncodeOptions {
                     keep_order: keep,
                     source: m.source(),
+                    // The exhaustive search (as before efforts existed): the
+                    // hashes do not move with the default effort.
+                    effort: subwave::MAX_EFFORT,
                     ..Default::default()
                 },
             )
@@ -130,6 +133,7 @@ fn freeze(swv: &str, m: &subwave::Loaded, source: &[u8]) -> Vec<u8> {
         // On two threads: the container is the same for every count.
         threads: 2,
         transform,
+        effort: subwave::MAX_EFFORT,
         ..Default::default()
     };
     let (mesh, q) = (&m.mesh, &m.quantization);

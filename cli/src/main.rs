@@ -150,6 +150,11 @@ struct Coding {
     /// holds a coding's memory.
     #[arg(long, value_name = "N", default_value_t = 0)]
     threads: usize,
+    /// How hard auto searches, 1 (fastest) to 9 (every candidate, transform and mode:
+    /// the smallest file); any effort decodes the same way.
+    #[arg(long, value_name = "N", default_value_t = subwave::DEFAULT_EFFORT,
+          value_parser = clap::value_parser!(u8).range(1..=subwave::MAX_EFFORT as i64))]
+    effort: u8,
 }
 
 impl Coding {
@@ -168,6 +173,7 @@ impl Coding {
                 0 => std::thread::available_parallelism().map_or(1, |n| n.get().min(4)),
                 n => n,
             },
+            effort: self.effort,
             ..Default::default()
         }
     }
@@ -1033,6 +1039,7 @@ fn verify(
             "bits_per_vertex": subwave::json::bits_per_vertex(enc.bytes.len(), n),
             "encode_ms": encode_ms,
             "encode_threads": opts.threads.max(1),
+            "effort": opts.effort,
             "decode_ms": decode_ms,
             "repeat": repeat,
             "exact": exact,

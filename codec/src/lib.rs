@@ -50,5 +50,8 @@ mod encoder;
 mod info;
 
 pub use decoder::{decode, DecodeOptions, Decoded};
-pub use encoder::{encode, encode_file, EncodeOptions, Encoded, Progress, Stage, TransformChoice};
+pub use encoder::{
+    encode, encode_file, EncodeOptions, Encoded, Progress, Stage, TransformChoice, DEFAULT_EFFORT,
+    MAX_EFFORT,
+};
 pub use info::{inspect, Info, SectionInfo};

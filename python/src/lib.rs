@@ -191,7 +191,7 @@ fn integer_mesh(
 /// values; `keep_order`: the input's vertex and face order restored on decoding).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (vertices, faces, offsets, bits=None, keep_order=false, threads=1, decimals=None))]
+#[pyo3(signature = (vertices, faces, offsets, bits=None, keep_order=false, threads=1, decimals=None, effort=None))]
 fn compress<'py>(
     py: Python<'py>,
     vertices: Vertices<'py>,
@@ -201,6 +201,7 @@ fn compress<'py>(
     keep_order: bool,
     threads: usize,
     decimals: Option<u8>,
+    effort: Option<u8>,
 ) -> PyResult<Bound<'py, PyBytes>> {
     if bits.is_some_and(|b| !(1..=30).contains(&b)) {
         return Err(pyo3::exceptions::PyValueError::new_err(
@@ -219,6 +220,7 @@ fn compress<'py>(
             let opts = EncodeOptions {
                 keep_order,
                 threads: threads.max(1),
+                effort: effort.unwrap_or(subwave::DEFAULT_EFFORT),
                 ..Default::default()
             };
             subwave::encode_to_vec(&mesh, &q, &opts).map(|e| e.bytes)

@@ -225,8 +225,9 @@ def compress(
             nearest doubles of such numbers (else :class:`InvalidMeshError`), and come
             back as those doubles. A mesh read from a text file says its decimals in
             ``mesh.quantization["decimals"]``.
-        effort: reserved for compression effort levels; only ``None`` (the default
-            search) is accepted for now.
+        effort: how hard the encoder searches, 1 (fastest) to 9 (every candidate,
+            transform and mode: the smallest container); ``None`` is the default (6).
+            Any effort decodes the same way.
         attributes: reserved for attribute channels; only ``None`` or ``{}`` is accepted
             for now (subwave carries positions and faces).
         threads: threads the encoder may use to try transforms at once; the container
@@ -235,8 +236,8 @@ def compress(
     Returns:
         The container's bytes.
     """
-    if effort is not None:
-        raise ValueError("effort levels are not available yet; leave effort=None")
+    if effort is not None and not 1 <= int(effort) <= 9:
+        raise ValueError(f"effort must be between 1 and 9 (given: {effort})")
     if attributes:
         raise ValueError(
             f"attributes are not carried yet (given: {', '.join(attributes)}); "
@@ -244,7 +245,14 @@ def compress(
         )
     flat, offsets = _flat_faces(faces, face_offsets)
     return _subwave.compress(
-        _vertices(vertices), flat, offsets, bits, bool(keep_order), max(1, int(threads)), decimals
+        _vertices(vertices),
+        flat,
+        offsets,
+        bits,
+        bool(keep_order),
+        max(1, int(threads)),
+        decimals,
+        None if effort is None else int(effort),
     )
 
 

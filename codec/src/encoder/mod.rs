@@ -55,8 +55,78 @@ pub struct EncodeOptions {
     /// candidate families and transforms at once. The container is the same for every
     /// count; each thread holds a coding's working memory.
     pub threads: usize,
+    /// How hard the encoder searches, 1..=[`MAX_EFFORT`] (default [`DEFAULT_EFFORT`]; 0
+    /// counts as 1, more as the most). At the most it codes every candidate hierarchy
+    /// (a mesh and its dual), ranks every other transform of each family and codes the
+    /// best of them in every level mode, ranks the polar discs' transforms, and tries
+    /// the best coding again without the rotated modes; each lower effort leaves out
+    /// one more search: 8 the retry without rotated modes, 7 the candidates but the
+    /// preferred one, 6 ranks a short list of transforms, 5 a shorter one, 4 none, 3 no
+    /// disc ranking, 2 no rotated level modes, 1 no subdivision fit. The container is
+    /// the same for a given effort whatever the thread count, and every effort decodes
+    /// the same way (it is the encoder's choice only).
+    pub effort: u8,
     /// Where the encoder reports what it is doing (nothing by default).
     pub progress: Progress,
+}
+
+/// The most search effort: today's exhaustive `auto`.
+pub const MAX_EFFORT: u8 = 9;
+
+/// The default search effort: on `../shared/corpus` its median container is effort 9's,
+/// about 1.5 x faster (`benches/RESULTS.md` has sizes and times per effort).
+pub const DEFAULT_EFFORT: u8 = 6;
+
+/// What the encoder tries at an effort ([`EncodeOptions::effort`]); each effort below the
+/// most leaves out one more search, the one that gains least for its time on the shared
+/// corpus (benches/RESULTS.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Effort {
+    /// The subdivision fit where the finest level looks like one (`auto`): from 2.
+    pub fit: bool,
+    /// Levels try the rotated modes (SPEC.md 10.5): from 3.
+    pub rotated: bool,
+    /// A polar hierarchy's disc transforms are ranked (`auto`): from 4.
+    pub discs: bool,
+    /// Which of the family's other transforms `auto` ranks: none below 5,
+    /// [`Effort::SHORTER_LIST`] at 5, [`Effort::SHORT_LIST`] at 6, every one (`None`)
+    /// from 7.
+    pub rank: Option<&'static [Wavelet]>,
+    /// Every candidate hierarchy of a family is coded (a mesh and its dual; else the
+    /// one recovery prefers): from 8.
+    pub candidates: bool,
+    /// The best coding is tried again without the rotated modes: at 9.
+    pub unrotated: bool,
+}
+
+impl Effort {
+    /// The transforms ranked at effort 6: those that win most often beside each family's
+    /// first (Catmull-Clark: interp6, interp4, lazy; sqrt(2): ir2w).
+    pub(crate) const SHORT_LIST: &'static [Wavelet] = &[
+        Wavelet::Interp6,
+        Wavelet::Interp4,
+        Wavelet::Lazy,
+        Wavelet::Ir2w,
+    ];
+    /// The transforms ranked at effort 5.
+    pub(crate) const SHORTER_LIST: &'static [Wavelet] = &[Wavelet::Interp6, Wavelet::Ir2w];
+
+    pub(crate) fn of(effort: u8) -> Effort {
+        let e = effort.clamp(1, MAX_EFFORT);
+        Effort {
+            fit: e >= 2,
+            rotated: e >= 3,
+            discs: e >= 4,
+            rank: match e {
+                0..=4 => Some(&[]),
+                5 => Some(Self::SHORTER_LIST),
+                6 => Some(Self::SHORT_LIST),
+                _ => None,
+            },
+            candidates: e >= 8,
+            unrotated: e >= 9,
+        }
+    }
 }
 
 /// What the encoder is doing, as reported to a [`Progress`].
@@ -118,6 +188,7 @@ impl Default for EncodeOptions {
             disc: None,
             value_map: None,
             threads: 1,
+            effort: DEFAULT_EFFORT,
             progress: Progress::default(),
         }
     }
@@ -417,7 +488,11 @@ fn best_hierarchy(
         drop(topo);
         // The subdivision fit, on each candidate whose finest level is near a
         // subdivision (every candidate when asked for by name).
-        let try_fit = matches!(opts.transform, TransformChoice::Auto | TransformChoice::Fit);
+        let try_fit = match opts.transform {
+            TransformChoice::Auto => Effort::of(opts.effort).fit,
+            TransformChoice::Fit => true,
+            TransformChoice::Fixed(_) => false,
+        };
         for (i, canon) in canons.iter_mut().enumerate().filter(|_| try_fit) {
             canon.unstow()?;
             let pos = canonical_positions(mesh, canon);

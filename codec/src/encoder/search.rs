@@ -222,8 +222,11 @@ fn best_candidate(
     canons: Vec<Canonical>,
     first: Wavelet,
 ) -> Result<Option<Candidate>> {
+    let effort = Effort::of(opts.effort);
+    // Below effort 8, the preferred candidate alone (recovery ranks it first).
+    let take = if effort.candidates { canons.len() } else { 1 };
     let mut fam_best: Option<Candidate> = None;
-    for mut canon in canons {
+    for mut canon in canons.into_iter().take(take) {
         // One candidate's levels at a time: the best so far waits stowed.
         if let Some((_, best)) = fam_best.as_mut() {
             best.stow();
@@ -248,7 +251,7 @@ fn best_candidate(
             first,
             disc,
             flat_h,
-            true,
+            effort.rotated,
             None,
             bound,
             &opts.progress,
@@ -285,6 +288,7 @@ pub(crate) fn code_family(
         TransformChoice::Auto | TransformChoice::Fit => auto_first,
         TransformChoice::Fixed(w) => w,
     };
+    let effort = Effort::of(opts.effort);
     let fam_best = best_candidate(mesh, opts, flat_h, canons, first)?;
     let Some((mut p, canon)) = fam_best else {
         return Ok(None);
@@ -332,7 +336,7 @@ pub(crate) fn code_family(
                 w,
                 d,
                 flat_h,
-                true,
+                effort.rotated,
                 Some(modes.clone()),
                 bound,
                 &opts.progress,
@@ -364,22 +368,27 @@ pub(crate) fn code_family(
             }
         }
         if let Some((_, w, d)) = ranked.filter(|&(s, ..)| s <= margin) {
-            try_code(p, w, d, true);
+            try_code(p, w, d, effort.rotated);
         }
     };
     let disc = p.header.disc;
     if opts.transform == TransformChoice::Auto {
         let pairs: Vec<_> = others
             .iter()
-            .filter(|&&w| w != first)
+            .filter(|&&w| w != first && effort.rank.is_none_or(|r| r.contains(&w)))
             .map(|&w| (w, disc))
             .collect();
-        rank_then_code(&mut p, &pairs);
+        if !pairs.is_empty() {
+            rank_then_code(&mut p, &pairs);
+        }
     }
     // A polar hierarchy: the other disc transforms, with the best transform.
-    if let (false, None, Transform::Wavelet(w)) =
-        (canon.poles.is_empty(), opts.disc, p.header.transform)
-    {
+    if let (false, None, Transform::Wavelet(w), true) = (
+        canon.poles.is_empty(),
+        opts.disc,
+        p.header.transform,
+        effort.discs,
+    ) {
         let d0 = p.header.disc;
         let pairs: Vec<_> = DiscTransform::ALL
             .into_iter()
@@ -393,7 +402,7 @@ pub(crate) fn code_family(
     // can be smaller in all. (Without a rotated level it would be this coding
     // again: the same modes win, the rotated ones coming last on ties.)
     let rotated = p.modes().iter().any(|&m| levl::rotated(&[m]));
-    if let (true, Transform::Wavelet(w)) = (rotated, p.header.transform) {
+    if let (true, Transform::Wavelet(w), true) = (rotated, p.header.transform, effort.unrotated) {
         let d = p.header.disc;
         try_code(&mut p, w, d, false);
     }
