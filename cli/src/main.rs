@@ -336,6 +336,9 @@ impl Progress {
     fn encoder(&self) -> subwave::Progress {
         let bar = self.bar.clone();
         subwave::Progress::new(move |s| {
+            if let subwave::Stage::Level { .. } = s {
+                trim_heap();
+            }
             bar.set_message(match s {
                 subwave::Stage::Recovering => "recovering the hierarchy".to_string(),
                 subwave::Stage::Level {
@@ -822,17 +825,18 @@ fn warn_dropped(quiet: bool, file: &str, loaded: &subwave::Loaded) {
 }
 
 /// The encoder makes and frees many large working arrays (per level, per mode tried).
-/// glibc's allocator keeps freed arrays below a threshold that it raises as it goes (to
-/// 32 MiB) in its heap, where they fragment it: the process then holds far more memory
-/// than it uses (on a 1.57 M-vertex mesh about 400 MB for 350 MB in use). A fixed
-/// threshold gives arrays of 4 MiB and more back to the system when they are freed
-/// (peak 338 MB there, for a few per cent of time: benches/RESULTS.md).
-fn tune_allocator_for_encoding() {
+/// glibc's allocator keeps freed memory inside its heap, where it fragments: the process
+/// then holds far more memory than it uses (on a 1.57 M-vertex mesh about 400 MB for
+/// 330 MB in use). Handing the heap's free pages back to the system as each level's
+/// coding starts keeps the peak near what is in use (331 MB there, for little time:
+/// benches/RESULTS.md). (A fixed mmap threshold did as well but made every allocation
+/// fail under valgrind, whose profiles this project measures with.)
+fn trim_heap() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    // SAFETY: mallopt only sets an allocator parameter; it is called before any thread
-    // of this process is started.
+    // SAFETY: malloc_trim only returns free memory of the allocator's own heap to the
+    // system; it is safe to call from any thread at any time.
     unsafe {
-        libc::mallopt(libc::M_MMAP_THRESHOLD, 4 << 20);
+        libc::malloc_trim(0);
     }
 }
 
@@ -848,7 +852,6 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
             keep_order,
             coding,
         } => {
-            tune_allocator_for_encoding();
             let job = Job::Compress {
                 keep_order: *keep_order,
                 coding,
