@@ -596,27 +596,8 @@ pub fn ir2w_synthesise(level: &Level, x: &mut [Vec<i64>; 3]) {
         rings: &rings,
         topo: &level.coarse,
     };
-    let nv = level.nv;
-    // One axis at a time: one sum per vertex alive, not three.
-    let mut acc = vec![0i128; nv];
-    for xk in x.iter_mut() {
-        ir2w_terms(level, &nb, |f, v, w| {
-            if let Some(a) = acc.get_mut(v as usize) {
-                *a += xk[nv + f].weighted(w as i128);
-            }
-        });
-        for (xv, a) in xk.iter_mut().zip(acc.iter_mut()) {
-            *xv = xv.plus(i64::round(std::mem::take(a), ONE));
-        }
-    }
-    drop(acc);
-    let small = small_values(x, nv);
-    for f in 0..level.nf() {
-        let (p, _) = face_prediction::<false>(&level.coarse, &nb, f, x, small);
-        for (xk, p) in x.iter_mut().zip(p) {
-            xk[nv + f] = xk[nv + f].plus(p);
-        }
-    }
+    ir2w_update_pass(level, &nb, x, false);
+    ir2w_predict_pass(level, &nb, x, false);
 }
 
 /// The encoder's ir2w analysis of a level, all three axes: the exact inverse of
@@ -630,23 +611,38 @@ pub fn ir2w_analyse(level: &Level, x: &mut [Vec<i64>; 3]) {
         rings: &rings,
         topo: &level.coarse,
     };
+    ir2w_predict_pass(level, &nb, x, true);
+    ir2w_update_pass(level, &nb, x, true);
+}
+
+/// ir2w's update, all three axes: every coarse vertex `v -= U_v` (`forward`) or
+/// `v += U_v` from the details `x[k][nv..]`, scattered face by face into one 128-bit sum
+/// per vertex, an axis at a time (one sum per vertex alive, not three).
+fn ir2w_update_pass(level: &Level, nb: &Neighbours<'_>, x: &mut [Vec<i64>; 3], forward: bool) {
     let nv = level.nv;
-    let small = small_values(x, nv);
-    for f in 0..level.nf() {
-        let (p, _) = face_prediction::<false>(&level.coarse, &nb, f, x, small);
-        for (xk, p) in x.iter_mut().zip(p) {
-            xk[nv + f] = xk[nv + f].minus(p);
-        }
-    }
     let mut acc = vec![0i128; nv];
     for xk in x.iter_mut() {
-        ir2w_terms(level, &nb, |f, v, w| {
+        ir2w_terms(level, nb, |f, v, w| {
             if let Some(a) = acc.get_mut(v as usize) {
                 *a += xk[nv + f].weighted(w as i128);
             }
         });
         for (xv, a) in xk.iter_mut().zip(acc.iter_mut()) {
-            *xv = xv.minus(i64::round(std::mem::take(a), ONE));
+            let u = i64::round(std::mem::take(a), ONE);
+            *xv = if forward { xv.minus(u) } else { xv.plus(u) };
+        }
+    }
+}
+
+/// ir2w's prediction, all three axes: every face point `f -= P_f` (`forward`) or
+/// `f += P_f`, from the coarse vertex values, each added where it is made.
+fn ir2w_predict_pass(level: &Level, nb: &Neighbours<'_>, x: &mut [Vec<i64>; 3], forward: bool) {
+    let nv = level.nv;
+    let small = small_values(x, nv);
+    for f in 0..level.nf() {
+        let (p, _) = face_prediction::<false>(&level.coarse, nb, f, x, small);
+        for (xk, p) in x.iter_mut().zip(p) {
+            xk[nv + f] = if forward { xk[nv + f].minus(p) } else { xk[nv + f].plus(p) };
         }
     }
 }
