@@ -74,8 +74,9 @@ def speed(args):
     print(f"\nmedians: encode {statistics.median(r[9] for r in rows):.2f} x, decode {statistics.median(r[6] for r in rows):.2f} x Draco cl10's speed")
 
 
-def draco_whole(path):
-    """Draco cl10 bytes of a file as trimesh loads it (None when it cannot)."""
+def draco_whole(path, raw):
+    """Draco cl10 bytes of a file (`raw`, its bytes) as trimesh loads it (None when it
+    cannot)."""
     try:
         import DracoPy, numpy as np, trimesh
     except ImportError as e:
@@ -90,8 +91,7 @@ def draco_whole(path):
     uv = getattr(m.visual, "uv", None)
     if uv is not None and len(uv) == len(m.vertices):
         kw.update(tex_coord=np.asarray(uv, dtype=np.float64), tex_coord_quantization_bits=12)
-    head = open(path, "rb").read()
-    has_normals = b"\nvn " in head if path.endswith(".obj") else b" nx\n" in head.split(b"end_header")[0]
+    has_normals = b"\nvn " in raw if path.endswith(".obj") else b" nx\n" in raw.split(b"end_header")[0]
     if has_normals:
         n = np.asarray(m.vertex_normals, dtype=np.float64)
         if len(n) == len(m.vertices):
@@ -127,7 +127,7 @@ def whole_files(args):
             exact = open(back, "rb").read() == raw
             xz = len(subprocess.run(["xz", "-9e", "-c"], input=raw, capture_output=True, check=True).stdout)
             zst = len(subprocess.run(["zstd", "-19", "-c", "-q"], input=raw, capture_output=True, check=True).stdout)
-            rows.append((name, len(raw), out["default"], out["keep"], exact, xz, zst, draco_whole(path)))
+            rows.append((name, len(raw), out["default"], out["keep"], exact, xz, zst, draco_whole(path, raw)))
     print("| file | bytes | subwave default | subwave --keep-order | same bytes back | xz -9e | zstd -19 | Draco cl10 (q16/12/10, lossy) | keep-order / xz |")
     print("|---|---:|---:|---:|---|---:|---:|---:|---:|")
     for r in rows:

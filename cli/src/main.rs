@@ -828,10 +828,11 @@ fn warn_dropped(quiet: bool, file: &str, loaded: &subwave::Loaded) {
 /// The encoder makes and frees many large working arrays (per level, per mode tried).
 /// glibc's allocator keeps freed memory inside its heap, where it fragments: the process
 /// then holds far more memory than it uses (on a 1.57 M-vertex mesh about 400 MB for
-/// 330 MB in use). Handing the heap's free pages back to the system as each level's
-/// coding starts keeps the peak near what is in use (331 MB there, for little time:
-/// benches/RESULTS.md). (A fixed mmap threshold did as well but made every allocation
-/// fail under valgrind, whose profiles this project measures with.)
+/// 332 MB in use). Handing the heap's free pages back to the system as each level's
+/// coding starts (the encoder's progress reports are the hook) keeps the peak near what
+/// is in use: 355 MB there at effort 9, 364 MB at the default, for little time
+/// (benches/RESULTS.md). (A fixed 4 MiB mmap threshold gave 331 MB but doubled the page
+/// faults and made allocations fail under valgrind, whose profiles this project uses.)
 fn trim_heap() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: malloc_trim only returns free memory of the allocator's own heap to the

@@ -31,9 +31,9 @@ pub(crate) fn code_hierarchy(
         disc,
     };
     for (l, level) in canon.levels.iter().enumerate().rev() {
-        // As the decoder: sqrt2-lazy keeps the coarse values, so one prediction per
-        // face serves the analysis and the tangent targets; the other sqrt(2)
-        // transforms take a plan; polar levels code the poles' discs first (SPEC.md 9.9).
+        // As the decoder: sqrt2-lazy predicts from the coarse values (which it keeps)
+        // and finds its phases with the predictions; ir2w runs its own passes,
+        // sqrt2-sym a plan; polar levels code the poles' discs first (SPEC.md 9.9).
         let mut t = LevelTransform::new(&scheme, level, l, &x, true);
         // The phases of modes 6 and 9 (SPEC.md 10.6): sqrt2-lazy's from its predictions,
         // a predict-only Catmull-Clark level's from the fine values (the decoder makes
@@ -68,11 +68,13 @@ pub(crate) fn code_hierarchy(
             level: i + 1,
             levels: canon.levels.len(),
         });
-        let t = LevelTransform::new(&scheme, level, i, &x, false);
-        // sqrt(2) levels: their tangent targets (SPEC.md 10.3) from the coarse values.
-        let targets = t.tangent_targets(level, &x);
-        // The finest level is not synthesised: its transform goes before it is coded.
-        let t = (i < last).then_some(t);
+        // The level's transform, made from its coarse values as the decoder makes it:
+        // for its synthesis once it is coded (not the finest's) and for a sqrt(2)
+        // level's tangent targets (SPEC.md 10.3).
+        let sqrt2 = canon.family == Family::Sqrt2;
+        let t = (i < last || sqrt2).then(|| LevelTransform::new(&scheme, level, i, &x, false));
+        let targets = t.as_ref().and_then(|t| t.tangent_targets(level, &x));
+        let t = t.filter(|_| i < last);
         let b = levl::encode(
             level,
             canon.family,

@@ -517,7 +517,6 @@ impl Level {
     }
 }
 
-/// Compressed lists: for each key in `0..n`, its values in insertion order.
 /// Per vertex of `topo`: the faces it is a corner of, once per corner, in face order
 /// (CSR: the starts, `nv + 1` entries, and the lists).
 pub(crate) fn vertex_faces(topo: &Topo) -> (Vec<u32>, Vec<u32>) {
@@ -527,6 +526,7 @@ pub(crate) fn vertex_faces(topo: &Topo) -> (Vec<u32>, Vec<u32>) {
     )
 }
 
+/// Compressed lists: for each key in `0..n`, its values in insertion order.
 pub(crate) fn csr<T: Copy + Default>(
     n: usize,
     pairs: impl Iterator<Item = (u32, T)> + Clone,
@@ -598,21 +598,19 @@ impl Canonical {
         debug_assert_eq!(self.stowed, 0, "the levels are stowed");
         match self.levels.last() {
             None => self.base.clone(),
-            Some(l) => self.fine_of(l),
+            Some(l) if self.family == Family::Sqrt2 => sqrt2::fine(l),
+            Some(l) => l.fine_with(&self.pole_flags()),
         }
     }
 
-    /// The fine topology of one of the hierarchy's levels, as canonicalisation made it.
-    fn fine_of(&self, level: &Level) -> Topo {
-        if self.family == Family::Sqrt2 {
-            return sqrt2::fine(level);
-        }
+    /// Which canonical vertices are poles (the same at every level), by number.
+    fn pole_flags(&self) -> Vec<bool> {
         let n = self.poles.iter().map(|&p| p as usize + 1).max().unwrap_or(0);
         let mut pole = vec![false; n];
         for &p in &self.poles {
             pole[p as usize] = true;
         }
-        level.fine_with(&pole)
+        pole
     }
 
     /// Frees the levels, keeping what makes them again ([`Canonical::unstow`]): a
@@ -629,22 +627,38 @@ impl Canonical {
     /// canonicalisation made them (each from the one before, from the base).
     pub fn unstow(&mut self) -> Result<()> {
         let n = std::mem::take(&mut self.stowed);
+        let pole = self.pole_flags();
         self.levels.reserve_exact(n);
         for _ in 0..n {
-            let level = match self.levels.last() {
-                Some(prev) if self.family == Family::Sqrt2 => sqrt2::next_level_of(prev, false)?,
-                Some(prev) => Level::new(&self.fine_of(prev))?,
-                None => {
-                    let mut level = Level::new(&self.base)?;
-                    if self.family == Family::Sqrt2 {
-                        level.free_vertex_adjacency();
-                    }
-                    level
-                }
-            };
+            let level = next_canonical_level(self.family, &self.base, self.levels.last(), &pole)?;
             self.levels.push(level);
         }
         Ok(())
+    }
+}
+
+/// The level after `prev` in a canonical hierarchy of `family` (with no `prev`, the
+/// refinement of `base`), as canonicalisation makes it: a Catmull-Clark or polar level
+/// from the fine faces of the one before (a pole's triangle corners split as `pole`
+/// says, SPEC.md 8.6); a sqrt(2) level from the one before without looking edges up, and
+/// without per-vertex lists (sqrt2-sym makes its vertices' face lists for the level it
+/// transforms).
+pub(crate) fn next_canonical_level(
+    family: Family,
+    base: &Topo,
+    prev: Option<&Level>,
+    pole: &[bool],
+) -> Result<Level> {
+    match prev {
+        Some(prev) if family == Family::Sqrt2 => sqrt2::next_level_of(prev, false),
+        Some(prev) => Level::new(&prev.fine_with(pole)),
+        None => {
+            let mut level = Level::new(base)?;
+            if family == Family::Sqrt2 {
+                level.free_vertex_adjacency();
+            }
+            Ok(level)
+        }
     }
 }
 
@@ -752,10 +766,14 @@ pub fn canonicalise(rec: &Recovered, gates: bool) -> Result<Canonical> {
     let poles: Vec<u32> = (0..pole.len() as u32)
         .filter(|&c| pole[c as usize])
         .collect();
-    let mut levels = Vec::with_capacity(rec.levels());
-    let mut cur = base.clone();
+    let family = if poles.is_empty() {
+        Family::Cc
+    } else {
+        Family::Polar
+    };
+    let mut levels: Vec<Level> = Vec::with_capacity(rec.levels());
     for l in 0..rec.levels() {
-        let lvl = Level::new(&cur)?;
+        let lvl = next_canonical_level(family, &base, levels.last(), &pole)?;
         let mut next = order.clone();
         for &[a, b] in &lvl.edges {
             let (ia, ib) = (order[a as usize], order[b as usize]);
@@ -765,7 +783,6 @@ pub fn canonicalise(rec: &Recovered, gates: bool) -> Result<Canonical> {
             next.push(p);
         }
         push_face_points(&lvl, &order, &rec.face_points[l], &mut next)?;
-        cur = lvl.fine_with(&pole);
         levels.push(lvl);
         order = next;
     }
@@ -773,11 +790,7 @@ pub fn canonicalise(rec: &Recovered, gates: bool) -> Result<Canonical> {
         base,
         levels,
         order,
-        family: if poles.is_empty() {
-            Family::Cc
-        } else {
-            Family::Polar
-        },
+        family,
         poles,
         stowed: 0,
     })

@@ -11,7 +11,8 @@
 
 use crate::error::{Error, Result};
 use crate::topology::{
-    base_numbering, check_matches, csr, push_face_points, Canonical, Level, PairMap, Topo, NONE,
+    base_numbering, check_matches, csr, next_canonical_level, push_face_points, Canonical, Level,
+    PairMap, Topo, NONE,
 };
 
 /// Whether every coarse edge has two faces (sqrt(2) levels need a closed mesh).
@@ -398,17 +399,9 @@ pub fn canonicalise(mut rec: Recovered, input: &Topo, gates: bool) -> Result<Can
     let (mut order, base) = base_numbering(&rec.base, finer, gates);
     let mut levels: Vec<Level> = Vec::with_capacity(rec.levels());
     for l in 0..rec.levels() {
-        // Without per-vertex lists (sqrt2-sym makes its vertices' face lists for the
-        // level it transforms); after the first, each level from the one before without
-        // looking edges up (the memory of large meshes).
-        let lvl = match levels.last() {
-            None => {
-                let mut lvl = Level::new(&base)?;
-                lvl.free_vertex_adjacency();
-                lvl
-            }
-            Some(prev) => next_level_of(prev, false)?,
-        };
+        // Without per-vertex lists, each from the one before without looking edges up
+        // (the memory of large meshes).
+        let lvl = next_canonical_level(super::Family::Sqrt2, &base, levels.last(), &[])?;
         if !closed(&lvl) {
             return Err(Error::InvalidMesh("sqrt(2) level with a boundary".into()));
         }

@@ -73,7 +73,10 @@ impl Rows {
     }
 }
 
-/// The precomputed steps of one transform on one level.
+/// The precomputed steps of one transform on one level. The codec takes a plan for
+/// sqrt2-sym only: sqrt2-lazy and ir2w go through passes of their own
+/// ([`predictions_with`], [`ir2w_analyse`], [`ir2w_synthesise`]), and their plans, with
+/// the gathered rows, are the reference the tests hold those passes to.
 pub struct Plan<'a> {
     nv: usize,
     nf: usize,
