@@ -7,11 +7,12 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q -p subwave-cli
-bin=target/release/subwave
+bin=$(realpath "${CARGO_TARGET_DIR:-target}")/release/subwave
 corpus=${SUBWAVE_CORPUS:-../shared/corpus}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 one() {
+  set -e
   local obj=$1 mode=$2 name
   name=$(basename "$obj" .obj)
   local out="$tmp/$name.$mode.swv"

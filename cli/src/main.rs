@@ -510,8 +510,6 @@ fn batch(
     let progress = Progress::new(true);
     progress.bar.set_length(inputs.len() as u64);
     let next = std::sync::atomic::AtomicUsize::new(0);
-    // Per input (by its index): the bytes read and written, or why not.
-    type Outcome = (usize, Result<(u64, u64), Failure>);
     let results: std::sync::Mutex<Vec<Outcome>> = std::sync::Mutex::new(Vec::new());
     std::thread::scope(|scope| {
         for _ in 0..threads {
@@ -521,30 +519,7 @@ fn batch(
                     break;
                 };
                 let out = target(rel);
-                let result: Result<(u64, u64), Failure> = (|| {
-                    if let Some(parent) = out.parent() {
-                        std::fs::create_dir_all(parent)
-                            .map_err(|e| fail(&parent.to_string_lossy(), e))?;
-                    }
-                    let out_name = out.to_string_lossy();
-                    let quiet = Progress {
-                        bar: indicatif::ProgressBar::hidden(),
-                    };
-                    let written = match job {
-                        Job::Compress { keep_order, coding } => {
-                            compress(cli, input, &out_name, *keep_order, coding, true, &quiet)?
-                        }
-                        Job::Decompress { format, max_level } => {
-                            let out_name = match Format::from_path(&out_name) {
-                                None => with_extension(input, &out_name, *format)?,
-                                Some(_) => out_name.into_owned(),
-                            };
-                            decompress(cli, input, &out_name, *format, *max_level, &quiet)?
-                        }
-                    };
-                    let read = std::fs::metadata(input).map_or(0, |m| m.len());
-                    Ok((read, written))
-                })();
+                let result = batch_one(cli, job, input, &out);
                 if let Err(f) = &result {
                     progress
                         .bar
@@ -560,9 +535,48 @@ fn batch(
     drop(progress);
     let mut results = results.into_inner().unwrap_or_default();
     results.sort_by_key(|(i, _)| *i);
+    Ok(batch_summary(job, &inputs, &results, dir))
+}
+
+/// Per input of a batch (by its index): the bytes read and written, or why not.
+type Outcome = (usize, Result<(u64, u64), Failure>);
+
+/// One file of a batch: `input` coded into `out`; the bytes read and written.
+fn batch_one(cli: &Cli, job: &Job<'_>, input: &str, out: &Path) -> Result<(u64, u64), Failure> {
+    if let Some(parent) = out.parent() {
+        std::fs::create_dir_all(parent).map_err(|e| fail(&parent.to_string_lossy(), e))?;
+    }
+    let out_name = out.to_string_lossy();
+    let quiet = Progress {
+        bar: indicatif::ProgressBar::hidden(),
+    };
+    let written = match job {
+        Job::Compress { keep_order, coding } => {
+            compress(cli, input, &out_name, *keep_order, coding, true, &quiet)?
+        }
+        Job::Decompress { format, max_level } => {
+            let out_name = match Format::from_path(&out_name) {
+                None => with_extension(input, &out_name, *format)?,
+                Some(_) => out_name.into_owned(),
+            };
+            decompress(cli, input, &out_name, *format, *max_level, &quiet)?
+        }
+    };
+    let read = std::fs::metadata(input).map_or(0, |m| m.len());
+    Ok((read, written))
+}
+
+/// A batch's summary line (the bytes read and written, the files that failed) and its
+/// exit code: 1 if any file failed.
+fn batch_summary<P>(
+    job: &Job<'_>,
+    inputs: &[(String, P)],
+    results: &[Outcome],
+    dir: &str,
+) -> ExitCode {
     let (mut read, mut written, mut done) = (0u64, 0u64, 0usize);
     let mut failed = Vec::new();
-    for (i, r) in &results {
+    for (i, r) in results {
         match r {
             Ok((a, b)) => {
                 read += a;
@@ -590,11 +604,11 @@ fn batch(
             format!("; {} failed: {}", failed.len(), failed.join(", "))
         }
     );
-    Ok(if failed.is_empty() {
+    if failed.is_empty() {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
-    })
+    }
 }
 
 /// `out`, with the extension of `format`, or where none is given of the format

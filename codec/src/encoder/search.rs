@@ -276,7 +276,6 @@ fn best_candidate(
 /// candidate, the ranking's winner coded in every mode, and a coding without the
 /// rotated modes. `threads` (at least 1) may code the ranking's transforms at once; the
 /// result is the same for every count.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn code_family(
     mesh: &Mesh,
     opts: &EncodeOptions,
@@ -295,34 +294,102 @@ pub(crate) fn code_family(
     let Some((mut p, canon)) = fam_best else {
         return Ok(None);
     };
-    // Codings of one hierarchy share their ORDR section (the order depends on the
-    // hierarchy only), so they compare by `coded()`, and a coding stops as soon
-    // as it cannot be wanted (`code_hierarchy`'s bound).
-    //
-    // Codes the chosen hierarchy with (w, d) and keeps it if smaller.
-    let try_code = |p: &mut Payloads, w: Wavelet, d: DiscTransform, rotated: bool| {
-        let bound = p.coded().saturating_sub(1);
-        if let Some(mut q) = code_hierarchy(
-            &canon,
-            mesh,
+    let coder = Recoder {
+        canon: &canon,
+        mesh,
+        opts,
+        flat_h,
+        threads,
+    };
+    let disc = p.header.disc;
+    if opts.transform == TransformChoice::Auto {
+        let pairs: Vec<_> = others
+            .iter()
+            .filter(|&&w| w != first && effort.rank.is_none_or(|r| r.contains(&w)))
+            .map(|&w| (w, disc))
+            .collect();
+        if !pairs.is_empty() {
+            coder.rank_then_code(&mut p, &pairs, effort.rotated);
+        }
+    }
+    // A polar hierarchy: the other disc transforms, with the best transform.
+    if let (false, None, Transform::Wavelet(w), true) = (
+        canon.poles.is_empty(),
+        opts.disc,
+        p.header.transform,
+        effort.discs,
+    ) {
+        let d0 = p.header.disc;
+        let pairs: Vec<_> = DiscTransform::ALL
+            .into_iter()
+            .filter(|&d| d != d0)
+            .map(|d| (w, d))
+            .collect();
+        coder.rank_then_code(&mut p, &pairs, effort.rotated);
+    }
+    // Each level keeps its smallest mode, but a rotated level hands the next one
+    // models learnt in another frame: the best coding without the rotated modes
+    // can be smaller in all. (Without a rotated level it would be this coding
+    // again: the same modes win, the rotated ones coming last on ties.)
+    let rotated = p.modes().iter().any(|&m| levl::rotated(&[m]));
+    if let (true, Transform::Wavelet(w), true) = (rotated, p.header.transform, effort.unrotated) {
+        let d = p.header.disc;
+        coder.try_code(&mut p, w, d, false);
+    }
+    Ok(Some((p, canon)))
+}
+
+/// Codes one chosen hierarchy again with other transforms, keeping the smallest coding.
+///
+/// Codings of one hierarchy share their ORDR section (the order depends on the
+/// hierarchy only), so they compare by `coded()`, and a coding stops as soon as it
+/// cannot be wanted (`code_hierarchy`'s bound).
+struct Recoder<'a> {
+    canon: &'a Canonical,
+    mesh: &'a Mesh,
+    opts: &'a EncodeOptions,
+    flat_h: &'a Header,
+    threads: usize,
+}
+
+impl Recoder<'_> {
+    /// The hierarchy coded with (w, d), each level in one of `modes` (every mode if
+    /// `None`), if it fits within `bound`.
+    fn code(
+        &self,
+        (w, d): (Wavelet, DiscTransform),
+        rotated: bool,
+        modes: Option<Vec<u8>>,
+        bound: usize,
+    ) -> Option<Payloads> {
+        code_hierarchy(
+            self.canon,
+            self.mesh,
             w,
             d,
-            flat_h,
+            self.flat_h,
             rotated,
-            None,
+            modes,
             bound,
-            &opts.progress,
-        ) {
+            &self.opts.progress,
+        )
+    }
+
+    /// Codes the hierarchy with (w, d) in every mode and keeps it in `p` if smaller.
+    fn try_code(&self, p: &mut Payloads, w: Wavelet, d: DiscTransform, rotated: bool) {
+        let bound = p.coded().saturating_sub(1);
+        if let Some(mut q) = self.code((w, d), rotated, None, bound) {
             q.order = p.order.clone();
             if q.coded() < p.coded() {
                 *p = q;
             }
         }
-    };
-    // Other (transform, disc) pairs are ranked coding each level in the mode p
-    // chose for it (a fraction of the work of trying every mode); the best of
-    // them is then coded in every mode. Whichever coding is smallest is kept.
-    let rank_then_code = |p: &mut Payloads, pairs: &[(Wavelet, DiscTransform)]| {
+    }
+
+    /// Other (transform, disc) pairs are ranked coding each level in the mode p chose
+    /// for it (a fraction of the work of trying every mode); the best of them is then
+    /// coded in every mode. Whichever coding is smallest is kept.
+    fn rank_then_code(&self, p: &mut Payloads, pairs: &[(Wavelet, DiscTransform)], rotated: bool) {
         let modes = p.modes();
         let mut ranked: Option<(usize, Wavelet, DiscTransform)> = None;
         // The largest ranking size that leads to coding in every mode.
@@ -331,22 +398,12 @@ pub(crate) fn code_family(
         // the loop below can give (before anything is ranked); the loop then takes
         // each coding only where it fits its own bound, as coded alone it would have
         // (a coding within a bound is the same coding under any wider one).
-        let code = |&(w, d): &(Wavelet, DiscTransform), bound: usize| {
-            code_hierarchy(
-                &canon,
-                mesh,
-                w,
-                d,
-                flat_h,
-                effort.rotated,
-                Some(modes.clone()),
-                bound,
-                &opts.progress,
-            )
+        let code = |&pair: &(Wavelet, DiscTransform), bound: usize| {
+            self.code(pair, rotated, Some(modes.clone()), bound)
         };
         let widest = p.coded().saturating_sub(1).max(margin);
-        let mut ahead = if threads > 1 {
-            par_map(pairs, threads, |pair| code(pair, widest))
+        let mut ahead = if self.threads > 1 {
+            par_map(pairs, self.threads, |pair| code(pair, widest))
         } else {
             Vec::new()
         };
@@ -370,45 +427,9 @@ pub(crate) fn code_family(
             }
         }
         if let Some((_, w, d)) = ranked.filter(|&(s, ..)| s <= margin) {
-            try_code(p, w, d, effort.rotated);
-        }
-    };
-    let disc = p.header.disc;
-    if opts.transform == TransformChoice::Auto {
-        let pairs: Vec<_> = others
-            .iter()
-            .filter(|&&w| w != first && effort.rank.is_none_or(|r| r.contains(&w)))
-            .map(|&w| (w, disc))
-            .collect();
-        if !pairs.is_empty() {
-            rank_then_code(&mut p, &pairs);
+            self.try_code(p, w, d, rotated);
         }
     }
-    // A polar hierarchy: the other disc transforms, with the best transform.
-    if let (false, None, Transform::Wavelet(w), true) = (
-        canon.poles.is_empty(),
-        opts.disc,
-        p.header.transform,
-        effort.discs,
-    ) {
-        let d0 = p.header.disc;
-        let pairs: Vec<_> = DiscTransform::ALL
-            .into_iter()
-            .filter(|&d| d != d0)
-            .map(|d| (w, d))
-            .collect();
-        rank_then_code(&mut p, &pairs);
-    }
-    // Each level keeps its smallest mode, but a rotated level hands the next one
-    // models learnt in another frame: the best coding without the rotated modes
-    // can be smaller in all. (Without a rotated level it would be this coding
-    // again: the same modes win, the rotated ones coming last on ties.)
-    let rotated = p.modes().iter().any(|&m| levl::rotated(&[m]));
-    if let (true, Transform::Wavelet(w), true) = (rotated, p.header.transform, effort.unrotated) {
-        let d = p.header.disc;
-        try_code(&mut p, w, d, false);
-    }
-    Ok(Some((p, canon)))
 }
 
 /// `f` of every item, in order, on up to `threads` threads (this one among them), each

@@ -1,5 +1,5 @@
-//! The frozen IR2W weights (SPEC.md 9.7), times 2^16: what [`super::solve`] computes
-//! (a test checks it). Valences 3..=16; index = valence - 3.
+//! The frozen IR2W weights (SPEC.md 9.7), times 2^16: what `super::solve` (feature
+//! `reference`) computes (a test checks it). Valences 3..=16; index = valence - 3.
 
 /// Prediction weights of a corner's neighbours, j = 0..n-1 (they sum to 2^15).
 pub const ALPHA: [&[i32]; 14] = [
