@@ -793,3 +793,72 @@ fn files_with_no_mesh_are_errors_and_empty_meshes_are_meshes() {
         );
     }
 }
+
+/// `bytes` with the payload of its section of `kind` rewritten by `edit` (checksums
+/// made valid).
+fn with_section(bytes: &[u8], kind: SectionKind, edit: impl FnOnce(&mut Vec<u8>)) -> Vec<u8> {
+    let c = subwave_container::Container::parse(bytes, &Limits::default()).unwrap();
+    let mut w = ContainerWriter::new();
+    let mut edit = Some(edit);
+    for s in &c.sections {
+        if s.kind == SectionKind::END {
+            continue;
+        }
+        let mut p = s.payload.to_vec();
+        if s.kind == kind {
+            (edit.take().expect("one section of the kind"))(&mut p);
+        }
+        w.section(s.kind, &p);
+    }
+    assert!(edit.is_none(), "no {kind} section");
+    w.finish()
+}
+
+#[test]
+fn every_bit_flip_or_cut_of_the_order_and_corner_indices_is_an_error_or_a_valid_file() {
+    // The frozen textured OBJ (walks in ORDR, vt and vn channels in CIDX): every bit of
+    // those payloads flipped and every cut of them, checksums made valid, so the walks'
+    // candidates and escapes and the channels' predictions meet hostile values. The
+    // result is an error, or a mesh and a file that the decoder could make.
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/corpus/golden/textured_cc3.file.swv"
+    );
+    let b = std::fs::read(path).unwrap();
+    let d = subwave::decode_slice(&b).unwrap();
+    assert!(d.file().is_some(), "the frozen container keeps its file");
+    let mut tried = 0;
+    let mut refused = 0;
+    for kind in [SectionKind::ORDER, SectionKind::CORNER_INDICES] {
+        let c = subwave_container::Container::parse(&b, &Limits::default()).unwrap();
+        let len = c
+            .sections
+            .iter()
+            .find(|s| s.kind == kind)
+            .unwrap()
+            .payload
+            .len();
+        let mut variants: Vec<Vec<u8>> = (0..len * 8)
+            .map(|bit| with_section(&b, kind, |p| p[bit / 8] ^= 1 << (bit % 8)))
+            .collect();
+        variants.extend((0..len).map(|n| with_section(&b, kind, |p| p.truncate(n))));
+        for x in variants {
+            match subwave::decode_slice(&x) {
+                Ok(d) => {
+                    d.mesh.validate().unwrap();
+                    // The file, or an error saying why not.
+                    let _ = d.file().unwrap();
+                }
+                Err(e) => {
+                    assert!(!e.to_string().is_empty());
+                    refused += 1;
+                }
+            }
+            tried += 1;
+        }
+    }
+    assert!(
+        tried > 500 && refused > 0,
+        "{tried} tried, {refused} refused"
+    );
+}

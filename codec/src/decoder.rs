@@ -3,6 +3,7 @@
 use crate::error::{Error, Result};
 use crate::mesh::{Mesh, MAX_COORD};
 use crate::quant::Quantization;
+use crate::sections::cidx::{self, CornerIndices};
 use crate::sections::head::{Header, Transform};
 use crate::sections::vmap::ValueMap;
 use crate::sections::{base, fbit, levl, ordr, tmpl};
@@ -41,6 +42,8 @@ pub struct Decoded {
     /// The input file's template (SPEC.md 11), when the container keeps the file's own
     /// bytes and the mesh is in its order: [`Decoded::file`] gives the file back.
     pub template: Option<Vec<u8>>,
+    /// The template's corner index channels (SPEC.md 11.1).
+    pub(crate) corner_indices: CornerIndices,
 }
 
 impl Decoded {
@@ -52,6 +55,7 @@ impl Decoded {
             t,
             &self.mesh,
             &self.quantization,
+            &self.corner_indices,
         ))
     }
 }
@@ -95,6 +99,9 @@ pub(crate) fn layout(c: &Container<'_>, limits: &Limits, whole: bool) -> Result<
     }
     if h.has_template {
         expected.push((SectionKind::TEMPLATE, "file template"));
+    }
+    if h.has_corner_indices {
+        expected.push((SectionKind::CORNER_INDICES, "corner index channels"));
     }
     expected.push((SectionKind::END, "end marker"));
     for (i, &(kind, what)) in expected.iter().enumerate() {
@@ -196,8 +203,12 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
     let ordr_at = after_levels + h.has_float_bits as usize;
     if h.has_order && level == h.levels {
         if let Some(s) = c.sections.get(ordr_at) {
-            let degrees: Vec<u32> = mesh.face_starts.windows(2).map(|w| w[1] - w[0]).collect();
-            let o = ordr::decode(s.payload, mesh.vertex_count(), &degrees)?;
+            let faces = ordr::Faces {
+                nv: mesh.vertex_count(),
+                starts: &mesh.face_starts,
+                idx: &mesh.faces,
+            };
+            let o = ordr::decode(s.payload, faces)?;
             mesh = restore_order(&mesh, &o);
             input_order = true;
         }
@@ -209,6 +220,10 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
         }
         _ => None,
     };
+    let corner_indices = match c.sections.get(ordr_at + 2) {
+        Some(s) if h.has_corner_indices && template.is_some() => cidx::decode(s.payload, &mesh)?,
+        _ => CornerIndices::default(),
+    };
     Ok(Decoded {
         mesh,
         quantization: h.quantization,
@@ -216,6 +231,7 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
         level,
         input_order,
         template,
+        corner_indices,
     })
 }
 

@@ -326,6 +326,110 @@ impl PolyMesh {
         out
     }
 
+    /// Writes OBJ text as modelling tools do, with attributes: two comment lines,
+    /// `mtllib`, `o`, the `v` lines, smooth `vn` lines (4 decimals, deduplicated on
+    /// their text, in vertex order), `vt` lines (a box projection: each face's chart is
+    /// the axis its normal leans on most, a vertex has one `vt` per chart it touches,
+    /// numbered by first use), `s 1`, a `usemtl` per chart, the faces grouped by chart
+    /// as `f v/vt/vn`. Positions with 6 decimals.
+    pub fn to_obj_textured(&self) -> String {
+        let n = self.positions.len();
+        let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let cross = |a: [f64; 3], b: [f64; 3]| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
+        let mut vnorm = vec![[0.0f64; 3]; n];
+        let mut chart = Vec::with_capacity(self.faces.len());
+        for f in &self.faces {
+            let mut fnorm = [0.0; 3];
+            for i in 0..f.len() {
+                let p = self.positions[f[i] as usize];
+                let q = self.positions[f[(i + 1) % f.len()] as usize];
+                let c = cross(p, sub(q, p));
+                for k in 0..3 {
+                    fnorm[k] += c[k];
+                }
+            }
+            for &v in f {
+                for k in 0..3 {
+                    vnorm[v as usize][k] += fnorm[k];
+                }
+            }
+            let axis = (0..3)
+                .max_by(|&a, &b| fnorm[a].abs().total_cmp(&fnorm[b].abs()))
+                .unwrap_or(0);
+            chart.push(axis * 2 + (fnorm[axis] < 0.0) as usize);
+        }
+        let mut s = String::with_capacity(n * 120 + self.faces.len() * 40);
+        s.push_str("# subwave-corpus OBJ File\n# made by to_obj_textured\n");
+        s.push_str("mtllib textured.mtl\no Cube\n");
+        for p in &self.positions {
+            let _ = writeln!(s, "v {:.6} {:.6} {:.6}", p[0], p[1], p[2]);
+        }
+        let mut vn_of = vec![0u32; n];
+        let mut vn_table: HashMap<String, u32> = HashMap::new();
+        for (v, nrm) in vnorm.iter().enumerate() {
+            let len = (nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2])
+                .sqrt()
+                .max(1e-12);
+            let text = format!(
+                "vn {:.4} {:.4} {:.4}",
+                nrm[0] / len,
+                nrm[1] / len,
+                nrm[2] / len
+            );
+            let next = vn_table.len() as u32 + 1;
+            let id = *vn_table.entry(text.clone()).or_insert_with(|| {
+                s.push_str(&text);
+                s.push('\n');
+                next
+            });
+            vn_of[v] = id;
+        }
+        let mut order: Vec<usize> = (0..self.faces.len()).collect();
+        order.sort_by_key(|&f| chart[f]);
+        let mut vt_of: HashMap<(usize, u32), u32> = HashMap::new();
+        let mut vt_lines = String::new();
+        let mut f_lines = String::new();
+        let mut last_chart = usize::MAX;
+        for &f in &order {
+            let c = chart[f];
+            if c != last_chart {
+                let _ = writeln!(f_lines, "usemtl Side{c}");
+                last_chart = c;
+            }
+            f_lines.push('f');
+            for &v in &self.faces[f] {
+                let next = vt_of.len() as u32 + 1;
+                let id = *vt_of.entry((c, v)).or_insert_with(|| {
+                    let p = self.positions[v as usize];
+                    let (a, b) = match c / 2 {
+                        0 => (p[1], p[2]),
+                        1 => (p[2], p[0]),
+                        _ => (p[0], p[1]),
+                    };
+                    let _ = writeln!(
+                        vt_lines,
+                        "vt {:.6} {:.6}",
+                        (a + 1.0) / 6.0 + (c % 3) as f64 / 3.0,
+                        (b + 1.0) / 4.0 + (c / 3) as f64 / 2.0
+                    );
+                    next
+                });
+                let _ = write!(f_lines, " {}/{}/{}", v + 1, id, vn_of[v as usize]);
+            }
+            f_lines.push('\n');
+        }
+        s.push_str(&vt_lines);
+        s.push_str("s 1\n");
+        s.push_str(&f_lines);
+        s
+    }
+
     /// Writes OBJ text with `decimals` decimals.
     pub fn to_obj(&self, decimals: usize) -> String {
         let mut s = String::with_capacity(self.positions.len() * 40 + self.faces.len() * 30);
@@ -571,6 +675,10 @@ pub fn small_corpus() -> Vec<(&'static str, Vec<u8>)> {
     let mut tris = cube().refined(2);
     tris.displace(0.05, 0.002, &mut rng);
     out.push(("cube_cc2.stl", tris.to_stl()));
+    // An OBJ with attributes as modelling tools write them: vt (seams), vn, materials.
+    let mut textured = cube().refined(3);
+    textured.displace(0.05, 0.002, &mut rng);
+    out.push(("textured_cc3.obj", textured.to_obj_textured().into_bytes()));
     out
 }
 

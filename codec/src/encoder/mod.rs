@@ -12,6 +12,7 @@ use crate::info::{section_info, SectionInfo};
 use crate::io::{self, Format};
 use crate::mesh::Mesh;
 use crate::quant::Quantization;
+use crate::sections::cidx::{self, CornerIndices};
 use crate::sections::head::{Header, Source, Transform};
 use crate::sections::vmap::ValueMap;
 use crate::sections::{base, fbit, levl, ordr, tmpl};
@@ -239,14 +240,28 @@ impl Payloads {
 }
 
 /// The ORDR payload (SPEC.md 7): the coded vertex order (`vertices[coded] = input`),
-/// face order and corner rotations.
-pub(crate) fn order_section(vertices: &[u32], faces: Vec<u32>, rotations: Vec<u32>) -> Vec<u8> {
+/// face order and corner rotations, of the canonical faces `fine`.
+pub(crate) fn order_section(
+    vertices: &[u32],
+    faces: Vec<u32>,
+    rotations: Vec<u32>,
+    canonical: ordr::Faces<'_>,
+) -> Vec<u8> {
     let o = ordr::InputOrder {
         vertices: vertices.to_vec(),
         faces,
         rotations,
     };
-    ordr::encode(&o)
+    ordr::encode(&o, canonical)
+}
+
+/// A topology's faces, as ORDR names them.
+pub(crate) fn faces_of(t: &Topo) -> ordr::Faces<'_> {
+    ordr::Faces {
+        nv: t.nv,
+        starts: &t.starts,
+        idx: &t.idx,
+    }
 }
 
 pub(crate) fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Header {
@@ -266,6 +281,7 @@ pub(crate) fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -
         has_value_map: false,
         has_float_bits: !mesh.floats.is_empty(),
         has_template: false,
+        has_corner_indices: false,
         poles: Vec::new(),
         disc: DiscTransform::None,
     }
@@ -329,9 +345,27 @@ pub fn encode_file(
         ));
     }
     mesh.validate()?;
-    let t = io::template_of(file, format, mesh, q)
-        .unwrap_or_else(|| io::template::verbatim(file, mesh, q));
-    encode_inner(mesh, q, opts, Some(&tmpl::encode(&t)?))
+    let (t, indices) = io::template_of(file, format, mesh, q).unwrap_or_else(|| {
+        (
+            io::template::verbatim(file, mesh, q),
+            CornerIndices::default(),
+        )
+    });
+    let own = FilePayloads {
+        tmpl: tmpl::encode(&t)?,
+        cidx: match indices.is_empty() {
+            true => None,
+            false => Some(cidx::encode(mesh, &indices)?),
+        },
+    };
+    encode_inner(mesh, q, opts, Some(&own))
+}
+
+/// The sections that keep a file's own bytes (SPEC.md 11): TMPL, and CIDX when the
+/// template has corner index channels.
+struct FilePayloads {
+    tmpl: Vec<u8>,
+    cidx: Option<Vec<u8>>,
 }
 
 /// [`encode`], with a TMPL payload when given.
@@ -339,7 +373,7 @@ fn encode_inner(
     mesh: &Mesh,
     q: &Quantization,
     opts: &EncodeOptions,
-    tmpl: Option<&[u8]>,
+    tmpl: Option<&FilePayloads>,
 ) -> Result<Encoded> {
     mesh.validate()?;
     check_floats(mesh, q)?;
@@ -375,11 +409,12 @@ fn encode_with(
     q: &Quantization,
     opts: &EncodeOptions,
     vmap: Option<&ValueMap>,
-    tmpl: Option<&[u8]>,
+    tmpl: Option<&FilePayloads>,
 ) -> Result<Encoded> {
     let mut flat_h = flat_header(mesh, q, opts);
     flat_h.has_value_map = vmap.is_some();
     flat_h.has_template = tmpl.is_some();
+    flat_h.has_corner_indices = tmpl.is_some_and(|t| t.cidx.is_some());
     let best = if opts.max_levels > 0 {
         opts.progress.report(Stage::Recovering);
         best_hierarchy(mesh, opts, &flat_h)?
@@ -498,8 +533,14 @@ fn best_hierarchy(
             let pos = canonical_positions(mesh, canon);
             if let Some(mut p) = code_fit(canon, &pos, flat_h, &FIT_BITS, !fit_only) {
                 if opts.keep_order {
-                    let (faces, rotations) = face_order(mesh, &canon.fine(), &canon.order)?;
-                    p.order = Some(order_section(&canon.order, faces, rotations));
+                    let fine = canon.fine();
+                    let (faces, rotations) = face_order(mesh, &fine, &canon.order)?;
+                    p.order = Some(order_section(
+                        &canon.order,
+                        faces,
+                        rotations,
+                        faces_of(&fine),
+                    ));
                 }
                 if best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
                     best = Some((p, canon.order.clone()));
@@ -582,11 +623,20 @@ fn best_flat(mesh: &Mesh, opts: &EncodeOptions, flat_h: &Header) -> (Payloads, V
     for (forder, rot) in candidates {
         let by_faces = base::permute_faces_rotated(mesh, &forder, &rot);
         let order = base::canonical_order(&by_faces);
+        let canonical = base::permute(&by_faces, &order);
+        let order_payload = opts.keep_order.then(|| {
+            let faces = ordr::Faces {
+                nv: canonical.vertex_count(),
+                starts: &canonical.face_starts,
+                idx: &canonical.faces,
+            };
+            order_section(&order, forder, rot, faces)
+        });
         let p = Payloads {
             header: flat_h.clone(),
-            base: base::encode(&base::permute(&by_faces, &order)),
+            base: base::encode(&canonical),
             levels: Vec::new(),
-            order: opts.keep_order.then(|| order_section(&order, forder, rot)),
+            order: order_payload,
         };
         if best_flat.as_ref().is_none_or(|b| p.size() < b.0.size()) {
             best_flat = Some((p, order));
@@ -600,7 +650,7 @@ fn write_container(
     payloads: &Payloads,
     vmap: Option<&ValueMap>,
     fbit: Option<&[u8]>,
-    tmpl: Option<&[u8]>,
+    tmpl: Option<&FilePayloads>,
 ) -> Result<(Vec<u8>, Vec<SectionInfo>)> {
     let header = &payloads.header;
     let transform = header.transform;
@@ -633,7 +683,10 @@ fn write_container(
         put(&mut w, SectionKind::ORDER, o)?;
     }
     if let Some(t) = tmpl {
-        put(&mut w, SectionKind::TEMPLATE, t)?;
+        put(&mut w, SectionKind::TEMPLATE, &t.tmpl)?;
+        if let Some(c) = &t.cidx {
+            put(&mut w, SectionKind::CORNER_INDICES, c)?;
+        }
     }
     let bytes = w.finish();
     let end = subwave_container::section_overhead(0);

@@ -237,8 +237,14 @@ fn best_candidate(
         // code_hierarchy drops the disc transform of a hierarchy without poles.
         let disc = opts.disc.unwrap_or(DiscTransform::None);
         let order = if opts.keep_order {
-            let (faces, rotations) = face_order(mesh, &canon.fine(), &canon.order)?;
-            Some(order_section(&canon.order, faces, rotations))
+            let fine = canon.fine();
+            let (faces, rotations) = face_order(mesh, &fine, &canon.order)?;
+            Some(order_section(
+                &canon.order,
+                faces,
+                rotations,
+                faces_of(&fine),
+            ))
         } else {
             None
         };

@@ -76,6 +76,11 @@ impl AdaptiveModel {
         self.until_rebuild = FIRST_PERIOD;
     }
 
+    /// How often `s` has been seen (the encoder's choice among equal codings).
+    pub(crate) fn count_of(&self, s: usize) -> u32 {
+        self.counts[s]
+    }
+
     /// Alphabet size.
     #[cfg(feature = "internals")]
     pub fn len(&self) -> usize {

@@ -290,7 +290,23 @@ pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
                         .position(|&c| c == b'/')
                         .map_or(e, |i| s + i);
                     b.index_text(&line[s..slash], 1);
-                    at = slash;
+                    // `/vt/vn`: channels 0 and 1 (SPEC.md 11.1).
+                    let mut p = slash;
+                    for k in 0..2 {
+                        if p >= e {
+                            break;
+                        }
+                        b.literal(b"/");
+                        let end = line[p + 1..e]
+                            .iter()
+                            .position(|&c| c == b'/')
+                            .map_or(e, |i| p + 1 + i);
+                        if end > p + 1 {
+                            b.channel_text(k, &line[p + 1..end]);
+                        }
+                        p = end;
+                    }
+                    at = p;
                 }
             }
             _ => {}

@@ -8,6 +8,7 @@ use super::{format_coord, value_f32, value_f64};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::quant::Quantization;
+use crate::sections::cidx::{CornerIndices, IndexChannel, MAX_CHANNELS};
 
 /// The next coordinate, as text (how [`format_coord`] writes it).
 const COORD_TEXT: u8 = 1;
@@ -37,8 +38,11 @@ const INDEX_32_BE: u8 = 12;
 const CORNER_F32_LE: u8 = 13;
 /// The next corner's vertex's three coordinates as text, a space before each (STL).
 const CORNER_TEXT: u8 = 14;
+/// Followed by a channel number k: the next value of corner index channel k (CIDX,
+/// SPEC.md 11.1) as text.
+const CHANNEL_TEXT: u8 = 15;
 /// Bytes at most this are markers; a literal one is escaped.
-const LAST_MARKER: u8 = 14;
+const LAST_MARKER: u8 = 15;
 
 /// Builds a template while a format's walker reads the file.
 pub(super) struct Builder<'m> {
@@ -49,6 +53,8 @@ pub(super) struct Builder<'m> {
     coord: usize,
     corner: usize,
     text: String,
+    /// The corner index channels' values the markers stand for.
+    indices: CornerIndices,
 }
 
 impl<'m> Builder<'m> {
@@ -60,6 +66,7 @@ impl<'m> Builder<'m> {
             coord: 0,
             corner: 0,
             text: String::new(),
+            indices: CornerIndices::default(),
         }
     }
 
@@ -108,6 +115,30 @@ impl<'m> Builder<'m> {
             self.out.push(SKIP_INDEX);
             self.literal(token);
         }
+    }
+
+    /// A number of channel `k` (an OBJ corner's `vt` or `vn` number) at the last corner
+    /// met, written as `token`: a marker where the token is a number's plain decimal
+    /// text (SPEC.md 11.1), else the token as it stands.
+    pub(super) fn channel_text(&mut self, k: u8, token: &[u8]) {
+        let corner = self.corner.checked_sub(1).map(|c| c as u32);
+        let value = plain_decimal(token);
+        let ki = k as usize;
+        if let (Some(c), Some(a), true) = (corner, value, ki < MAX_CHANNELS) {
+            if self.indices.channels.len() <= ki {
+                self.indices
+                    .channels
+                    .resize(ki + 1, IndexChannel::default());
+            }
+            let ch = &mut self.indices.channels[ki];
+            if ch.corners.last().is_none_or(|&l| l < c) {
+                ch.corners.push(c);
+                ch.values.push(a);
+                self.out.extend_from_slice(&[CHANNEL_TEXT, k]);
+                return;
+            }
+        }
+        self.literal(token);
     }
 
     /// The next coordinate, stored as the binary float `bytes` (4 or 8, `big` endian).
@@ -208,11 +239,28 @@ pub(super) fn builder<'m>(mesh: &'m Mesh, q: &'m Quantization, len: usize) -> Bu
     Builder::new(mesh, q, len / 2)
 }
 
-/// The template a walk built, if it expands back to `bytes`.
-pub(super) fn checked(b: Builder<'_>, bytes: &[u8]) -> Option<Vec<u8>> {
+/// The template a walk built and its corner index channels, if they expand back to
+/// `bytes`.
+pub(super) fn checked(b: Builder<'_>, bytes: &[u8]) -> Option<(Vec<u8>, CornerIndices)> {
     let (mesh, q) = (b.mesh, b.q);
-    let t = b.out;
-    (expand(&t, mesh, q).ok()? == bytes).then_some(t)
+    let (t, mut idx) = (b.out, b.indices);
+    // Channels the walk never used are not carried.
+    while idx.channels.last().is_some_and(|c| c.values.is_empty()) {
+        idx.channels.pop();
+    }
+    (expand(&t, mesh, q, &idx).ok()? == bytes).then_some((t, idx))
+}
+
+/// The number `token` is the plain decimal text of (digits, no leading zero), if it
+/// fits 32 bits.
+fn plain_decimal(token: &[u8]) -> Option<u32> {
+    if token.is_empty() || (token.len() > 1 && token[0] == b'0') {
+        return None;
+    }
+    token.iter().try_fold(0u32, |n, &c| {
+        c.is_ascii_digit().then_some(())?;
+        n.checked_mul(10)?.checked_add((c - b'0') as u32)
+    })
 }
 
 /// A template that gives `bytes` back whatever the mesh: every byte literal.
@@ -222,11 +270,18 @@ pub(crate) fn verbatim(bytes: &[u8], mesh: &Mesh, q: &Quantization) -> Vec<u8> {
     b.out
 }
 
-/// The file a template stands for, with the decoded `mesh` (in the file's order).
-pub(crate) fn expand(t: &[u8], mesh: &Mesh, q: &Quantization) -> Result<Vec<u8>> {
+/// The file a template stands for, with the decoded `mesh` (in the file's order) and
+/// its corner index channels.
+pub(crate) fn expand(
+    t: &[u8],
+    mesh: &Mesh,
+    q: &Quantization,
+    indices: &CornerIndices,
+) -> Result<Vec<u8>> {
     let bad = |what: &str| Error::corrupt("TMPL", what.to_string());
     let mut out = Vec::with_capacity(t.len() + 24 * mesh.vertex_count());
     let (mut coord, mut corner) = (0usize, 0usize);
+    let mut used = [0usize; MAX_CHANNELS];
     let mut text = String::new();
     let mut i = 0;
     let next_coord = |coord: &mut usize| {
@@ -285,8 +340,30 @@ pub(crate) fn expand(t: &[u8], mesh: &Mesh, q: &Quantization) -> Result<Vec<u8>>
                 out.push(*t.get(i).ok_or_else(|| bad("ends inside an escape"))?);
                 i += 1;
             }
+            CHANNEL_TEXT => {
+                let k = *t
+                    .get(i)
+                    .ok_or_else(|| bad("ends inside a channel marker"))?
+                    as usize;
+                i += 1;
+                let a = indices
+                    .channels
+                    .get(k)
+                    .and_then(|c| c.values.get(used[k]))
+                    .ok_or_else(|| bad("more channel values than CIDX carries"))?;
+                used[k] += 1;
+                out.extend_from_slice(a.to_string().as_bytes());
+            }
             _ => out.push(b),
         }
+    }
+    if indices
+        .channels
+        .iter()
+        .zip(used)
+        .any(|(c, u)| c.values.len() != u)
+    {
+        return Err(bad("CIDX carries values the template does not write"));
     }
     Ok(out)
 }

@@ -134,6 +134,9 @@ pub struct Header {
     /// A `TMPL` section follows the input order: the input file's own bytes around the
     /// coded values (SPEC.md 11).
     pub has_template: bool,
+    /// A `CIDX` section follows the template: its per-corner index channels (SPEC.md
+    /// 11.1).
+    pub has_corner_indices: bool,
     /// Polar hierarchies (family 3): the base mesh's poles, increasing (SPEC.md 8.6);
     /// empty for every other family.
     pub poles: Vec<u32>,
@@ -146,6 +149,7 @@ const FLAG_ORDER: u64 = 1;
 const FLAG_VALUE_MAP: u64 = 2;
 const FLAG_FLOAT_BITS: u64 = 4;
 const FLAG_TEMPLATE: u64 = 8;
+const FLAG_CORNER_INDICES: u64 = 16;
 /// The transform code of the subdivision fit.
 const FIT_CODE: u8 = 9;
 
@@ -197,7 +201,8 @@ impl Header {
             flag(self.has_order, FLAG_ORDER)
                 | flag(self.has_value_map, FLAG_VALUE_MAP)
                 | flag(self.has_float_bits, FLAG_FLOAT_BITS)
-                | flag(self.has_template, FLAG_TEMPLATE),
+                | flag(self.has_template, FLAG_TEMPLATE)
+                | flag(self.has_corner_indices, FLAG_CORNER_INDICES),
         );
         if self.family == Family::Polar {
             w.varint(self.poles.len() as u64);
@@ -259,7 +264,11 @@ impl Header {
         let source = Source::from_code(r.u8("source format")?);
         let at = r.offset();
         let flags = r.varint("flags")?;
-        let known = FLAG_ORDER | FLAG_VALUE_MAP | FLAG_FLOAT_BITS | FLAG_TEMPLATE;
+        let known = FLAG_ORDER
+            | FLAG_VALUE_MAP
+            | FLAG_FLOAT_BITS
+            | FLAG_TEMPLATE
+            | FLAG_CORNER_INDICES;
         if flags & !known != 0 {
             return Err(Error::Unsupported(format!(
                 "header flags {flags:#x} (byte {at})"
@@ -288,6 +297,7 @@ impl Header {
             has_value_map: flags & FLAG_VALUE_MAP != 0,
             has_float_bits: flags & FLAG_FLOAT_BITS != 0,
             has_template: flags & FLAG_TEMPLATE != 0,
+            has_corner_indices: flags & FLAG_CORNER_INDICES != 0,
             poles,
             disc,
         };
@@ -296,15 +306,17 @@ impl Header {
     }
 
     /// An upper bound on what decoding this container allocates (SPEC.md 2.5): 128 bytes
-    /// per vertex (152 with an FBIT section), 24 per corner, 8 per face. (Measured
+    /// per vertex (152 with an FBIT section), 24 per corner (56 with a CIDX section),
+    /// 8 per face. (Measured
     /// peaks: about 110 per vertex for
     /// the levels' values, topology, edge tables and output; the flat path's edge tables
     /// about 20 per corner.)
     pub fn memory_estimate(&self) -> u64 {
         let per_vertex = if self.has_float_bits { 152 } else { 128 };
+        let per_corner = if self.has_corner_indices { 56 } else { 24 };
         self.vertices
             .saturating_mul(per_vertex)
-            .saturating_add(self.corners.saturating_mul(24))
+            .saturating_add(self.corners.saturating_mul(per_corner))
             .saturating_add(self.faces.saturating_mul(8))
     }
 
@@ -321,6 +333,9 @@ impl Header {
         }
         if self.has_template && !self.has_order {
             return Err(malformed(offset, "a file template without the input order"));
+        }
+        if self.has_corner_indices && !self.has_template {
+            return Err(malformed(offset, "corner index channels without a file template"));
         }
         if self.has_float_bits && !matches!(self.quantization, Quantization::Float { .. }) {
             return Err(malformed(offset, "float bits without binary float quantisation"));

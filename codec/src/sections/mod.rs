@@ -2,6 +2,7 @@
 //! them: each holds its payload's wire format, both ways.
 
 pub mod base;
+pub mod cidx;
 pub mod fbit;
 pub mod head;
 pub mod levl;
