@@ -216,19 +216,11 @@ mod tests {
     use super::*;
 
     fn grid_mesh(n: u32) -> Mesh {
-        let mut faces = Vec::new();
-        let mut starts = vec![0u32];
-        for y in 0..n - 1 {
-            for x in 0..n - 1 {
-                let i = y * n + x;
-                faces.extend_from_slice(&[i, i + 1, i + n + 1, i + n]);
-                starts.push(faces.len() as u32);
-            }
-        }
+        let t = crate::topology::fixtures::quad_grid(n);
         Mesh {
-            positions: vec![[0; 3]; (n * n) as usize],
-            faces,
-            face_starts: starts,
+            positions: vec![[0; 3]; t.nv],
+            faces: t.idx,
+            face_starts: t.starts,
             ..Mesh::default()
         }
     }

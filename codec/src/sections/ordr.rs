@@ -871,16 +871,8 @@ mod tests {
 
     /// An n x n grid of quads, row-major, and its faces.
     fn grid(n: u32) -> (usize, Vec<u32>, Vec<u32>) {
-        let mut idx = Vec::new();
-        let mut starts = vec![0u32];
-        for y in 0..n - 1 {
-            for x in 0..n - 1 {
-                let i = y * n + x;
-                idx.extend_from_slice(&[i, i + 1, i + n + 1, i + n]);
-                starts.push(idx.len() as u32);
-            }
-        }
-        ((n * n) as usize, starts, idx)
+        let t = crate::topology::fixtures::quad_grid(n);
+        (t.nv, t.starts, t.idx)
     }
 
     fn shuffle(p: &mut [u32], seed: u64, swaps: usize) {

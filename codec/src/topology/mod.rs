@@ -606,6 +606,18 @@ pub(crate) mod fixtures {
 
     /// A closed pentagonal prism with one side split into two triangles: a pentagon,
     /// triangles and quads, vertices of valence 3, 4 and 5.
+    /// An n x n grid of quads over n^2 vertices, row-major.
+    pub(crate) fn quad_grid(n: u32) -> Topo {
+        let mut t = Topo::new((n * n) as usize);
+        for y in 0..n - 1 {
+            for x in 0..n - 1 {
+                let i = y * n + x;
+                t.push(&[i, i + 1, i + n + 1, i + n]);
+            }
+        }
+        t
+    }
+
     pub(crate) fn prism_with_triangles() -> Topo {
         let mut t = Topo::new(10);
         t.push(&[4, 3, 2, 1, 0]);
@@ -622,7 +634,7 @@ pub(crate) mod fixtures {
 
 #[cfg(test)]
 mod next_tests {
-    use super::fixtures::{prism_with_triangles, shuffle};
+    use super::fixtures::{self, prism_with_triangles, shuffle};
     use super::*;
 
     /// `Level::next` is `Level::new` of the fine faces, for closed and open meshes,
@@ -636,13 +648,7 @@ mod next_tests {
         open.push(&[0, 4, 5, 6, 1]);
         // A second component, its face against the others' orientation.
         open.push(&[7, 8, 6]);
-        let mut grid = Topo::new(16);
-        for y in 0..3u32 {
-            for x in 0..3u32 {
-                let i = y * 4 + x;
-                grid.push(&[i, i + 1, i + 5, i + 4]);
-            }
-        }
+        let grid = fixtures::quad_grid(4);
         let mut flipped = prism_with_triangles();
         let mut f0: Vec<u32> = flipped.face(0).to_vec();
         f0.reverse();
