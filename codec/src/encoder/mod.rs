@@ -255,13 +255,17 @@ pub(crate) fn order_section(
     ordr::encode(&o, canonical)
 }
 
-/// A topology's faces, as ORDR names them.
-pub(crate) fn faces_of(t: &Topo) -> ordr::Faces<'_> {
-    ordr::Faces {
-        nv: t.nv,
-        starts: &t.starts,
-        idx: &t.idx,
-    }
+/// The ORDR payload of a hierarchy coding `mesh`: its canonical order back to the
+/// input's.
+pub(crate) fn hierarchy_order(mesh: &Mesh, canon: &Canonical) -> Result<Vec<u8>> {
+    let fine = canon.fine();
+    let (faces, rotations) = face_order(mesh, &fine, &canon.order)?;
+    let canonical = ordr::Faces {
+        nv: fine.nv,
+        starts: &fine.starts,
+        idx: &fine.idx,
+    };
+    Ok(order_section(&canon.order, faces, rotations, canonical))
 }
 
 pub(crate) fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Header {
@@ -533,14 +537,7 @@ fn best_hierarchy(
             let pos = canonical_positions(mesh, canon);
             if let Some(mut p) = code_fit(canon, &pos, flat_h, &FIT_BITS, !fit_only) {
                 if opts.keep_order {
-                    let fine = canon.fine();
-                    let (faces, rotations) = face_order(mesh, &fine, &canon.order)?;
-                    p.order = Some(order_section(
-                        &canon.order,
-                        faces,
-                        rotations,
-                        faces_of(&fine),
-                    ));
+                    p.order = Some(hierarchy_order(mesh, canon)?);
                 }
                 if best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
                     best = Some((p, canon.order.clone()));

@@ -236,17 +236,9 @@ fn best_candidate(
         canon.unstow()?;
         // code_hierarchy drops the disc transform of a hierarchy without poles.
         let disc = opts.disc.unwrap_or(DiscTransform::None);
-        let order = if opts.keep_order {
-            let fine = canon.fine();
-            let (faces, rotations) = face_order(mesh, &fine, &canon.order)?;
-            Some(order_section(
-                &canon.order,
-                faces,
-                rotations,
-                faces_of(&fine),
-            ))
-        } else {
-            None
+        let order = match opts.keep_order {
+            true => Some(hierarchy_order(mesh, &canon)?),
+            false => None,
         };
         // Wanted only if smaller than the best candidate so far.
         let bound = fam_best.as_ref().map_or(UNBOUNDED, |b| {

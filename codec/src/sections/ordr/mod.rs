@@ -1,0 +1,224 @@
+//! The ORDR section: the permutations from canonical vertex and face order back to the
+//! input's, and the faces' first corners (SPEC.md 7). Two methods, the smaller kept:
+//! three lists, where runs of consecutive indices cost a fraction of a bit each and the
+//! rest is coded as a rank among the indices not yet used (close to log2(n!) bits for a
+//! random order); or walks over the faces and then the vertices in the input's order,
+//! each next one coded as which of a few predicted neighbours it is (straight on, turning,
+//! the next row, the next vertex of the faces' corners), so that the orders exporters
+//! write (rows, grids, Blender's subdivision order, first use) cost little.
+
+
+mod around;
+mod walks;
+#[cfg(test)]
+mod tests;
+
+use crate::entropy::{AdaptiveModel, Decoder, Encoder, IntModel};
+use crate::error::{Error, Result};
+use walks::{decode_walks, encode_walks};
+
+const SECTION: &str = "ORDR";
+
+/// Fenwick tree over `0..n` holding 1 for every index still unused.
+pub(super) struct Unused {
+    tree: Vec<u32>,
+}
+
+impl Unused {
+    pub(super) fn new(n: usize) -> Self {
+        let mut tree = vec![0u32; n + 1];
+        for i in 1..=n {
+            tree[i] += 1;
+            let j = i + (i & i.wrapping_neg());
+            if j <= n {
+                tree[j] += tree[i];
+            }
+        }
+        Unused { tree }
+    }
+
+    /// Unused indices below `i`.
+    pub(super) fn rank(&self, i: usize) -> u64 {
+        let mut s = 0u64;
+        let mut k = i;
+        while k > 0 {
+            s += self.tree[k] as u64;
+            k &= k - 1;
+        }
+        s
+    }
+
+    /// The unused index with `r` unused indices below it.
+    pub(super) fn select(&self, r: u64) -> usize {
+        let n = self.tree.len() - 1;
+        let mut pos = 0usize;
+        let mut rem = r;
+        let mut step = if n == 0 {
+            0
+        } else {
+            1usize << (usize::BITS - 1 - n.leading_zeros())
+        };
+        while step > 0 {
+            let next = pos + step;
+            if next <= n && (self.tree[next] as u64) <= rem {
+                pos = next;
+                rem -= self.tree[next] as u64;
+            }
+            step >>= 1;
+        }
+        pos
+    }
+
+    pub(super) fn remove(&mut self, i: usize) {
+        let mut k = i + 1;
+        while k < self.tree.len() {
+            self.tree[k] -= 1;
+            k += k & k.wrapping_neg();
+        }
+    }
+}
+
+/// The input's order: vertices, and (format 2) faces with their first corners.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct InputOrder {
+    /// `vertices[c]` = input number of canonical vertex `c`.
+    pub vertices: Vec<u32>,
+    /// `faces[c]` = input position of canonical face `c`.
+    pub faces: Vec<u32>,
+    /// `rotations[c]`: input face `faces[c]` starts at corner `rotations[c]` of the
+    /// canonical face (its corner order otherwise the same).
+    pub rotations: Vec<u32>,
+}
+
+/// The canonical faces the order refers to: `idx[starts[f]..starts[f + 1]]` are
+/// canonical face f's corners, over `nv` vertices.
+#[derive(Debug, Clone, Copy)]
+pub struct Faces<'a> {
+    /// Vertices.
+    pub nv: usize,
+    /// Face starts (one more than faces).
+    pub starts: &'a [u32],
+    /// Corners.
+    pub idx: &'a [u32],
+}
+
+impl<'a> Faces<'a> {
+    pub(super) fn count(&self) -> usize {
+        self.starts.len().saturating_sub(1)
+    }
+
+    pub(super) fn face(&self, g: usize) -> &'a [u32] {
+        &self.idx[self.starts[g] as usize..self.starts[g + 1] as usize]
+    }
+}
+
+/// Codes a permutation `order[new] = old` of `0..order.len()` (SPEC.md 7.1).
+fn put_perm(e: &mut Encoder, order: &[u32]) {
+    let n = order.len();
+    let mut run = [AdaptiveModel::new(2), AdaptiveModel::new(2)];
+    let mut unused = Unused::new(n);
+    let mut prev: i64 = -1;
+    let mut prev_hit = 0usize;
+    for (i, &o) in order.iter().enumerate() {
+        let hit = o as i64 == prev + 1;
+        e.symbol(&mut run[prev_hit], hit as usize);
+        if !hit {
+            e.uniform(unused.rank(o as usize), (n - i) as u64);
+        }
+        unused.remove(o as usize);
+        prev = o as i64;
+        prev_hit = hit as usize;
+    }
+}
+
+/// Decodes a permutation of `0..n` and checks it is one.
+fn get_perm(d: &mut Decoder, n: usize) -> Result<Vec<u32>> {
+    let mut run = [AdaptiveModel::new(2), AdaptiveModel::new(2)];
+    let mut unused = Unused::new(n);
+    let mut used = vec![false; n];
+    let mut out = Vec::with_capacity(n);
+    let mut prev: i64 = -1;
+    let mut prev_hit = 0usize;
+    for i in 0..n {
+        let hit = d.symbol(&mut run[prev_hit])? == 1;
+        let o = if hit {
+            (prev + 1) as usize
+        } else {
+            let r = d.uniform((n - i) as u64)?;
+            unused.select(r)
+        };
+        if o >= n || used[o] {
+            return Err(Error::corrupt(SECTION, "not a permutation"));
+        }
+        used[o] = true;
+        unused.remove(o);
+        out.push(o as u32);
+        prev = o as i64;
+        prev_hit = hit as usize;
+    }
+    Ok(out)
+}
+
+/// Codes the order as three lists (SPEC.md 7.1, method 0).
+fn encode_lists(o: &InputOrder) -> Vec<u8> {
+    let mut e = Encoder::new();
+    put_perm(&mut e, &o.vertices);
+    put_perm(&mut e, &o.faces);
+    let mut m = IntModel::new();
+    for &r in &o.rotations {
+        e.int(&mut m, r as i64);
+    }
+    e.finish()
+}
+
+/// Decodes method 0 (SPEC.md 7.1); `degrees[c]` is canonical face c's degree.
+fn decode_lists(payload: &[u8], nv: usize, degrees: &[u32]) -> Result<InputOrder> {
+    let mut d = Decoder::new(payload, SECTION)?;
+    let vertices = get_perm(&mut d, nv)?;
+    let faces = get_perm(&mut d, degrees.len())?;
+    let mut m = IntModel::new();
+    let mut rotations = Vec::with_capacity(degrees.len());
+    for &k in degrees {
+        let r = d.int(&mut m)?;
+        if r < 0 || r >= k as i64 {
+            return Err(Error::corrupt(SECTION, "face rotation out of range"));
+        }
+        rotations.push(r as u32);
+    }
+    Ok(InputOrder {
+        vertices,
+        faces,
+        rotations,
+    })
+}
+
+/// Codes the ORDR section (SPEC.md 7) of the input order `o` of the canonical
+/// `faces`: a method byte, then the order as three lists (method 0) or as walks
+/// (method 1), whichever is smaller.
+pub fn encode(o: &InputOrder, faces: Faces<'_>) -> Vec<u8> {
+    let lists = encode_lists(o);
+    let walks = encode_walks(o, faces);
+    let (method, body) = if walks.len() < lists.len() {
+        (1, walks)
+    } else {
+        (0, lists)
+    };
+    let mut out = Vec::with_capacity(body.len() + 1);
+    out.push(method);
+    out.extend_from_slice(&body);
+    out
+}
+
+/// Decodes an ORDR section for the canonical `faces`.
+pub fn decode(payload: &[u8], faces: Faces<'_>) -> Result<InputOrder> {
+    match payload.split_first() {
+        Some((0, body)) => {
+            let degrees: Vec<u32> = faces.starts.windows(2).map(|w| w[1] - w[0]).collect();
+            decode_lists(body, faces.nv, &degrees)
+        }
+        Some((1, body)) => decode_walks(body, faces),
+        Some((m, _)) => Err(Error::corrupt(SECTION, format!("unknown method {m}"))),
+        None => Err(Error::corrupt(SECTION, "empty payload")),
+    }
+}
+

@@ -1,0 +1,126 @@
+//! ORDR's tests: both methods round-trip, predictable orders are cheap, damage is an
+//! error.
+
+use super::walks::encode_walks;
+use super::*;
+use proptest::prelude::*;
+
+/// An n x n grid of quads, row-major, and its faces.
+fn grid(n: u32) -> (usize, Vec<u32>, Vec<u32>) {
+    let t = crate::topology::fixtures::quad_grid(n);
+    (t.nv, t.starts, t.idx)
+}
+
+fn shuffle(p: &mut [u32], seed: u64, swaps: usize) {
+    let mut s = seed | 1;
+    let n = p.len();
+    for _ in 0..swaps {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        if n > 0 {
+            p.swap((s % n as u64) as usize, ((s >> 20) % n as u64) as usize);
+        }
+    }
+}
+
+proptest! {
+    /// Any vertex and face permutation and any rotations round-trip.
+    #[test]
+    fn orders_round_trip(n in 2u32..14, seed in proptest::num::u64::ANY, swaps in 0usize..300) {
+        let (nv, starts, idx) = grid(n);
+        let faces = Faces { nv, starts: &starts, idx: &idx };
+        let mut vertices: Vec<u32> = (0..nv as u32).collect();
+        shuffle(&mut vertices, seed, swaps);
+        let nf = starts.len() - 1;
+        let mut fo: Vec<u32> = (0..nf as u32).collect();
+        shuffle(&mut fo, seed.rotate_left(17), swaps);
+        let rotations = fo.iter().map(|&x| (x ^ seed as u32) % 4).collect();
+        let o = InputOrder { vertices, faces: fo, rotations };
+        let bytes = encode(&o, faces);
+        prop_assert_eq!(&decode(&bytes, faces).unwrap(), &o);
+        // Each method on its own.
+        let mut walks = vec![1];
+        walks.extend(encode_walks(&o, faces));
+        prop_assert_eq!(&decode(&walks, faces).unwrap(), &o);
+        let mut lists = vec![0];
+        lists.extend(encode_lists(&o));
+        prop_assert_eq!(&decode(&lists, faces).unwrap(), &o);
+    }
+}
+
+/// The canonical order, a grid's rows walked from another corner (every row
+/// reversed, the faces' first corners turned), and vertices in order of first use
+/// cost a few bytes; a random order about log2(n!) bits.
+#[test]
+fn predictable_orders_are_nearly_free() {
+    let n = 100u32;
+    let (nv, starts, idx) = grid(n);
+    let faces = Faces { nv, starts: &starts, idx: &idx };
+    let nf = starts.len() - 1;
+    let identity = InputOrder {
+        vertices: (0..nv as u32).collect(),
+        faces: (0..nf as u32).collect(),
+        rotations: vec![0; nf],
+    };
+    // Rows reversed: vertex (x, y) is input vertex y * n + (n - 1 - x).
+    let m = n - 1;
+    let mirrored = InputOrder {
+        vertices: (0..nv as u32).map(|v| v / n * n + (n - 1 - v % n)).collect(),
+        faces: (0..nf as u32).map(|f| f / m * m + (m - 1 - f % m)).collect(),
+        rotations: vec![1; nf],
+    };
+    // Vertices numbered by first use in the faces (PLY exporters with seams).
+    let mut first_use = vec![u32::MAX; nv];
+    let mut next = 0;
+    for &v in &idx {
+        if first_use[v as usize] == u32::MAX {
+            first_use[v as usize] = next;
+            next += 1;
+        }
+    }
+    let by_use = InputOrder {
+        vertices: first_use,
+        ..identity.clone()
+    };
+    for (name, o) in [("identity", identity.clone()), ("mirrored", mirrored), ("first use", by_use)] {
+        let bytes = encode(&o, faces);
+        assert!(bytes.len() < 400, "{name}: {} bytes", bytes.len());
+        assert_eq!(decode(&bytes, faces).unwrap(), o, "{name}");
+    }
+    let mut random = identity;
+    shuffle(&mut random.vertices, 99, 100_000);
+    let bytes = encode(&random, faces);
+    let bound = (1..=nv).map(|i| (i as f64).log2()).sum::<f64>() / 8.0;
+    assert!((bytes.len() as f64) < bound * 1.05 + 200.0, "{} vs {bound}", bytes.len());
+    assert_eq!(decode(&bytes, faces).unwrap(), random);
+}
+
+/// Damaged payloads give errors or another order, never a panic.
+#[test]
+fn damaged_payloads_are_errors_not_panics() {
+    let (nv, starts, idx) = grid(9);
+    let faces = Faces { nv, starts: &starts, idx: &idx };
+    let nf = starts.len() - 1;
+    let mut vertices: Vec<u32> = (0..nv as u32).collect();
+    shuffle(&mut vertices, 5, 40);
+    let o = InputOrder {
+        vertices,
+        faces: (0..nf as u32).rev().collect(),
+        rotations: (0..nf as u32).map(|x| x % 4).collect(),
+    };
+    let bytes = encode(&o, faces);
+    for cut in 0..bytes.len() {
+        let _ = decode(&bytes[..cut], faces);
+    }
+    for i in 0..bytes.len() * 8 {
+        let mut b = bytes.clone();
+        b[i / 8] ^= 1 << (i % 8);
+        if let Ok(back) = decode(&b, faces) {
+            let mut seen = vec![false; nv];
+            for &v in &back.vertices {
+                assert!(!std::mem::replace(&mut seen[v as usize], true));
+            }
+        }
+    }
+}
