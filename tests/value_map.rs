@@ -225,7 +225,7 @@ fn hostile_value_maps_are_refused() {
     // The flags varint comes right before the end of a Catmull-Clark header.
     let at = head.len() - 1;
     assert_eq!(head[at], 2);
-    head[at] = 2 | 32;
+    head[at] = 2 | 64;
     match subwave::Header::read(&head, 0, &Limits::default()) {
         Err(Error::Unsupported(what)) => assert!(what.contains("flags"), "{what}"),
         other => panic!("expected unsupported, got {other:?}"),

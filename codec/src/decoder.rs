@@ -1,12 +1,13 @@
 //! The decoder: one straight pipeline from the container to the mesh (SPEC.md 2-10).
 
 use crate::error::{Error, Result};
+use crate::io::template::Channels;
 use crate::mesh::{Mesh, MAX_COORD};
 use crate::quant::Quantization;
-use crate::sections::cidx::{self, CornerIndices};
 use crate::sections::head::{Header, Transform};
 use crate::sections::vmap::ValueMap;
 use crate::sections::{base, fbit, levl, ordr, tmpl};
+use crate::sections::{cidx, nrml};
 use crate::topology::Family;
 use crate::topology::{self, Level, Topo};
 use crate::transform::fit;
@@ -42,8 +43,8 @@ pub struct Decoded {
     /// The input file's template (SPEC.md 11), when the container keeps the file's own
     /// bytes and the mesh is in its order: [`Decoded::file`] gives the file back.
     pub template: Option<Vec<u8>>,
-    /// The template's corner index channels (SPEC.md 11.1).
-    pub(crate) corner_indices: CornerIndices,
+    /// The template's channels (SPEC.md 11.1, 11.2).
+    pub(crate) channels: Channels,
 }
 
 impl Decoded {
@@ -55,7 +56,7 @@ impl Decoded {
             t,
             &self.mesh,
             &self.quantization,
-            &self.corner_indices,
+            &self.channels,
         ))
     }
 }
@@ -102,6 +103,9 @@ pub(crate) fn layout(c: &Container<'_>, limits: &Limits, whole: bool) -> Result<
     }
     if h.has_corner_indices {
         expected.push((SectionKind::CORNER_INDICES, "corner index channels"));
+    }
+    if h.has_normals {
+        expected.push((SectionKind::NORMALS, "normal components"));
     }
     expected.push((SectionKind::END, "end marker"));
     for (i, &(kind, what)) in expected.iter().enumerate() {
@@ -213,16 +217,9 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
             input_order = true;
         }
     }
-    // The file's own bytes (SPEC.md 11), within the decompression-bomb allowance.
-    let template = match c.sections.get(ordr_at + 1) {
-        Some(s) if h.has_template && input_order => {
-            Some(tmpl::decode(s.payload, s.offset, allowance)?)
-        }
-        _ => None,
-    };
-    let corner_indices = match c.sections.get(ordr_at + 2) {
-        Some(s) if h.has_corner_indices && template.is_some() => cidx::decode(s.payload, &mesh)?,
-        _ => CornerIndices::default(),
+    let (template, channels) = match input_order && h.has_template {
+        true => file_sections(&c, ordr_at + 1, &h, &mesh, allowance)?,
+        false => (None, Channels::default()),
     };
     Ok(Decoded {
         mesh,
@@ -231,8 +228,35 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
         level,
         input_order,
         template,
-        corner_indices,
+        channels,
     })
+}
+
+/// The sections that keep the file's own bytes, from section `at` on (SPEC.md 11): the
+/// template, within the decompression-bomb allowance, and its channels (CIDX, NRML),
+/// for `mesh` in the input's order.
+fn file_sections(
+    c: &Container<'_>,
+    mut at: usize,
+    h: &Header,
+    mesh: &Mesh,
+    allowance: u64,
+) -> Result<(Option<Vec<u8>>, Channels)> {
+    let mut channels = Channels::default();
+    let Some(s) = c.sections.get(at) else {
+        return Ok((None, channels));
+    };
+    let template = tmpl::decode(s.payload, s.offset, allowance)?;
+    at += 1;
+    if let (Some(s), true) = (c.sections.get(at), h.has_corner_indices) {
+        channels.indices = cidx::decode(s.payload, mesh)?;
+        at += 1;
+    }
+    if let (Some(s), true) = (c.sections.get(at), h.has_normals) {
+        let count = crate::io::template::normal_markers(&template);
+        channels.normals = nrml::decode(s.payload, mesh, &channels.indices, count)?;
+    }
+    Ok((Some(template), channels))
 }
 
 /// Refuses a refinement larger than the header's finest mesh, before it is built.

@@ -9,11 +9,13 @@ use std::collections::HashMap;
 
 use crate::error::{Error, Result};
 use crate::info::{section_info, SectionInfo};
+use crate::io::template::Channels;
 use crate::io::{self, Format};
 use crate::mesh::Mesh;
 use crate::quant::Quantization;
-use crate::sections::cidx::{self, CornerIndices};
+use crate::sections::cidx;
 use crate::sections::head::{Header, Source, Transform};
+use crate::sections::nrml;
 use crate::sections::vmap::ValueMap;
 use crate::sections::{base, fbit, levl, ordr, tmpl};
 use crate::topology::{self, Canonical, Family, Topo};
@@ -286,6 +288,7 @@ pub(crate) fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -
         has_float_bits: !mesh.floats.is_empty(),
         has_template: false,
         has_corner_indices: false,
+        has_normals: false,
         poles: Vec::new(),
         disc: DiscTransform::None,
     }
@@ -349,27 +352,28 @@ pub fn encode_file(
         ));
     }
     mesh.validate()?;
-    let (t, indices) = io::template_of(file, format, mesh, q).unwrap_or_else(|| {
-        (
-            io::template::verbatim(file, mesh, q),
-            CornerIndices::default(),
-        )
-    });
+    let (t, ch) = io::template_of(file, format, mesh, q)
+        .unwrap_or_else(|| (io::template::verbatim(file, mesh, q), Channels::default()));
     let own = FilePayloads {
         tmpl: tmpl::encode(&t)?,
-        cidx: match indices.is_empty() {
+        cidx: match ch.indices.is_empty() {
             true => None,
-            false => Some(cidx::encode(mesh, &indices)?),
+            false => Some(cidx::encode(mesh, &ch.indices)?),
+        },
+        nrml: match ch.normals.is_empty() {
+            true => None,
+            false => Some(nrml::encode(mesh, &ch.indices, &ch.normals)?),
         },
     };
     encode_inner(mesh, q, opts, Some(&own))
 }
 
-/// The sections that keep a file's own bytes (SPEC.md 11): TMPL, and CIDX when the
-/// template has corner index channels.
+/// The sections that keep a file's own bytes (SPEC.md 11): TMPL, CIDX when the
+/// template has corner index channels, NRML when it has normal components.
 struct FilePayloads {
     tmpl: Vec<u8>,
     cidx: Option<Vec<u8>>,
+    nrml: Option<Vec<u8>>,
 }
 
 /// [`encode`], with a TMPL payload when given.
@@ -419,6 +423,7 @@ fn encode_with(
     flat_h.has_value_map = vmap.is_some();
     flat_h.has_template = tmpl.is_some();
     flat_h.has_corner_indices = tmpl.is_some_and(|t| t.cidx.is_some());
+    flat_h.has_normals = tmpl.is_some_and(|t| t.nrml.is_some());
     let best = if opts.max_levels > 0 {
         opts.progress.report(Stage::Recovering);
         best_hierarchy(mesh, opts, &flat_h)?
@@ -683,6 +688,9 @@ fn write_container(
         put(&mut w, SectionKind::TEMPLATE, &t.tmpl)?;
         if let Some(c) = &t.cidx {
             put(&mut w, SectionKind::CORNER_INDICES, c)?;
+        }
+        if let Some(n) = &t.nrml {
+            put(&mut w, SectionKind::NORMALS, n)?;
         }
     }
     let bytes = w.finish();

@@ -197,7 +197,7 @@ pub(crate) fn lines_with_ends(bytes: &[u8]) -> impl Iterator<Item = &[u8]> {
     bytes.split_inclusive(|&c| c == b'\n')
 }
 
-/// The template of `bytes` (SPEC.md 11) and its corner index channels (11.1), a file of
+/// The template of `bytes` (SPEC.md 11) and its channels (11.1, 11.2), a file of
 /// `format` whose mesh (in the file's vertex and face order) is `mesh` on `q`, checked
 /// to expand back to `bytes`; `None` where the file strays from what the walkers follow
 /// (the caller keeps it whole).
@@ -206,7 +206,7 @@ pub(crate) fn template_of(
     format: Format,
     mesh: &Mesh,
     q: &Quantization,
-) -> Option<(Vec<u8>, crate::sections::cidx::CornerIndices)> {
+) -> Option<(Vec<u8>, template::Channels)> {
     let mut b = template::builder(mesh, q, bytes.len());
     match format {
         Format::Obj => obj::template(bytes, &mut b)?,

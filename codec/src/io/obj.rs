@@ -8,6 +8,7 @@ use super::{coords_line, syntax, Format, RawMesh};
 use crate::error::Result;
 use crate::mesh::Mesh;
 use crate::quant::{Quantization, TextCoords};
+use crate::sections::nrml::Component;
 
 /// The OBJ statements (Wavefront's specification and common extensions) besides those
 /// read above, kept as dropped: a line that starts with none of them is not OBJ.
@@ -256,6 +257,14 @@ pub(super) fn tokens(code: &[u8]) -> impl Iterator<Item = (usize, usize)> + '_ {
 /// line and the vertex number of every `f` corner are the coded values; `None` for a
 /// file with continued lines (the reader joins them).
 pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
+    // `vn` values go to NRML (SPEC.md 11.2) if every `vn` line is three plain decimals,
+    // so that its n-th entry is the corners' `vn` number n.
+    let normals = super::lines_with_ends(bytes).all(|line| {
+        let code = &line[..line.iter().position(|&c| c == b'#').unwrap_or(line.len())];
+        let t: Vec<&[u8]> = tokens(code).map(|(s, e)| &code[s..e]).collect();
+        t.first() != Some(&&b"vn"[..])
+            || (t.len() == 4 && t[1..].iter().all(|t| Component::parse(t).is_some()))
+    });
     for line in super::lines_with_ends(bytes) {
         let mut content = line.strip_suffix(b"\n").unwrap_or(line);
         content = content.strip_suffix(b"\r").unwrap_or(content);
@@ -274,6 +283,13 @@ pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
         let kw = &code[s0..e0];
         let mut at = 0;
         match kw {
+            b"vn" if normals => {
+                for (s, e) in toks.take(3) {
+                    b.literal(&line[at..s]);
+                    b.normal_text(Component::parse(&line[s..e])?);
+                    at = e;
+                }
+            }
             b"v" => {
                 for (s, e) in toks.take(3) {
                     b.literal(&line[at..s]);

@@ -9,6 +9,20 @@ use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::quant::Quantization;
 use crate::sections::cidx::{CornerIndices, IndexChannel, MAX_CHANNELS};
+use crate::sections::nrml::Component;
+
+/// The values a template's channel markers write (SPEC.md 11.1, 11.2): the corner index
+/// channels and the normal components.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub(crate) struct Channels {
+    /// Corner index channels (CIDX).
+    pub indices: CornerIndices,
+    /// Normal components, three per `vn` line (NRML).
+    pub normals: Vec<Component>,
+}
+
+/// The channel number of normal components after marker [`CHANNEL_TEXT`].
+pub(crate) const NORMAL_MARK: u8 = 4;
 
 /// The next coordinate, as text (how [`format_coord`] writes it).
 const COORD_TEXT: u8 = 1;
@@ -53,8 +67,8 @@ pub(super) struct Builder<'m> {
     coord: usize,
     corner: usize,
     text: String,
-    /// The corner index channels' values the markers stand for.
-    indices: CornerIndices,
+    /// The channels' values the markers stand for.
+    channels: Channels,
 }
 
 impl<'m> Builder<'m> {
@@ -66,7 +80,7 @@ impl<'m> Builder<'m> {
             coord: 0,
             corner: 0,
             text: String::new(),
-            indices: CornerIndices::default(),
+            channels: Channels::default(),
         }
     }
 
@@ -125,12 +139,11 @@ impl<'m> Builder<'m> {
         let value = plain_decimal(token);
         let ki = k as usize;
         if let (Some(c), Some(a), true) = (corner, value, ki < MAX_CHANNELS) {
-            if self.indices.channels.len() <= ki {
-                self.indices
-                    .channels
-                    .resize(ki + 1, IndexChannel::default());
+            let indices = &mut self.channels.indices;
+            if indices.channels.len() <= ki {
+                indices.channels.resize(ki + 1, IndexChannel::default());
             }
-            let ch = &mut self.indices.channels[ki];
+            let ch = &mut indices.channels[ki];
             if ch.corners.last().is_none_or(|&l| l < c) {
                 ch.corners.push(c);
                 ch.values.push(a);
@@ -139,6 +152,13 @@ impl<'m> Builder<'m> {
             }
         }
         self.literal(token);
+    }
+
+    /// A normal component (an OBJ `vn` value), written as `token`, a plain decimal
+    /// ([`Component::parse`]): marker 0x0F 4 (SPEC.md 11.2).
+    pub(super) fn normal_text(&mut self, c: Component) {
+        self.channels.normals.push(c);
+        self.out.extend_from_slice(&[CHANNEL_TEXT, NORMAL_MARK]);
     }
 
     /// The next coordinate, stored as the binary float `bytes` (4 or 8, `big` endian).
@@ -239,16 +259,37 @@ pub(super) fn builder<'m>(mesh: &'m Mesh, q: &'m Quantization, len: usize) -> Bu
     Builder::new(mesh, q, len / 2)
 }
 
-/// The template a walk built and its corner index channels, if they expand back to
-/// `bytes`.
-pub(super) fn checked(b: Builder<'_>, bytes: &[u8]) -> Option<(Vec<u8>, CornerIndices)> {
+/// The template a walk built and its channels, if they expand back to `bytes`.
+pub(super) fn checked(b: Builder<'_>, bytes: &[u8]) -> Option<(Vec<u8>, Channels)> {
     let (mesh, q) = (b.mesh, b.q);
-    let (t, mut idx) = (b.out, b.indices);
+    let (t, mut ch) = (b.out, b.channels);
     // Channels the walk never used are not carried.
-    while idx.channels.last().is_some_and(|c| c.values.is_empty()) {
-        idx.channels.pop();
+    while ch
+        .indices
+        .channels
+        .last()
+        .is_some_and(|c| c.values.is_empty())
+    {
+        ch.indices.channels.pop();
     }
-    (expand(&t, mesh, q, &idx).ok()? == bytes).then_some((t, idx))
+    (expand(&t, mesh, q, &ch).ok()? == bytes).then_some((t, ch))
+}
+
+/// How many normal components a template's markers write.
+pub(crate) fn normal_markers(t: &[u8]) -> usize {
+    let mut n = 0;
+    let mut i = 0;
+    while i < t.len() {
+        match t[i] {
+            ESCAPE => i += 2,
+            CHANNEL_TEXT => {
+                n += (t.get(i + 1) == Some(&NORMAL_MARK)) as usize;
+                i += 2;
+            }
+            _ => i += 1,
+        }
+    }
+    n
 }
 
 /// The number `token` is the plain decimal text of (digits, no leading zero), if it
@@ -276,8 +317,10 @@ pub(crate) fn expand(
     t: &[u8],
     mesh: &Mesh,
     q: &Quantization,
-    indices: &CornerIndices,
+    channels: &Channels,
 ) -> Result<Vec<u8>> {
+    let indices = &channels.indices;
+    let mut normals = channels.normals.iter();
     let bad = |what: &str| Error::corrupt("TMPL", what.to_string());
     let mut out = Vec::with_capacity(t.len() + 24 * mesh.vertex_count());
     let (mut coord, mut corner) = (0usize, 0usize);
@@ -340,6 +383,13 @@ pub(crate) fn expand(
                 out.push(*t.get(i).ok_or_else(|| bad("ends inside an escape"))?);
                 i += 1;
             }
+            CHANNEL_TEXT if t.get(i) == Some(&NORMAL_MARK) => {
+                i += 1;
+                let c = normals
+                    .next()
+                    .ok_or_else(|| bad("more normal components than NRML carries"))?;
+                out.extend_from_slice(c.text().as_bytes());
+            }
             CHANNEL_TEXT => {
                 let k = *t
                     .get(i)
@@ -362,8 +412,11 @@ pub(crate) fn expand(
         .iter()
         .zip(used)
         .any(|(c, u)| c.values.len() != u)
+        || normals.next().is_some()
     {
-        return Err(bad("CIDX carries values the template does not write"));
+        return Err(bad(
+            "CIDX or NRML carries values the template does not write",
+        ));
     }
     Ok(out)
 }

@@ -137,6 +137,8 @@ pub struct Header {
     /// A `CIDX` section follows the template: its per-corner index channels (SPEC.md
     /// 11.1).
     pub has_corner_indices: bool,
+    /// An `NRML` section follows: the template's normal components (SPEC.md 11.2).
+    pub has_normals: bool,
     /// Polar hierarchies (family 3): the base mesh's poles, increasing (SPEC.md 8.6);
     /// empty for every other family.
     pub poles: Vec<u32>,
@@ -150,6 +152,7 @@ const FLAG_VALUE_MAP: u64 = 2;
 const FLAG_FLOAT_BITS: u64 = 4;
 const FLAG_TEMPLATE: u64 = 8;
 const FLAG_CORNER_INDICES: u64 = 16;
+const FLAG_NORMALS: u64 = 32;
 /// The transform code of the subdivision fit.
 const FIT_CODE: u8 = 9;
 
@@ -202,7 +205,8 @@ impl Header {
                 | flag(self.has_value_map, FLAG_VALUE_MAP)
                 | flag(self.has_float_bits, FLAG_FLOAT_BITS)
                 | flag(self.has_template, FLAG_TEMPLATE)
-                | flag(self.has_corner_indices, FLAG_CORNER_INDICES),
+                | flag(self.has_corner_indices, FLAG_CORNER_INDICES)
+                | flag(self.has_normals, FLAG_NORMALS),
         );
         if self.family == Family::Polar {
             w.varint(self.poles.len() as u64);
@@ -268,7 +272,8 @@ impl Header {
             | FLAG_VALUE_MAP
             | FLAG_FLOAT_BITS
             | FLAG_TEMPLATE
-            | FLAG_CORNER_INDICES;
+            | FLAG_CORNER_INDICES
+            | FLAG_NORMALS;
         if flags & !known != 0 {
             return Err(Error::Unsupported(format!(
                 "header flags {flags:#x} (byte {at})"
@@ -298,6 +303,7 @@ impl Header {
             has_float_bits: flags & FLAG_FLOAT_BITS != 0,
             has_template: flags & FLAG_TEMPLATE != 0,
             has_corner_indices: flags & FLAG_CORNER_INDICES != 0,
+            has_normals: flags & FLAG_NORMALS != 0,
             poles,
             disc,
         };
@@ -306,13 +312,15 @@ impl Header {
     }
 
     /// An upper bound on what decoding this container allocates (SPEC.md 2.5): 128 bytes
-    /// per vertex (152 with an FBIT section), 24 per corner (56 with a CIDX section),
+    /// per vertex (152 with an FBIT section, 64 more with an NRML section), 24 per corner
+    /// (56 with a CIDX section),
     /// 8 per face. (Measured
     /// peaks: about 110 per vertex for
     /// the levels' values, topology, edge tables and output; the flat path's edge tables
     /// about 20 per corner.)
     pub fn memory_estimate(&self) -> u64 {
-        let per_vertex = if self.has_float_bits { 152 } else { 128 };
+        let per_vertex = if self.has_float_bits { 152 } else { 128 }
+            + if self.has_normals { 64 } else { 0 };
         let per_corner = if self.has_corner_indices { 56 } else { 24 };
         self.vertices
             .saturating_mul(per_vertex)
@@ -336,6 +344,9 @@ impl Header {
         }
         if self.has_corner_indices && !self.has_template {
             return Err(malformed(offset, "corner index channels without a file template"));
+        }
+        if self.has_normals && !self.has_template {
+            return Err(malformed(offset, "normal components without a file template"));
         }
         if self.has_float_bits && !matches!(self.quantization, Quantization::Float { .. }) {
             return Err(malformed(offset, "float bits without binary float quantisation"));

@@ -7,5 +7,6 @@ pub mod fbit;
 pub mod head;
 pub mod levl;
 pub mod ordr;
+pub mod nrml;
 pub(crate) mod tmpl;
 pub mod vmap;
