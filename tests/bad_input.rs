@@ -817,7 +817,7 @@ fn with_section(bytes: &[u8], kind: SectionKind, edit: impl FnOnce(&mut Vec<u8>)
 #[test]
 fn every_bit_flip_or_cut_of_the_order_corner_indices_and_normals_is_an_error_or_a_valid_file() {
     // The frozen textured OBJ (walks in ORDR, vt and vn channels in CIDX, normals in
-    // NRML): every bit of
+    // NRML, the vt table in an ATTR): every bit of
     // those payloads flipped and every cut of them, checksums made valid, so the walks'
     // candidates and escapes and the channels' predictions meet hostile values. The
     // result is an error, or a mesh and a file that the decoder could make.
@@ -834,6 +834,7 @@ fn every_bit_flip_or_cut_of_the_order_corner_indices_and_normals_is_an_error_or_
         SectionKind::ORDER,
         SectionKind::CORNER_INDICES,
         SectionKind::NORMALS,
+        SectionKind::ATTRIBUTE,
     ] {
         let c = subwave_container::Container::parse(&b, &Limits::default()).unwrap();
         let len = c

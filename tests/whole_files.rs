@@ -66,6 +66,88 @@ fn files_the_walkers_cannot_follow_still_come_back() {
     round_trip("ply", ply).unwrap();
 }
 
+/// A PLY of `mesh` with attributes (texture coordinates, colours, a signed label, a
+/// double): binary little-endian or ASCII (fixed decimals, as `printf("%f")` writes).
+fn ply_with_attributes(mesh: &subwave::Mesh, q: &subwave::Quantization, binary: bool) -> Vec<u8> {
+    let nv = mesh.vertex_count();
+    let mut out = format!(
+        "ply\nformat {} 1.0\nelement vertex {nv}\nproperty float x\nproperty float y\nproperty float z\nproperty float s\nproperty float t\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nproperty short label\nproperty double wear\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        if binary { "binary_little_endian" } else { "ascii" },
+        mesh.face_count()
+    )
+    .into_bytes();
+    for v in 0..nv {
+        let p = mesh.positions[v].map(|n| q.value_f64(n, 0) as f32);
+        let (s, t) = (0.5 + 0.4 * p[0], 0.5 - 0.3 * p[1] + 0.1 * p[2]);
+        let rgb = p.map(|x| (128.0 + 100.0 * x).clamp(0.0, 255.0) as u8);
+        let label = (v % 7) as i16 - 3;
+        let wear = (p[0] as f64 * 3.0).sin();
+        if binary {
+            for x in [p[0], p[1], p[2], s, t] {
+                out.extend_from_slice(&x.to_le_bytes());
+            }
+            out.extend_from_slice(&rgb);
+            out.extend_from_slice(&label.to_le_bytes());
+            out.extend_from_slice(&wear.to_le_bytes());
+        } else {
+            out.extend_from_slice(
+                format!(
+                    "{} {} {} {s:.6} {t:.6} {} {} {} {label} {wear:.9}\n",
+                    p[0], p[1], p[2], rgb[0], rgb[1], rgb[2]
+                )
+                .as_bytes(),
+            );
+        }
+    }
+    for f in mesh.iter_faces() {
+        if binary {
+            out.push(f.len() as u8);
+            for &i in f {
+                out.extend_from_slice(&(i as i32).to_le_bytes());
+            }
+        } else {
+            let idx: Vec<String> = f.iter().map(u32::to_string).collect();
+            out.extend_from_slice(format!("{} {}\n", f.len(), idx.join(" ")).as_bytes());
+        }
+    }
+    out
+}
+
+#[test]
+fn attributes_go_through_attr_sections_and_come_back() {
+    // Texture coordinates, colours, a label and a double on a subdivided mesh: each run
+    // of one type in an ATTR section (SPEC.md 11.3), the template left with the header
+    // and the markers, and the file back byte for byte.
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/subdivided_cc3.obj");
+    let m = subwave::load(&std::fs::read(path).unwrap(), None).unwrap();
+    for binary in [true, false] {
+        let bytes = ply_with_attributes(&m.mesh, &m.quantization, binary);
+        round_trip("ply", &bytes).unwrap();
+        let l = subwave::load(&bytes, None).unwrap();
+        let opts = EncodeOptions {
+            keep_order: true,
+            source: l.source(),
+            ..Default::default()
+        };
+        let enc = subwave::encode_file(&l.mesh, &l.quantization, &opts, &bytes, l.format).unwrap();
+        let size = |kind: &str| -> Vec<usize> {
+            enc.sections
+                .iter()
+                .filter(|s| s.kind == kind)
+                .map(|s| s.bytes)
+                .collect()
+        };
+        // s t, red green blue, label, wear.
+        assert_eq!(size("ATTR").len(), 4, "binary {binary}: {:?}", enc.sections);
+        let attributes_raw = m.mesh.vertex_count() * (8 + 3 + 2 + 8);
+        assert!(
+            size("TMPL")[0] * 8 < attributes_raw,
+            "binary {binary}: template {:?} for {attributes_raw} bytes of attributes",
+            size("TMPL")
+        );
+    }
+}
+
 #[test]
 fn blender_files_come_back_byte_for_byte() {
     let Some(dir) = common::shared_corpus().map(|d| d.join("blender")) else {

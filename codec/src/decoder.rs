@@ -1,13 +1,13 @@
 //! The decoder: one straight pipeline from the container to the mesh (SPEC.md 2-10).
 
 use crate::error::{Error, Result};
-use crate::io::template::Channels;
+use crate::io::template::{Attribute, Channels};
 use crate::mesh::{Mesh, MAX_COORD};
 use crate::quant::Quantization;
 use crate::sections::head::{Header, Transform};
 use crate::sections::vmap::ValueMap;
+use crate::sections::{attr, cidx, nrml};
 use crate::sections::{base, fbit, levl, ordr, tmpl};
-use crate::sections::{cidx, nrml};
 use crate::topology::Family;
 use crate::topology::{self, Level, Topo};
 use crate::transform::fit;
@@ -107,6 +107,17 @@ pub(crate) fn layout(c: &Container<'_>, limits: &Limits, whole: bool) -> Result<
     if h.has_normals {
         expected.push((SectionKind::NORMALS, "normal components"));
     }
+    // Attribute sections (SPEC.md 11.3) after a template: as many as stand there.
+    if h.has_template {
+        let at = expected.len() + 1;
+        let n = c
+            .sections
+            .iter()
+            .skip(at)
+            .take_while(|s| s.kind == SectionKind::ATTRIBUTE)
+            .count();
+        expected.extend((0..n).map(|_| (SectionKind::ATTRIBUTE, "attribute")));
+    }
     expected.push((SectionKind::END, "end marker"));
     for (i, &(kind, what)) in expected.iter().enumerate() {
         if !whole && i + 1 >= c.sections.len() {
@@ -125,6 +136,16 @@ pub(crate) fn layout(c: &Container<'_>, limits: &Limits, whole: bool) -> Result<
 
 /// Decodes a container (SPEC.md 2-10).
 pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
+    decode_inner(bytes, opts, false)
+}
+
+/// Decodes an attribute's nested container (SPEC.md 11.3): one that keeps no file of
+/// its own, so nesting stops there.
+fn decode_nested(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
+    decode_inner(bytes, opts, true)
+}
+
+fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Decoded> {
     let limits = &opts.limits;
     let c = if opts.max_level.is_some() {
         Container::parse_prefix(bytes, limits)?
@@ -132,6 +153,9 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
         Container::parse(bytes, limits)?
     };
     let h = layout(&c, limits, opts.max_level.is_none())?;
+    if nested && h.has_template {
+        return Err(Error::corrupt("ATTR", "a nested container keeps a file"));
+    }
     // Decompression-bomb guard (SPEC.md 2.5): what the header asks for, per byte given.
     let allowance = (bytes.len() as u64)
         .max(64)
@@ -205,6 +229,7 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
     }
     let mut input_order = false;
     let ordr_at = after_levels + h.has_float_bits as usize;
+    let mut order_payload = None;
     if h.has_order && level == h.levels {
         if let Some(s) = c.sections.get(ordr_at) {
             let faces = ordr::Faces {
@@ -213,12 +238,21 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
                 idx: &mesh.faces,
             };
             let o = ordr::decode(s.payload, faces)?;
+            order_payload = Some(s.payload);
             mesh = restore_order(&mesh, &o);
             input_order = true;
         }
     }
     let (template, channels) = match input_order && h.has_template {
-        true => file_sections(&c, ordr_at + 1, &h, &mesh, allowance)?,
+        true => {
+            let own = FileSections {
+                at: ordr_at + 1,
+                allowance,
+                limits,
+                order: order_payload,
+            };
+            file_sections(&c, own, &h, &mesh)?
+        }
         false => (None, Channels::default()),
     };
     Ok(Decoded {
@@ -232,16 +266,30 @@ pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
     })
 }
 
+/// Where the sections that keep a file's own bytes start, and what decoding them
+/// needs: the decompression-bomb allowance, the limits, the main ORDR payload.
+struct FileSections<'a> {
+    at: usize,
+    allowance: u64,
+    limits: &'a Limits,
+    order: Option<&'a [u8]>,
+}
+
 /// The sections that keep the file's own bytes, from section `at` on (SPEC.md 11): the
-/// template, within the decompression-bomb allowance, and its channels (CIDX, NRML),
-/// for `mesh` in the input's order.
+/// template, within the decompression-bomb allowance, and its channels (CIDX, NRML,
+/// ATTR), for `mesh` in the input's order.
 fn file_sections(
     c: &Container<'_>,
-    mut at: usize,
+    own: FileSections<'_>,
     h: &Header,
     mesh: &Mesh,
-    allowance: u64,
 ) -> Result<(Option<Vec<u8>>, Channels)> {
+    let FileSections {
+        mut at,
+        allowance,
+        limits,
+        order,
+    } = own;
     let mut channels = Channels::default();
     let Some(s) = c.sections.get(at) else {
         return Ok((None, channels));
@@ -255,8 +303,40 @@ fn file_sections(
     if let (Some(s), true) = (c.sections.get(at), h.has_normals) {
         let count = crate::io::template::normal_markers(&template);
         channels.normals = nrml::decode(s.payload, mesh, &channels.indices, count)?;
+        at += 1;
+    }
+    while let Some(s) = c
+        .sections
+        .get(at)
+        .filter(|s| s.kind == SectionKind::ATTRIBUTE)
+    {
+        channels
+            .attributes
+            .push(attribute(s.payload, limits, order)?);
+        at += 1;
     }
     Ok((Some(template), channels))
+}
+
+/// An attribute from its ATTR payload (SPEC.md 11.3), `order` being the main
+/// container's ORDR payload: the nested container must keep its order and nothing of a
+/// file of its own.
+fn attribute(payload: &[u8], limits: &Limits, order: Option<&[u8]>) -> Result<Attribute> {
+    let (width, nested) = attr::decode(payload, limits, order)?;
+    let opts = DecodeOptions {
+        limits: limits.clone(),
+        max_level: None,
+    };
+    let d = decode_nested(&nested, &opts)
+        .map_err(|e| Error::corrupt("ATTR", format!("nested container: {e}")))?;
+    if !d.input_order && d.mesh.vertex_count() > 0 {
+        return Err(Error::corrupt("ATTR", "the nested container has no order"));
+    }
+    Ok(Attribute {
+        width,
+        mesh: d.mesh,
+        q: d.quantization,
+    })
 }
 
 /// Refuses a refinement larger than the header's finest mesh, before it is built.

@@ -31,7 +31,7 @@ pub const MAGIC: [u8; 8] = [0x89, b'S', b'W', b'V', b'\r', b'\n', 0x1a, b'\n'];
 /// The format version this crate writes and the only one it reads: before the first
 /// release the format has one version at a time (SPEC.md 1), and a container of any other
 /// version is refused with an error that names it.
-pub const FORMAT_VERSION: u16 = 30;
+pub const FORMAT_VERSION: u16 = 31;
 
 /// Bytes before the first section: magic, version, reserved.
 pub const PREAMBLE_LEN: usize = 12;
@@ -142,11 +142,14 @@ impl SectionKind {
     pub const CORNER_INDICES: SectionKind = SectionKind(*b"CIDX");
     /// The file's normal components, predicted from the geometry.
     pub const NORMALS: SectionKind = SectionKind(*b"NRML");
+    /// One vertex attribute of the file coded as the positions of a mesh of its own: a
+    /// nested container.
+    pub const ATTRIBUTE: SectionKind = SectionKind(*b"ATTR");
     /// Marks the end of a complete container.
     pub const END: SectionKind = SectionKind(*b"SEND");
 
     /// Every kind, with its one-byte code in the stream (SPEC.md 2.2).
-    const CODES: [(SectionKind, u8); 10] = [
+    const CODES: [(SectionKind, u8); 11] = [
         (SectionKind::HEADER, b'H'),
         (SectionKind::VALUE_MAP, b'V'),
         (SectionKind::BASE, b'B'),
@@ -156,6 +159,7 @@ impl SectionKind {
         (SectionKind::TEMPLATE, b'T'),
         (SectionKind::CORNER_INDICES, b'C'),
         (SectionKind::NORMALS, b'N'),
+        (SectionKind::ATTRIBUTE, b'A'),
         (SectionKind::END, b'E'),
     ];
 

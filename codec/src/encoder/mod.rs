@@ -9,10 +9,11 @@ use std::collections::HashMap;
 
 use crate::error::{Error, Result};
 use crate::info::{section_info, SectionInfo};
-use crate::io::template::Channels;
+use crate::io::template::{Attribute, Channels};
 use crate::io::{self, Format};
 use crate::mesh::Mesh;
 use crate::quant::Quantization;
+use crate::sections::attr;
 use crate::sections::cidx;
 use crate::sections::head::{Header, Source, Transform};
 use crate::sections::nrml;
@@ -352,8 +353,17 @@ pub fn encode_file(
         ));
     }
     mesh.validate()?;
-    let (t, ch) = io::template_of(file, format, mesh, q)
+    let (mut t, mut ch) = io::template_of(file, format, mesh, q, true)
         .unwrap_or_else(|| (io::template::verbatim(file, mesh, q), Channels::default()));
+    let attr = match ch.attributes.iter().map(|a| attribute(a, opts)).collect() {
+        Ok(a) => a,
+        // An attribute the codec cannot take stays in the template.
+        Err(_) => {
+            (t, ch) = io::template_of(file, format, mesh, q, false)
+                .unwrap_or_else(|| (io::template::verbatim(file, mesh, q), Channels::default()));
+            Vec::new()
+        }
+    };
     let own = FilePayloads {
         tmpl: tmpl::encode(&t)?,
         cidx: match ch.indices.is_empty() {
@@ -364,16 +374,28 @@ pub fn encode_file(
             true => None,
             false => Some(nrml::encode(mesh, &ch.indices, &ch.normals)?),
         },
+        attr,
     };
     encode_inner(mesh, q, opts, Some(&own))
 }
 
+/// The ATTR payload of attribute `a` (SPEC.md 11.3): its mesh coded with its order kept
+/// and `opts`' search.
+fn attribute(a: &Attribute, opts: &EncodeOptions) -> Result<Vec<u8>> {
+    let mut o = opts.clone();
+    o.keep_order = true;
+    o.progress = Progress::default();
+    Ok(attr::encode(a.width, &encode(&a.mesh, &a.q, &o)?.bytes))
+}
+
 /// The sections that keep a file's own bytes (SPEC.md 11): TMPL, CIDX when the
-/// template has corner index channels, NRML when it has normal components.
+/// template has corner index channels, NRML when it has normal components, an ATTR per
+/// attribute.
 struct FilePayloads {
     tmpl: Vec<u8>,
     cidx: Option<Vec<u8>>,
     nrml: Option<Vec<u8>>,
+    attr: Vec<Vec<u8>>,
 }
 
 /// [`encode`], with a TMPL payload when given.
@@ -691,6 +713,10 @@ fn write_container(
         }
         if let Some(n) = &t.nrml {
             put(&mut w, SectionKind::NORMALS, n)?;
+        }
+        for a in &t.attr {
+            let a = attr::share_order(a.clone(), payloads.order.as_deref());
+            put(&mut w, SectionKind::ATTRIBUTE, &a)?;
         }
     }
     let bytes = w.finish();

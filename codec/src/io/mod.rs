@@ -197,7 +197,8 @@ pub(crate) fn lines_with_ends(bytes: &[u8]) -> impl Iterator<Item = &[u8]> {
     bytes.split_inclusive(|&c| c == b'\n')
 }
 
-/// The template of `bytes` (SPEC.md 11) and its channels (11.1, 11.2), a file of
+/// The template of `bytes` (SPEC.md 11) and its channels (11.1-11.3), with attributes
+/// if `attributes`, a file of
 /// `format` whose mesh (in the file's vertex and face order) is `mesh` on `q`, checked
 /// to expand back to `bytes`; `None` where the file strays from what the walkers follow
 /// (the caller keeps it whole).
@@ -206,8 +207,24 @@ pub(crate) fn template_of(
     format: Format,
     mesh: &Mesh,
     q: &Quantization,
+    attributes: bool,
 ) -> Option<(Vec<u8>, template::Channels)> {
-    let mut b = template::builder(mesh, q, bytes.len());
+    // With attributes (SPEC.md 11.3) if asked; a file whose attributes the walk cannot
+    // follow is tried again without.
+    match attributes {
+        true => walk(bytes, format, mesh, q, true).or_else(|| walk(bytes, format, mesh, q, false)),
+        false => walk(bytes, format, mesh, q, false),
+    }
+}
+
+fn walk(
+    bytes: &[u8],
+    format: Format,
+    mesh: &Mesh,
+    q: &Quantization,
+    attributes: bool,
+) -> Option<(Vec<u8>, template::Channels)> {
+    let mut b = template::builder(mesh, q, bytes.len(), attributes);
     match format {
         Format::Obj => obj::template(bytes, &mut b)?,
         Format::PlyAscii | Format::PlyBinary | Format::PlyBinaryBigEndian => {
@@ -217,6 +234,19 @@ pub(crate) fn template_of(
         Format::StlAscii | Format::StlBinary => stl::template(bytes, &mut b)?,
     }
     template::checked(b, bytes)
+}
+
+/// An attribute's values from its text (SPEC.md 11.3): rows of three tokens, the first
+/// `width` the values (the rest "0"), read as positions are (exact decimals on their
+/// grid, else binary floats). (Measured: on Blender's ASCII PLY, whose values are
+/// binary32s' shortest texts, the decimal grid with the values it does not write back
+/// left in the template is smaller than the binary32s.)
+pub(crate) fn text_values(rows: &[[&str; 3]]) -> Option<crate::quant::Integers> {
+    let mut text = crate::quant::TextCoords::default();
+    for r in rows {
+        text.push(*r).ok()?;
+    }
+    crate::quant::integerize(&text.finish().0, None).ok()
 }
 
 /// Writes `mesh` in `format`, mapping integers to values with `q`.

@@ -3,7 +3,7 @@
 use std::collections::BTreeSet;
 use std::io::Write;
 
-use super::template::Builder;
+use super::template::{Attribute, Builder, Form};
 use super::{coords_line, syntax, Format, RawMesh};
 use crate::error::Result;
 use crate::mesh::Mesh;
@@ -253,10 +253,87 @@ pub(super) fn tokens(code: &[u8]) -> impl Iterator<Item = (usize, usize)> + '_ {
     })
 }
 
+/// A line's statement: its tokens before any comment.
+fn statement(line: &[u8]) -> Vec<&[u8]> {
+    let code = &line[..line.iter().position(|&c| c == b'#').unwrap_or(line.len())];
+    tokens(code).map(|(s, e)| &code[s..e]).collect()
+}
+
+/// An attribute of `width` values from each entry's tokens (the rest 0), on the faces
+/// `faces` (each a list of entry numbers), if its numbers are finite.
+fn attribute_of(entries: &[Vec<&[u8]>], width: usize, faces: &Mesh) -> Option<Attribute> {
+    let mut rows = Vec::with_capacity(entries.len());
+    for e in entries {
+        let mut t = ["0"; 3];
+        for k in 0..width {
+            t[k] = std::str::from_utf8(e[k]).ok()?;
+        }
+        rows.push(t);
+    }
+    Some(Attribute::on_faces(
+        width,
+        super::text_values(&rows)?,
+        faces,
+    ))
+}
+
+/// The attributes of an OBJ file (SPEC.md 11.3), made in `b`: the `vt` table when every
+/// `vt` line is two numbers (on the faces of the corners' `vt` numbers, where a face's
+/// corners all have distinct ones), and the vertex colours when every `v` line is six
+/// numbers. Their numbers in `b`, in that order.
+fn attributes(bytes: &[u8], b: &mut Builder<'_>) -> [Option<usize>; 2] {
+    let (mut vt, mut colours) = (Vec::new(), Vec::new());
+    let (mut vt_ok, mut colours_ok) = (true, true);
+    let mut uv_faces = Mesh::new();
+    let mut corners = Vec::new();
+    for line in super::lines_with_ends(bytes) {
+        let t = statement(line);
+        match t.first().copied() {
+            Some(b"vt") => {
+                vt_ok &= t.len() == 3;
+                vt.push(t[1..].to_vec());
+            }
+            Some(b"v") => {
+                colours_ok &= t.len() == 7;
+                colours.push(t[4.min(t.len())..].to_vec());
+            }
+            Some(b"f" | b"fo") if t.len() >= 4 => {
+                corners.clear();
+                for c in &t[1..] {
+                    let n = c
+                        .split(|&x| x == b'/')
+                        .nth(1)
+                        .and_then(|n| std::str::from_utf8(n).ok()?.parse::<u32>().ok())
+                        .filter(|&n| n >= 1);
+                    match n {
+                        Some(n) if !corners.contains(&(n - 1)) => corners.push(n - 1),
+                        _ => break,
+                    }
+                }
+                if corners.len() == t.len() - 1 && corners.iter().all(|&n| (n as usize) < vt.len())
+                {
+                    uv_faces.push_face(&corners);
+                }
+            }
+            _ => {}
+        }
+    }
+    let mut out = [None, None];
+    if vt_ok && !vt.is_empty() {
+        out[0] = attribute_of(&vt, 2, &uv_faces).and_then(|a| b.attribute(a));
+    }
+    if colours_ok && !colours.is_empty() && colours.len() == b.mesh().vertex_count() {
+        out[1] = attribute_of(&colours, 3, b.mesh()).and_then(|a| b.attribute(a));
+    }
+    out
+}
+
 /// Walks an OBJ file for its template (SPEC.md 11): the three coordinates of every `v`
 /// line and the vertex number of every `f` corner are the coded values; `None` for a
 /// file with continued lines (the reader joins them).
 pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
+    let [uv, colour] = attributes(bytes, b);
+    b.uv_attribute = uv;
     // `vn` values go to NRML (SPEC.md 11.2) if every `vn` line is three plain decimals,
     // so that its n-th entry is the corners' `vn` number n.
     let normals = super::lines_with_ends(bytes).all(|line| {
@@ -291,9 +368,20 @@ pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
                 }
             }
             b"v" => {
-                for (s, e) in toks.take(3) {
+                for (i, (s, e)) in toks.enumerate() {
                     b.literal(&line[at..s]);
-                    b.coord_text(&line[s..e]);
+                    match (i, colour) {
+                        (0..3, _) => b.coord_text(&line[s..e]),
+                        (_, Some(g)) => b.attr_value(g, Form::Text, &line[s..e]),
+                        _ => b.literal(&line[s..e]),
+                    }
+                    at = e;
+                }
+            }
+            b"vt" if uv.is_some() => {
+                for (s, e) in toks {
+                    b.literal(&line[at..s]);
+                    b.attr_value(uv?, Form::Text, &line[s..e]);
                     at = e;
                 }
             }

@@ -4,11 +4,11 @@
 use std::collections::BTreeSet;
 use std::io::Write;
 
-use super::template::Builder;
+use super::template::{Attribute, Builder, Form};
 use super::{value_f32, value_f64, write_counted_text, Format, RawMesh};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
-use crate::quant::{Decimal, Quantization, RawCoords, TextCoords};
+use crate::quant::{integerize, Decimal, Quantization, RawCoords, TextCoords};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Scalar {
@@ -350,6 +350,10 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                         match (is_vertex && mode == Mode::Ascii, axis_of(name)) {
                             (true, Some(a)) => toks[a] = body.token()?,
                             (false, Some(a)) if is_vertex => v[a] = body.num(*ty)?,
+                            // Another property's text is kept whatever its digits.
+                            _ if mode == Mode::Ascii => {
+                                body.token()?;
+                            }
                             _ => {
                                 body.num(*ty)?;
                             }
@@ -563,12 +567,139 @@ pub(crate) fn write<W: Write>(
     Ok(())
 }
 
+/// The vertex element's attributes (SPEC.md 11.3), made in `b`: its scalar properties
+/// but x, y, z, in runs of up to three of one type, each on the file's faces. Per
+/// property of the vertex element, its attribute and place in it.
+fn attributes(
+    bytes: &[u8],
+    mode: Mode,
+    elements: &[Element],
+    body_start: usize,
+    b: &mut Builder<'_>,
+) -> Option<Vec<Option<(usize, usize)>>> {
+    let vertex = elements.iter().position(|e| e.name == "vertex")?;
+    let props = &elements[vertex].props;
+    // Runs of one type: (first property, length, type).
+    let mut runs: Vec<(usize, usize, Scalar)> = Vec::new();
+    for (i, p) in props.iter().enumerate() {
+        let Prop::Scalar(name, ty) = p else { continue };
+        if ["x", "y", "z"].contains(&name.as_str()) {
+            continue;
+        }
+        match runs.last_mut() {
+            Some((first, len, t)) if *t == *ty && *first + *len == i && *len < 3 => *len += 1,
+            _ => runs.push((i, 1, *ty)),
+        }
+    }
+    if runs.is_empty() {
+        return None;
+    }
+    let mut place = vec![None; props.len()];
+    for (r, &(first, len, _)) in runs.iter().enumerate() {
+        for k in 0..len {
+            place[first + k] = Some((r, k));
+        }
+    }
+    // The values, as tokens (ASCII) or numbers.
+    let n = elements[vertex].count as usize;
+    let mut tokens: Vec<Vec<[&str; 3]>> = vec![Vec::new(); runs.len()];
+    let mut nums: Vec<Vec<[Num; 3]>> = vec![Vec::new(); runs.len()];
+    let mut body = Body {
+        data: bytes,
+        pos: body_start,
+        mode,
+    };
+    for (e, el) in elements.iter().enumerate() {
+        if e == vertex {
+            for (r, &(_, _, ty)) in runs.iter().enumerate() {
+                tokens[r].reserve(n);
+                nums[r].reserve(n);
+                let zero = match ty {
+                    Scalar::F32 => Num::F32(0.0),
+                    Scalar::F64 => Num::F64(0.0),
+                    _ => Num::Int(0),
+                };
+                (0..n).for_each(|_| {
+                    tokens[r].push(["0"; 3]);
+                    nums[r].push([zero; 3]);
+                });
+            }
+        }
+        for v in 0..el.count as usize {
+            for (i, p) in el.props.iter().enumerate() {
+                match (p, place.get(i).copied().flatten().filter(|_| e == vertex)) {
+                    (Prop::Scalar(..), Some((r, k))) if mode == Mode::Ascii => {
+                        tokens[r][v][k] = body.token().ok()?;
+                    }
+                    (Prop::Scalar(_, ty), Some((r, k))) => nums[r][v][k] = body.num(*ty).ok()?,
+                    (Prop::Scalar(_, ty), None) => {
+                        body.num(*ty).ok()?;
+                    }
+                    (Prop::List(_, cty, ity), _) => read_list(&mut body, *cty, *ity, None).ok()?,
+                }
+            }
+            if mode == Mode::Ascii {
+                body.end_line();
+            }
+        }
+        if e == vertex {
+            break;
+        }
+    }
+    let mesh = b.mesh();
+    let mut numbers = Vec::with_capacity(runs.len());
+    for (r, &(_, len, ty)) in runs.iter().enumerate() {
+        let raw = match (mode, ty) {
+            (Mode::Ascii, _) => {
+                let g = super::text_values(&tokens[r])
+                    .and_then(|v| b.attribute(Attribute::on_faces(len, v, mesh)));
+                numbers.push(g);
+                continue;
+            }
+            (_, Scalar::F32) => RawCoords::F32(
+                nums[r]
+                    .iter()
+                    .map(|v| v.map(|x| if let Num::F32(f) = x { f } else { 0.0 }))
+                    .collect(),
+            ),
+            (_, Scalar::F64) => RawCoords::F64(
+                nums[r]
+                    .iter()
+                    .map(|v| v.map(|x| if let Num::F64(f) = x { f } else { 0.0 }))
+                    .collect(),
+            ),
+            _ => RawCoords::Decimal(
+                nums[r]
+                    .iter()
+                    .map(|v| {
+                        v.map(|x| Decimal {
+                            mantissa: if let Num::Int(i) = x { i } else { 0 },
+                            decimals: 0,
+                        })
+                    })
+                    .collect(),
+            ),
+        };
+        let g = integerize(&raw, None)
+            .ok()
+            .and_then(|v| b.attribute(Attribute::on_faces(len, v, mesh)));
+        numbers.push(g);
+    }
+    Some(
+        place
+            .into_iter()
+            .map(|p| p.and_then(|(r, k)| Some((numbers[r]?, k))))
+            .collect(),
+    )
+}
+
 /// Walks a PLY file for its template (SPEC.md 11): the header and every property but the
 /// vertices' x, y, z (in that order) and the faces' first vertex index list stay as they
 /// are. `None` where the walk cannot follow the file (coordinates out of order, integer
 /// coordinates in a binary file, index lists of other than 32-bit items).
 pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
     let (mode, elements, body_start) = parse_header(bytes).ok()?;
+    let places = attributes(bytes, mode, &elements, body_start, b).unwrap_or_default();
     b.literal(&bytes[..body_start]);
     let mut pos = body_start;
     let big = mode == Mode::Be;
@@ -605,24 +736,32 @@ pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
         {
             return None;
         }
+        let place = |i: usize| match is_vertex {
+            true => places.get(i).copied().flatten(),
+            false => None,
+        };
         for _ in 0..el.count {
             let mut took_list = false;
-            for (p, axis) in el.props.iter().zip(&axes) {
+            for (i, (p, axis)) in el.props.iter().zip(&axes).enumerate() {
                 match (p, mode) {
                     (Prop::Scalar(..), Mode::Ascii) => {
                         let (s, e) = token(&mut pos, b)?;
-                        match axis {
-                            Some(_) => b.coord_text(&bytes[s..e]),
-                            None => b.literal(&bytes[s..e]),
+                        match (axis, place(i)) {
+                            (Some(_), _) => b.coord_text(&bytes[s..e]),
+                            (None, Some((g, _))) => b.attr_value(g, Form::Text, &bytes[s..e]),
+                            (None, None) => b.literal(&bytes[s..e]),
                         }
                     }
                     (Prop::Scalar(_, ty), _) => {
                         let raw = bytes.get(pos..pos + ty.size())?;
                         pos += ty.size();
-                        match axis {
-                            Some(_) if ty.is_float() => b.coord_binary(raw, big),
-                            Some(_) => return None,
-                            None => b.literal(raw),
+                        let signed = matches!(ty, Scalar::I8 | Scalar::I16 | Scalar::I32);
+                        let form = Form::binary(ty.size(), ty.is_float(), signed, big);
+                        match (axis, place(i), form) {
+                            (Some(_), ..) if ty.is_float() => b.coord_binary(raw, big),
+                            (Some(_), ..) => return None,
+                            (None, Some((g, _)), Some(f)) => b.attr_value(g, f, raw),
+                            (None, ..) => b.literal(raw),
                         }
                     }
                     (Prop::List(name, cty, ity), _) => {

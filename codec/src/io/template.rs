@@ -11,18 +11,162 @@ use crate::quant::Quantization;
 use crate::sections::cidx::{CornerIndices, IndexChannel, MAX_CHANNELS};
 use crate::sections::nrml::Component;
 
-/// The values a template's channel markers write (SPEC.md 11.1, 11.2): the corner index
-/// channels and the normal components.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
+/// The values a template's channel markers write (SPEC.md 11.1-11.3): the corner index
+/// channels, the normal components and the attributes.
+#[derive(Debug, Clone, Default, PartialEq)]
 pub(crate) struct Channels {
     /// Corner index channels (CIDX).
     pub indices: CornerIndices,
     /// Normal components, three per `vn` line (NRML).
     pub normals: Vec<Component>,
+    /// Attributes coded as meshes of their own (ATTR).
+    pub attributes: Vec<Attribute>,
+}
+
+/// A vertex attribute of a file as the positions of a mesh of its own (SPEC.md 11.3):
+/// `width` values per entry (1..=3; the positions' other axes are 0), entry i the
+/// mesh's vertex i, its faces the attribute's.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Attribute {
+    /// Values per entry, 1..=3.
+    pub width: u8,
+    /// The entries as positions, and the faces they form.
+    pub mesh: Mesh,
+    /// How the positions' integers map to the file's values.
+    pub q: Quantization,
+}
+
+impl Attribute {
+    /// An attribute of `width` values per entry, the integers `values`, on `faces`'
+    /// faces.
+    pub(crate) fn on_faces(width: usize, values: crate::quant::Integers, faces: &Mesh) -> Self {
+        let (positions, q, floats) = values;
+        Attribute {
+            width: width as u8,
+            mesh: Mesh {
+                positions,
+                face_starts: faces.face_starts.clone(),
+                faces: faces.faces.clone(),
+                floats,
+            },
+            q,
+        }
+    }
 }
 
 /// The channel number of normal components after marker [`CHANNEL_TEXT`].
 pub(crate) const NORMAL_MARK: u8 = 4;
+/// Channel numbers from this on, after marker [`CHANNEL_TEXT`]: attribute
+/// `k - FIRST_ATTRIBUTE`, then a form byte ([`Form`]).
+pub(crate) const FIRST_ATTRIBUTE: u8 = 16;
+/// Most attributes a template may use.
+pub(crate) const MAX_ATTRIBUTES: usize = 16;
+
+/// How an attribute value is written (SPEC.md 11.3): the byte after an attribute's
+/// channel number.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+pub(crate) enum Form {
+    /// As text, as a coordinate is (marker 0x01).
+    Text = 0,
+    F32Le = 1,
+    F32Be = 2,
+    F64Le = 3,
+    F64Be = 4,
+    I8 = 5,
+    U8 = 6,
+    I16Le = 7,
+    I16Be = 8,
+    U16Le = 9,
+    U16Be = 10,
+    I32Le = 11,
+    I32Be = 12,
+    U32Le = 13,
+    U32Be = 14,
+    /// Not written here (the bytes stand literally beside).
+    Skip = 15,
+    /// Not a value: the last corner's vertex in the attribute's faces, counted from 1,
+    /// as decimal text (an OBJ corner's `vt` number).
+    Corner = 16,
+}
+
+impl Form {
+    fn from_byte(b: u8) -> Option<Form> {
+        use Form::*;
+        [
+            Text, F32Le, F32Be, F64Le, F64Be, I8, U8, I16Le, I16Be, U16Le, U16Be, I32Le, I32Be,
+            U32Le, U32Be, Skip, Corner,
+        ]
+        .get(b as usize)
+        .copied()
+    }
+
+    /// The form of a binary value of `size` bytes, a float or not, signed or not.
+    pub(crate) fn binary(size: usize, float: bool, signed: bool, big: bool) -> Option<Form> {
+        use Form::*;
+        Some(match (size, float, signed, big) {
+            (4, true, _, false) => F32Le,
+            (4, true, _, true) => F32Be,
+            (8, true, _, false) => F64Le,
+            (8, true, _, true) => F64Be,
+            (1, false, true, _) => I8,
+            (1, false, false, _) => U8,
+            (2, false, true, false) => I16Le,
+            (2, false, true, true) => I16Be,
+            (2, false, false, false) => U16Le,
+            (2, false, false, true) => U16Be,
+            (4, false, true, false) => I32Le,
+            (4, false, true, true) => I32Be,
+            (4, false, false, false) => U32Le,
+            (4, false, false, true) => U32Be,
+            _ => return None,
+        })
+    }
+
+    /// Appends value `i` of attribute `a` in this form; `None` where there is no such
+    /// value or an integer form cannot hold it.
+    fn write(self, a: &Attribute, i: usize, out: &mut Vec<u8>) -> Option<()> {
+        let w = a.width as usize;
+        let (v, k) = (i / w, i % w);
+        if v >= a.mesh.vertex_count() {
+            return None;
+        }
+        let int = || match a.q {
+            Quantization::Decimal { decimals: 0 } => Some(a.mesh.positions[v][k]),
+            _ => None,
+        };
+        use Form::*;
+        match self {
+            Text => {
+                let mut t = String::new();
+                format_coord(&a.mesh, v, k, &a.q, &mut t);
+                out.extend_from_slice(t.as_bytes());
+            }
+            F32Le => out.extend_from_slice(&value_f32(&a.mesh, v, k, &a.q).to_le_bytes()),
+            F32Be => out.extend_from_slice(&value_f32(&a.mesh, v, k, &a.q).to_be_bytes()),
+            F64Le => out.extend_from_slice(&value_f64(&a.mesh, v, k, &a.q).to_le_bytes()),
+            F64Be => out.extend_from_slice(&value_f64(&a.mesh, v, k, &a.q).to_be_bytes()),
+            I8 => out.extend_from_slice(&i8::try_from(int()?).ok()?.to_le_bytes()),
+            U8 => out.extend_from_slice(&u8::try_from(int()?).ok()?.to_le_bytes()),
+            I16Le => out.extend_from_slice(&i16::try_from(int()?).ok()?.to_le_bytes()),
+            I16Be => out.extend_from_slice(&i16::try_from(int()?).ok()?.to_be_bytes()),
+            U16Le => out.extend_from_slice(&u16::try_from(int()?).ok()?.to_le_bytes()),
+            U16Be => out.extend_from_slice(&u16::try_from(int()?).ok()?.to_be_bytes()),
+            I32Le => out.extend_from_slice(&i32::try_from(int()?).ok()?.to_le_bytes()),
+            I32Be => out.extend_from_slice(&i32::try_from(int()?).ok()?.to_be_bytes()),
+            U32Le => out.extend_from_slice(&u32::try_from(int()?).ok()?.to_le_bytes()),
+            U32Be => out.extend_from_slice(&u32::try_from(int()?).ok()?.to_be_bytes()),
+            Skip | Corner => {}
+        }
+        Some(())
+    }
+}
+
+/// Corner `c`'s vertex in attribute `a`'s faces, counted from 1, when `a`'s faces
+/// have the mesh's corners.
+fn attribute_corner(a: &Attribute, c: usize) -> Option<u64> {
+    a.mesh.faces.get(c).map(|&v| v as u64 + 1)
+}
 
 /// The next coordinate, as text (how [`format_coord`] writes it).
 const COORD_TEXT: u8 = 1;
@@ -69,6 +213,12 @@ pub(super) struct Builder<'m> {
     text: String,
     /// The channels' values the markers stand for.
     channels: Channels,
+    /// Whether the walk may make attributes.
+    attributes: bool,
+    /// Values of each attribute met so far.
+    attr_used: Vec<usize>,
+    /// The attribute whose faces give channel 0's values (an OBJ's `vt` table).
+    pub(super) uv_attribute: Option<usize>,
 }
 
 impl<'m> Builder<'m> {
@@ -81,6 +231,44 @@ impl<'m> Builder<'m> {
             corner: 0,
             text: String::new(),
             channels: Channels::default(),
+            attributes: true,
+            attr_used: Vec::new(),
+            uv_attribute: None,
+        }
+    }
+
+    /// The mesh the template is of, in the file's order.
+    pub(super) fn mesh(&self) -> &'m Mesh {
+        self.mesh
+    }
+
+    /// Takes `a` as the next attribute, if the walk may make one: its number.
+    pub(super) fn attribute(&mut self, a: Attribute) -> Option<usize> {
+        let g = self.channels.attributes.len();
+        if !self.attributes || g >= MAX_ATTRIBUTES || a.mesh.validate().is_err() {
+            return None;
+        }
+        self.channels.attributes.push(a);
+        self.attr_used.push(0);
+        Some(g)
+    }
+
+    /// The next value of attribute `g`, written in the file as `token` in `form`: its
+    /// marker where the attribute writes it the same way, else the marker that skips
+    /// it and the token as it stands.
+    pub(super) fn attr_value(&mut self, g: usize, form: Form, token: &[u8]) {
+        let i = self.attr_used[g];
+        self.attr_used[g] += 1;
+        let mut w = Vec::with_capacity(token.len());
+        let same = form
+            .write(&self.channels.attributes[g], i, &mut w)
+            .is_some()
+            && w == token;
+        let form = if same { form } else { Form::Skip };
+        self.out
+            .extend_from_slice(&[CHANNEL_TEXT, FIRST_ATTRIBUTE + g as u8, form as u8]);
+        if !same {
+            self.literal(token);
         }
     }
 
@@ -138,6 +326,20 @@ impl<'m> Builder<'m> {
         let corner = self.corner.checked_sub(1).map(|c| c as u32);
         let value = plain_decimal(token);
         let ki = k as usize;
+        // A `vt` number that the `vt` attribute's faces give (SPEC.md 11.3).
+        if let (0, Some(c), Some(a), Some(g)) = (k, corner, value, self.uv_attribute) {
+            let at = &self.channels.attributes[g];
+            if at.mesh.face_starts == self.mesh.face_starts
+                && attribute_corner(at, c as usize) == Some(a as u64)
+            {
+                self.out.extend_from_slice(&[
+                    CHANNEL_TEXT,
+                    FIRST_ATTRIBUTE + g as u8,
+                    Form::Corner as u8,
+                ]);
+                return;
+            }
+        }
         if let (Some(c), Some(a), true) = (corner, value, ki < MAX_CHANNELS) {
             let indices = &mut self.channels.indices;
             if indices.channels.len() <= ki {
@@ -254,9 +456,17 @@ fn write_corner(marker: u8, mesh: &Mesh, v: usize, q: &Quantization, out: &mut V
     }
 }
 
-/// A builder for a template of a file of about `len` bytes.
-pub(super) fn builder<'m>(mesh: &'m Mesh, q: &'m Quantization, len: usize) -> Builder<'m> {
-    Builder::new(mesh, q, len / 2)
+/// A builder for a template of a file of about `len` bytes, that makes attributes
+/// (SPEC.md 11.3) if `attributes`.
+pub(super) fn builder<'m>(
+    mesh: &'m Mesh,
+    q: &'m Quantization,
+    len: usize,
+    attributes: bool,
+) -> Builder<'m> {
+    let mut b = Builder::new(mesh, q, len / 2);
+    b.attributes = attributes;
+    b
 }
 
 /// The template a walk built and its channels, if they expand back to `bytes`.
@@ -284,7 +494,10 @@ pub(crate) fn normal_markers(t: &[u8]) -> usize {
             ESCAPE => i += 2,
             CHANNEL_TEXT => {
                 n += (t.get(i + 1) == Some(&NORMAL_MARK)) as usize;
-                i += 2;
+                i += match t.get(i + 1) {
+                    Some(&k) if k >= FIRST_ATTRIBUTE => 3,
+                    _ => 2,
+                };
             }
             _ => i += 1,
         }
@@ -321,6 +534,7 @@ pub(crate) fn expand(
 ) -> Result<Vec<u8>> {
     let indices = &channels.indices;
     let mut normals = channels.normals.iter();
+    let mut attr_used = vec![0usize; channels.attributes.len()];
     let bad = |what: &str| Error::corrupt("TMPL", what.to_string());
     let mut out = Vec::with_capacity(t.len() + 24 * mesh.vertex_count());
     let (mut coord, mut corner) = (0usize, 0usize);
@@ -390,6 +604,30 @@ pub(crate) fn expand(
                     .ok_or_else(|| bad("more normal components than NRML carries"))?;
                 out.extend_from_slice(c.text().as_bytes());
             }
+            CHANNEL_TEXT if t.get(i).is_some_and(|&k| k >= FIRST_ATTRIBUTE) => {
+                let g = (t[i] - FIRST_ATTRIBUTE) as usize;
+                let form = t
+                    .get(i + 1)
+                    .and_then(|&f| Form::from_byte(f))
+                    .ok_or_else(|| bad("an attribute marker without its form"))?;
+                i += 2;
+                let a = channels
+                    .attributes
+                    .get(g)
+                    .ok_or_else(|| bad("an attribute marker past the ATTR sections"))?;
+                if form == Form::Corner {
+                    let v = corner
+                        .checked_sub(1)
+                        .and_then(|c| attribute_corner(a, c))
+                        .ok_or_else(|| bad("a corner marker past the attribute's faces"))?;
+                    out.extend_from_slice(v.to_string().as_bytes());
+                    continue;
+                }
+                form.write(a, attr_used[g], &mut out).ok_or_else(|| {
+                    bad("an attribute value past the attribute's, or out of its type's range")
+                })?;
+                attr_used[g] += 1;
+            }
             CHANNEL_TEXT => {
                 let k = *t
                     .get(i)
@@ -413,9 +651,14 @@ pub(crate) fn expand(
         .zip(used)
         .any(|(c, u)| c.values.len() != u)
         || normals.next().is_some()
+        || channels
+            .attributes
+            .iter()
+            .zip(&attr_used)
+            .any(|(a, &u)| a.mesh.vertex_count() * a.width as usize != u)
     {
         return Err(bad(
-            "CIDX or NRML carries values the template does not write",
+            "CIDX, NRML or ATTR carries values the template does not write",
         ));
     }
     Ok(out)

@@ -1,6 +1,7 @@
 //! The container's sections (SPEC.md 2.4), one module per kind, named as SPEC.md names
 //! them: each holds its payload's wire format, both ways.
 
+pub(crate) mod attr;
 pub mod base;
 pub mod cidx;
 pub mod fbit;
