@@ -209,31 +209,24 @@ pub(crate) fn template_of(
     q: &Quantization,
     attributes: bool,
 ) -> Option<(Vec<u8>, template::Channels)> {
+    let walk = |attributes: bool| {
+        let mut b = template::builder(mesh, q, bytes.len(), attributes);
+        match format {
+            Format::Obj => obj::template(bytes, &mut b)?,
+            Format::PlyAscii | Format::PlyBinary | Format::PlyBinaryBigEndian => {
+                ply::template(bytes, &mut b)?
+            }
+            Format::Off => off::template(bytes, &mut b)?,
+            Format::StlAscii | Format::StlBinary => stl::template(bytes, &mut b)?,
+        }
+        template::checked(b, bytes)
+    };
     // With attributes (SPEC.md 11.3) if asked; a file whose attributes the walk cannot
     // follow is tried again without.
     match attributes {
-        true => walk(bytes, format, mesh, q, true).or_else(|| walk(bytes, format, mesh, q, false)),
-        false => walk(bytes, format, mesh, q, false),
+        true => walk(true).or_else(|| walk(false)),
+        false => walk(false),
     }
-}
-
-fn walk(
-    bytes: &[u8],
-    format: Format,
-    mesh: &Mesh,
-    q: &Quantization,
-    attributes: bool,
-) -> Option<(Vec<u8>, template::Channels)> {
-    let mut b = template::builder(mesh, q, bytes.len(), attributes);
-    match format {
-        Format::Obj => obj::template(bytes, &mut b)?,
-        Format::PlyAscii | Format::PlyBinary | Format::PlyBinaryBigEndian => {
-            ply::template(bytes, &mut b)?
-        }
-        Format::Off => off::template(bytes, &mut b)?,
-        Format::StlAscii | Format::StlBinary => stl::template(bytes, &mut b)?,
-    }
-    template::checked(b, bytes)
 }
 
 /// An attribute's values from its text (SPEC.md 11.3): rows of three tokens, the first

@@ -162,6 +162,39 @@ impl Form {
     }
 }
 
+/// Expands an attribute marker (SPEC.md 11.3): attribute `g` and the form byte, after
+/// `corner` corners; `used` counts each attribute's values written.
+fn attribute_marker(
+    (g, form): (u8, Option<u8>),
+    channels: &Channels,
+    corner: usize,
+    used: &mut [usize],
+    out: &mut Vec<u8>,
+) -> Result<()> {
+    let bad = |what: &str| Error::corrupt("TMPL", what.to_string());
+    let g = g as usize;
+    let form = form
+        .and_then(Form::from_byte)
+        .ok_or_else(|| bad("an attribute marker without its form"))?;
+    let a = channels
+        .attributes
+        .get(g)
+        .ok_or_else(|| bad("an attribute marker past the ATTR sections"))?;
+    if form == Form::Corner {
+        let v = corner
+            .checked_sub(1)
+            .and_then(|c| attribute_corner(a, c))
+            .ok_or_else(|| bad("a corner marker past the attribute's faces"))?;
+        out.extend_from_slice(v.to_string().as_bytes());
+        return Ok(());
+    }
+    form.write(a, used[g], out).ok_or_else(|| {
+        bad("an attribute value past the attribute's, or out of its type's range")
+    })?;
+    used[g] += 1;
+    Ok(())
+}
+
 /// Corner `c`'s vertex in attribute `a`'s faces, counted from 1, when `a`'s faces
 /// have the mesh's corners.
 fn attribute_corner(a: &Attribute, c: usize) -> Option<u64> {
@@ -605,28 +638,9 @@ pub(crate) fn expand(
                 out.extend_from_slice(c.text().as_bytes());
             }
             CHANNEL_TEXT if t.get(i).is_some_and(|&k| k >= FIRST_ATTRIBUTE) => {
-                let g = (t[i] - FIRST_ATTRIBUTE) as usize;
-                let form = t
-                    .get(i + 1)
-                    .and_then(|&f| Form::from_byte(f))
-                    .ok_or_else(|| bad("an attribute marker without its form"))?;
+                let marker = (t[i] - FIRST_ATTRIBUTE, t.get(i + 1).copied());
                 i += 2;
-                let a = channels
-                    .attributes
-                    .get(g)
-                    .ok_or_else(|| bad("an attribute marker past the ATTR sections"))?;
-                if form == Form::Corner {
-                    let v = corner
-                        .checked_sub(1)
-                        .and_then(|c| attribute_corner(a, c))
-                        .ok_or_else(|| bad("a corner marker past the attribute's faces"))?;
-                    out.extend_from_slice(v.to_string().as_bytes());
-                    continue;
-                }
-                form.write(a, attr_used[g], &mut out).ok_or_else(|| {
-                    bad("an attribute value past the attribute's, or out of its type's range")
-                })?;
-                attr_used[g] += 1;
+                attribute_marker(marker, channels, corner, &mut attr_used, &mut out)?;
             }
             CHANNEL_TEXT => {
                 let k = *t
