@@ -868,3 +868,37 @@ fn every_bit_flip_or_cut_of_the_order_corner_indices_and_normals_is_an_error_or_
         "{tried} tried, {refused} refused"
     );
 }
+
+#[test]
+fn attribute_sections_that_nest_files_or_claim_what_is_not_there_are_errors() {
+    // An ATTR whose nested container keeps a file of its own (which could nest again),
+    // one with an unknown flag, one with a width of 4, one that says its order is the
+    // main container's when the nested container has its own ORDR as well: each an
+    // error naming ATTR.
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/corpus/golden/textured_cc3.file.swv"
+    );
+    let b = std::fs::read(path).unwrap();
+    assert!(subwave::decode_slice(&b).is_ok());
+    let nested_file = b.clone();
+    let cases: [(&str, Box<dyn Fn(&mut Vec<u8>)>); 4] = [
+        (
+            "nests a file",
+            Box::new(move |p: &mut Vec<u8>| {
+                p.truncate(2);
+                p.extend_from_slice(&nested_file);
+            }),
+        ),
+        ("unknown flag", Box::new(|p: &mut Vec<u8>| p[1] |= 2)),
+        ("width 4", Box::new(|p: &mut Vec<u8>| p[0] = 4)),
+        ("order twice", Box::new(|p: &mut Vec<u8>| p[1] |= 1)),
+    ];
+    for (what, edit) in cases {
+        let x = with_section(&b, SectionKind::ATTRIBUTE, |p| edit(p));
+        match subwave::decode_slice(&x) {
+            Ok(_) => panic!("{what}: decoded"),
+            Err(e) => assert!(e.to_string().contains("ATTR"), "{what}: {e}"),
+        }
+    }
+}
