@@ -882,7 +882,8 @@ fn attribute_sections_that_nest_files_or_claim_what_is_not_there_are_errors() {
     let b = std::fs::read(path).unwrap();
     assert!(subwave::decode_slice(&b).is_ok());
     let nested_file = b.clone();
-    let cases: [(&str, Box<dyn Fn(&mut Vec<u8>)>); 4] = [
+    type Edit = Box<dyn Fn(&mut Vec<u8>)>;
+    let cases: [(&str, Edit); 4] = [
         (
             "nests a file",
             Box::new(move |p: &mut Vec<u8>| {
