@@ -814,6 +814,15 @@ fn with_section(bytes: &[u8], kind: SectionKind, edit: impl FnOnce(&mut Vec<u8>)
     w.finish()
 }
 
+/// The frozen textured OBJ's container (ORDR walks, CIDX, NRML and an ATTR).
+fn frozen_textured() -> Vec<u8> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/corpus/golden/textured_cc3.file.swv"
+    );
+    std::fs::read(path).unwrap()
+}
+
 #[test]
 fn every_bit_flip_or_cut_of_the_order_corner_indices_and_normals_is_an_error_or_a_valid_file() {
     // The frozen textured OBJ (walks in ORDR, vt and vn channels in CIDX, normals in
@@ -821,11 +830,7 @@ fn every_bit_flip_or_cut_of_the_order_corner_indices_and_normals_is_an_error_or_
     // those payloads flipped and every cut of them, checksums made valid, so the walks'
     // candidates and escapes and the channels' predictions meet hostile values. The
     // result is an error, or a mesh and a file that the decoder could make.
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/corpus/golden/textured_cc3.file.swv"
-    );
-    let b = std::fs::read(path).unwrap();
+    let b = frozen_textured();
     let d = subwave::decode_slice(&b).unwrap();
     assert!(d.file().is_some(), "the frozen container keeps its file");
     let mut tried = 0;
@@ -875,11 +880,7 @@ fn attribute_sections_that_nest_files_or_claim_what_is_not_there_are_errors() {
     // one with an unknown flag, one with a width of 4, one that says its order is the
     // main container's when the nested container has its own ORDR as well: each an
     // error naming ATTR.
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/corpus/golden/textured_cc3.file.swv"
-    );
-    let b = std::fs::read(path).unwrap();
+    let b = frozen_textured();
     assert!(subwave::decode_slice(&b).is_ok());
     let nested_file = b.clone();
     type Edit = Box<dyn Fn(&mut Vec<u8>)>;

@@ -715,7 +715,7 @@ fn write_container(
             put(&mut w, SectionKind::NORMALS, n)?;
         }
         for a in &t.attr {
-            let a = attr::share_order(a.clone(), payloads.order.as_deref());
+            let a = attr::share_order(a, payloads.order.as_deref());
             put(&mut w, SectionKind::ATTRIBUTE, &a)?;
         }
     }

@@ -277,13 +277,24 @@ fn attribute_of(entries: &[Vec<&[u8]>], width: usize, faces: &Mesh) -> Option<At
     ))
 }
 
-/// The attributes of an OBJ file (SPEC.md 11.3), made in `b`: the `vt` table when every
-/// `vt` line is two numbers (on the faces of the corners' `vt` numbers, where a face's
-/// corners all have distinct ones), and the vertex colours when every `v` line is six
-/// numbers. Their numbers in `b`, in that order.
-fn attributes(bytes: &[u8], b: &mut Builder<'_>) -> [Option<usize>; 2] {
+/// What an OBJ file's walk needs to know before it starts.
+struct Scan {
+    /// The `vt` table's attribute (SPEC.md 11.3).
+    uv: Option<usize>,
+    /// The vertex colours' attribute.
+    colour: Option<usize>,
+    /// Whether every `vn` line is three plain decimals: then the `vn` values go to NRML
+    /// (SPEC.md 11.2), so that its n-th entry is the corners' `vn` number n.
+    normals: bool,
+}
+
+/// One pass over an OBJ file before its walk: whether its normals go to NRML, and its
+/// attributes (SPEC.md 11.3), made in `b`: the `vt` table when every `vt` line is two
+/// numbers (on the faces of the corners' `vt` numbers, where a face's corners all have
+/// distinct ones), and the vertex colours when every `v` line is six numbers.
+fn scan(bytes: &[u8], b: &mut Builder<'_>) -> Scan {
     let (mut vt, mut colours) = (Vec::new(), Vec::new());
-    let (mut vt_ok, mut colours_ok) = (true, true);
+    let (mut vt_ok, mut colours_ok, mut normals) = (true, true, true);
     let mut uv_faces = Mesh::new();
     let mut corners = Vec::new();
     for line in super::lines_with_ends(bytes) {
@@ -296,6 +307,9 @@ fn attributes(bytes: &[u8], b: &mut Builder<'_>) -> [Option<usize>; 2] {
             Some(b"v") => {
                 colours_ok &= t.len() == 7;
                 colours.push(t[4.min(t.len())..].to_vec());
+            }
+            Some(b"vn") => {
+                normals &= t.len() == 4 && t[1..].iter().all(|t| Component::parse(t).is_some());
             }
             Some(b"f" | b"fo") if t.len() >= 4 => {
                 corners.clear();
@@ -318,12 +332,17 @@ fn attributes(bytes: &[u8], b: &mut Builder<'_>) -> [Option<usize>; 2] {
             _ => {}
         }
     }
-    let mut out = [None, None];
+    let mut out = Scan {
+        uv: None,
+        colour: None,
+        normals,
+    };
     if vt_ok && !vt.is_empty() {
-        out[0] = attribute_of(&vt, 2, &uv_faces).and_then(|a| b.attribute(a));
+        out.uv = attribute_of(&vt, 2, &uv_faces).and_then(|a| b.attribute(a));
+        b.corners_from(out.uv);
     }
     if colours_ok && !colours.is_empty() && colours.len() == b.mesh().vertex_count() {
-        out[1] = attribute_of(&colours, 3, b.mesh()).and_then(|a| b.attribute(a));
+        out.colour = attribute_of(&colours, 3, b.mesh()).and_then(|a| b.attribute(a));
     }
     out
 }
@@ -332,16 +351,11 @@ fn attributes(bytes: &[u8], b: &mut Builder<'_>) -> [Option<usize>; 2] {
 /// line and the vertex number of every `f` corner are the coded values; `None` for a
 /// file with continued lines (the reader joins them).
 pub(super) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
-    let [uv, colour] = attributes(bytes, b);
-    b.uv_attribute = uv;
-    // `vn` values go to NRML (SPEC.md 11.2) if every `vn` line is three plain decimals,
-    // so that its n-th entry is the corners' `vn` number n.
-    let normals = super::lines_with_ends(bytes).all(|line| {
-        let code = &line[..line.iter().position(|&c| c == b'#').unwrap_or(line.len())];
-        let t: Vec<&[u8]> = tokens(code).map(|(s, e)| &code[s..e]).collect();
-        t.first() != Some(&&b"vn"[..])
-            || (t.len() == 4 && t[1..].iter().all(|t| Component::parse(t).is_some()))
-    });
+    let Scan {
+        uv,
+        colour,
+        normals,
+    } = scan(bytes, b);
     for line in super::lines_with_ends(bytes) {
         let mut content = line.strip_suffix(b"\n").unwrap_or(line);
         content = content.strip_suffix(b"\r").unwrap_or(content);

@@ -250,8 +250,9 @@ pub(super) struct Builder<'m> {
     attributes: bool,
     /// Values of each attribute met so far.
     attr_used: Vec<usize>,
-    /// The attribute whose faces give channel 0's values (an OBJ's `vt` table).
-    pub(super) uv_attribute: Option<usize>,
+    /// The attribute whose faces give channel 0's values (an OBJ's `vt` table), when
+    /// they have the mesh's corners.
+    uv_attribute: Option<usize>,
 }
 
 impl<'m> Builder<'m> {
@@ -284,6 +285,13 @@ impl<'m> Builder<'m> {
         self.channels.attributes.push(a);
         self.attr_used.push(0);
         Some(g)
+    }
+
+    /// Takes attribute `g`'s faces as the source of channel 0's values (an OBJ's `vt`
+    /// numbers, SPEC.md 11.3), if they have the mesh's corners.
+    pub(super) fn corners_from(&mut self, g: Option<usize>) {
+        self.uv_attribute =
+            g.filter(|&g| self.channels.attributes[g].mesh.face_starts == self.mesh.face_starts);
     }
 
     /// The next value of attribute `g`, written in the file as `token` in `form`: its
@@ -361,10 +369,7 @@ impl<'m> Builder<'m> {
         let ki = k as usize;
         // A `vt` number that the `vt` attribute's faces give (SPEC.md 11.3).
         if let (0, Some(c), Some(a), Some(g)) = (k, corner, value, self.uv_attribute) {
-            let at = &self.channels.attributes[g];
-            if at.mesh.face_starts == self.mesh.face_starts
-                && attribute_corner(at, c as usize) == Some(a as u64)
-            {
+            if attribute_corner(&self.channels.attributes[g], c as usize) == Some(a as u64) {
                 self.out.extend_from_slice(&[
                     CHANNEL_TEXT,
                     FIRST_ATTRIBUTE + g as u8,

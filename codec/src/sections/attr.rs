@@ -29,19 +29,19 @@ pub(crate) fn encode(width: u8, nested: &[u8]) -> Vec<u8> {
 /// `payload` (from [`encode`]) with its nested container's ORDR section left out when
 /// that section's payload is `order`, the main container's: an attribute on the file's
 /// own faces in the file's order has the same hierarchy and order as the positions.
-pub(crate) fn share_order(payload: Vec<u8>, order: Option<&[u8]>) -> Vec<u8> {
+pub(crate) fn share_order<'a>(payload: &'a [u8], order: Option<&[u8]>) -> Cow<'a, [u8]> {
     let (Some(order), Some(nested)) = (order, payload.get(2..)) else {
-        return payload;
+        return Cow::Borrowed(payload);
     };
     let Ok(c) = Container::parse(nested, &Limits::default()) else {
-        return payload;
+        return Cow::Borrowed(payload);
     };
     if !c
         .sections
         .iter()
         .any(|s| s.kind == SectionKind::ORDER && s.payload == order)
     {
-        return payload;
+        return Cow::Borrowed(payload);
     }
     let mut w = ContainerWriter::new();
     for s in &c.sections {
@@ -51,7 +51,7 @@ pub(crate) fn share_order(payload: Vec<u8>, order: Option<&[u8]>) -> Vec<u8> {
     }
     let mut out = vec![payload[0], payload[1] | SHARED_ORDER];
     out.extend_from_slice(&w.finish());
-    out
+    Cow::Owned(out)
 }
 
 /// An ATTR payload's width and nested container (with the main container's ORDR

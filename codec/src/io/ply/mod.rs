@@ -163,6 +163,15 @@ impl<'a> Body<'a> {
         })
     }
 
+    /// Goes past a value that is not coded: in an ASCII body its text, whatever its
+    /// digits (a number past exact mode's 18 decimals is still a file to keep).
+    fn skip(&mut self, ty: Scalar) -> Result<()> {
+        match self.mode {
+            Mode::Ascii => self.token().map(|_| ()),
+            _ => self.num(ty).map(|_| ()),
+        }
+    }
+
     fn int(&mut self, ty: Scalar, what: &str) -> Result<i64> {
         match self.num(ty)? {
             Num::Int(i) => Ok(i),
@@ -352,13 +361,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                         match (is_vertex && mode == Mode::Ascii, axis_of(name)) {
                             (true, Some(a)) => toks[a] = body.token()?,
                             (false, Some(a)) if is_vertex => v[a] = body.num(*ty)?,
-                            // Another property's text is kept whatever its digits.
-                            _ if mode == Mode::Ascii => {
-                                body.token()?;
-                            }
-                            _ => {
-                                body.num(*ty)?;
-                            }
+                            _ => body.skip(*ty)?,
                         }
                     }
                     Prop::List(name, cty, ity) => {

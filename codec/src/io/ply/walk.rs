@@ -1,9 +1,9 @@
 //! A PLY file's template (SPEC.md 11): the walk over its header and body that marks
 //! the coded values, and the vertex element's attributes (11.3).
 
-use super::{line_len, parse_header, read_list, Body, Element, Mode, Num, Prop, Scalar};
+use super::{line_len, parse_header, read_list, to_coords, Body, Element, Mode, Num, Prop, Scalar};
 use crate::io::template::{Attribute, Builder, Form};
-use crate::quant::{integerize, Decimal, RawCoords};
+use crate::quant::integerize;
 
 /// The vertex element's runs of up to three consecutive scalar properties of one type
 /// besides x, y, z: (first property, length, type).
@@ -20,22 +20,6 @@ fn runs(props: &[Prop]) -> Vec<(usize, usize, Scalar)> {
         }
     }
     runs
-}
-
-/// A binary run's values (all of type `ty`) as coordinates: floats as they are,
-/// integers as decimals with no decimals.
-fn binary_values(nums: &[[Num; 3]], ty: Scalar) -> RawCoords {
-    let f32_of = |x: Num| if let Num::F32(f) = x { f } else { 0.0 };
-    let f64_of = |x: Num| if let Num::F64(f) = x { f } else { 0.0 };
-    let int_of = |x: Num| Decimal {
-        mantissa: if let Num::Int(i) = x { i } else { 0 },
-        decimals: 0,
-    };
-    match ty {
-        Scalar::F32 => RawCoords::F32(nums.iter().map(|v| v.map(f32_of)).collect()),
-        Scalar::F64 => RawCoords::F64(nums.iter().map(|v| v.map(f64_of)).collect()),
-        _ => RawCoords::Decimal(nums.iter().map(|v| v.map(int_of)).collect()),
-    }
 }
 
 /// The vertex element's attributes (SPEC.md 11.3), made in `b`: its scalar properties
@@ -71,18 +55,19 @@ fn attributes(
     };
     for (e, el) in elements.iter().enumerate() {
         if e == vertex {
+            // Room for the values, the axes past a run's length 0 of its type.
             for (r, &(_, _, ty)) in runs.iter().enumerate() {
-                tokens[r].reserve(n);
-                nums[r].reserve(n);
-                let zero = match ty {
-                    Scalar::F32 => Num::F32(0.0),
-                    Scalar::F64 => Num::F64(0.0),
-                    _ => Num::Int(0),
-                };
-                (0..n).for_each(|_| {
-                    tokens[r].push(["0"; 3]);
-                    nums[r].push([zero; 3]);
-                });
+                match mode {
+                    Mode::Ascii => tokens[r] = vec![["0"; 3]; n],
+                    _ => {
+                        let zero = match ty {
+                            Scalar::F32 => Num::F32(0.0),
+                            Scalar::F64 => Num::F64(0.0),
+                            _ => Num::Int(0),
+                        };
+                        nums[r] = vec![[zero; 3]; n];
+                    }
+                }
             }
         }
         for v in 0..el.count as usize {
@@ -92,9 +77,7 @@ fn attributes(
                         tokens[r][v][k] = body.token().ok()?;
                     }
                     (Prop::Scalar(_, ty), Some((r, k))) => nums[r][v][k] = body.num(*ty).ok()?,
-                    (Prop::Scalar(_, ty), None) => {
-                        body.num(*ty).ok()?;
-                    }
+                    (Prop::Scalar(_, ty), None) => body.skip(*ty).ok()?,
                     (Prop::List(_, cty, ity), _) => read_list(&mut body, *cty, *ity, None).ok()?,
                 }
             }
@@ -116,7 +99,7 @@ fn attributes(
                 numbers.push(g);
                 continue;
             }
-            _ => binary_values(&nums[r], ty),
+            _ => to_coords(&nums[r]).ok()?,
         };
         let g = integerize(&raw, None)
             .ok()
