@@ -46,9 +46,14 @@ pub fn info(info: &Info) -> Value {
         "disc_transform": h.disc.name(),
         "transform": h.transform.name(),
         "fit_bits": match h.transform {
-            Transform::Fit { bits } => Some(bits),
+            Transform::Fit { bits, .. } => Some(bits),
             _ => None,
         },
+        "fit_limit": match h.transform {
+            Transform::Fit { limit, .. } => Some(limit),
+            _ => None,
+        },
+        "creases": h.creases,
         "quantization": quantization(&h.quantization),
         "keep_order": h.has_order,
         "value_map": h.has_value_map,

@@ -167,12 +167,15 @@ fn hostile_fit_containers_are_refused() {
     // (the transform code comes just before it).
     let m = own("subdivided_cc3.obj", Some(16));
     let enc = encode(&m.mesh, &m.quantization, TransformChoice::Auto);
-    let Transform::Fit { bits } = enc.header.transform else {
+    let Transform::Fit { bits, limit } = enc.header.transform else {
         panic!("not a fit")
     };
     let head = enc.header.write();
     let mut other = enc.header.clone();
-    other.transform = Transform::Fit { bits: bits + 1 };
+    other.transform = Transform::Fit {
+        bits: bits + 1,
+        limit,
+    };
     let at = head
         .iter()
         .zip(other.write())
@@ -238,12 +241,141 @@ fn hostile_fit_containers_are_refused() {
             other => panic!("{what}: expected a malformed or corrupt container, got {other:?}"),
         }
     }
+    // Fit rules the format does not define are unsupported, not guessed at.
+    match subwave::decode_slice(&rewritten(|h| h[at + 1] |= 4, |_, _| {})) {
+        Err(Error::Unsupported(what)) => assert!(what.contains("fit rules"), "{what}"),
+        other => panic!("unknown fit rules: {other:?}"),
+    }
     // The header names the fit (transform code 9) and its extra bits.
     let h = subwave::Header::read(&head, 0, &Limits::default()).unwrap();
     assert!(
         matches!(h.transform, subwave::Transform::Fit { .. }),
         "{h:?}"
     );
+}
+
+/// The pentagonal prism (two pentagon caps, one side split into triangles), its
+/// control values moved by a smooth bump, and its ten rim edges (the caps' edges).
+fn prism_and_rims() -> (subwave_corpus::PolyMesh, Vec<[u32; 2]>) {
+    let mut control = subwave_corpus::mixed_polygons();
+    control.displace(0.2, 0.0, &mut Rng::new(1));
+    let rims = control.faces[..2]
+        .iter()
+        .flat_map(|f| (0..f.len()).map(move |i| [f[i], f[(i + 1) % f.len()]]))
+        .collect();
+    (control, rims)
+}
+
+/// Bytes of a container's finest LEVL section (a fit's residuals).
+fn residual_bytes(bytes: &[u8]) -> usize {
+    let c = subwave_container::Container::parse(bytes, &Limits::default()).unwrap();
+    c.sections
+        .iter()
+        .rfind(|s| s.kind == SectionKind::LEVEL)
+        .unwrap()
+        .payload
+        .len()
+}
+
+#[test]
+fn each_rule_set_is_found_and_its_surfaces_code_to_near_zero_residuals() {
+    // Surfaces made by the corpus crate's own float evaluation of each rule set
+    // (plain, limit, creased, both), rounded: the fit finds the rules (the creases
+    // from the data alone), decodes exactly, and its residuals cost next to nothing.
+    let (control, rims) = prism_and_rims();
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    for (creased, limit) in [(false, false), (false, true), (true, false), (true, true)] {
+        let creases: &[[u32; 2]] = if creased { &rims } else { &[] };
+        let surface = control.subdivision_surface(4, creases, limit);
+        let mesh = common::to_mesh(&surface, 1e5);
+        let enc = encode(&mesh, &q, TransformChoice::Fit);
+        let what = format!("creased {creased}, limit {limit}");
+        match enc.header.transform {
+            Transform::Fit { limit: l, .. } => assert_eq!(l, limit, "{what}"),
+            t => panic!("{what}: expected a fit, got {}", t.name()),
+        }
+        assert_eq!(
+            enc.header.creases.len(),
+            if creased { 10 } else { 0 },
+            "{what}"
+        );
+        assert_exact(&enc.bytes, &mesh, &what);
+        let n = mesh.vertex_count();
+        let r = residual_bytes(&enc.bytes);
+        assert!(8 * r < n, "{what}: {r} B of residuals for {n} vertices");
+        // The plain fit of a limit or creased surface misses: its residuals are the
+        // difference between the rule sets.
+        if creased || limit {
+            let plain = control.subdivision_surface(4, &[], false);
+            let off = mesh
+                .positions
+                .iter()
+                .zip(&common::to_mesh(&plain, 1e5).positions)
+                .filter(|(a, b)| a != b)
+                .count();
+            assert!(
+                off > n / 2,
+                "{what}: the rule sets differ at {off} of {n} vertices"
+            );
+        }
+    }
+}
+
+#[test]
+fn auto_finds_a_creased_limit_surface() {
+    // A folded sheet (a tent along a column; 5 columns, so that its hierarchy's base
+    // is this grid), its fold creased, on the limit: regular patches, so `auto` sees a
+    // surface and tries the fit.
+    let (control, fold) = subwave_corpus::folded_sheet();
+    let mesh = common::to_mesh(&control.subdivision_surface(3, &fold, true), 1e6);
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    let enc = encode(&mesh, &q, TransformChoice::Auto);
+    assert!(
+        matches!(enc.header.transform, Transform::Fit { limit: true, .. }),
+        "auto chose {}",
+        enc.header.transform.name()
+    );
+    assert_eq!(enc.header.creases.len(), 4);
+    assert_exact(&enc.bytes, &mesh, "folded sheet");
+    let n = mesh.vertex_count();
+    let r = residual_bytes(&enc.bytes);
+    assert!(8 * r < n, "{r} B of residuals for {n} vertices");
+}
+
+#[test]
+fn hostile_crease_lists_are_refused() {
+    let (control, rims) = prism_and_rims();
+    let mesh = common::to_mesh(&control.subdivision_surface(2, &rims, true), 1e5);
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    let enc = encode(&mesh, &q, TransformChoice::Fit);
+    assert!(!enc.header.creases.is_empty());
+    let c = subwave_container::Container::parse(&enc.bytes, &Limits::default()).unwrap();
+    let with_header = |h: &subwave::Header| {
+        let mut w = ContainerWriter::new();
+        for s in c.sections.iter().filter(|s| s.kind != SectionKind::END) {
+            let p = if s.kind == SectionKind::HEADER {
+                h.write()
+            } else {
+                s.payload.to_vec()
+            };
+            w.section(s.kind, &p);
+        }
+        w.finish()
+    };
+    assert!(subwave::decode_slice(&with_header(&enc.header)).is_ok());
+    // An edge number the base mesh does not have (below the corner count, so only
+    // the base mesh can tell), and one past every corner.
+    for (e, what) in [
+        (enc.header.base_corners as u32 - 1, "not a base edge"),
+        (1000, "past"),
+    ] {
+        let mut h = enc.header.clone();
+        h.creases = vec![e];
+        match subwave::decode_slice(&with_header(&h)) {
+            Err(err) => assert!(err.to_string().contains(what), "{e}: {err}"),
+            Ok(_) => panic!("crease {e} decoded"),
+        }
+    }
 }
 
 #[test]
@@ -256,7 +388,7 @@ fn fits_near_the_coordinate_limit_keep_their_values_in_range() {
     let q = subwave::Quantization::Decimal { decimals: 0 };
     let enc = encode(&mesh, &q, TransformChoice::Fit);
     match enc.header.transform {
-        Transform::Fit { bits } => assert!(bits <= 6, "{bits}"),
+        Transform::Fit { bits, .. } => assert!(bits <= 6, "{bits}"),
         t => panic!("expected a fit, got {}", t.name()),
     }
     assert_exact(&enc.bytes, &mesh, "near 2^44");

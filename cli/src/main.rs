@@ -948,8 +948,17 @@ fn print_info(info: &subwave::Info, as_json: bool) {
         println!("disc transform  {}", h.disc.name());
     }
     match h.transform {
-        subwave::Transform::Fit { bits } => {
-            println!("transform       fit (control values with {bits} extra bits)")
+        subwave::Transform::Fit { bits, limit } => {
+            let rules = match (limit, h.creases.len()) {
+                (false, 0) => String::new(),
+                (true, 0) => ", limit surface".to_string(),
+                (l, n) => format!(
+                    ", {n} creased base edge{}{}",
+                    if n == 1 { "" } else { "s" },
+                    if l { ", limit surface" } else { "" }
+                ),
+            };
+            println!("transform       fit (control values with {bits} extra bits{rules})")
         }
         t => println!("transform       {}", t.name()),
     }

@@ -209,7 +209,7 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
     let mut mesh = match h.transform {
         _ if h.levels == 0 => base,
         Transform::Wavelet(w) => synthesise_levels(&c, &h, base, w, level)?,
-        Transform::Fit { bits } => synthesise_fit(&c, &h, base, bits, level)?,
+        Transform::Fit { bits, limit } => synthesise_fit(&c, &h, base, (bits, limit), level)?,
         Transform::None => return Err(Error::Unsupported("levels without a transform".into())),
     };
     if let Some(m) = &vmap {
@@ -551,16 +551,29 @@ fn coarse_mesh(h: &Header, w: Wavelet, upto: u8, x: &[Vec<i64>; 3], topo: Topo) 
 }
 
 /// Rebuilds levels 1..=`upto` of a subdivision fit (SPEC.md 9.10, 10.4): the control
-/// values refined in integers, rounded to the grid, and at the finest level the
-/// residuals added.
-fn synthesise_fit(c: &Container<'_>, h: &Header, base: Mesh, bits: u8, upto: u8) -> Result<Mesh> {
+/// values refined in integers (with the header's creases; placed on the limit surface
+/// when `limit`), rounded to the grid, and at the finest level the residuals added.
+fn synthesise_fit(
+    c: &Container<'_>,
+    h: &Header,
+    base: Mesh,
+    (bits, limit): (u8, bool),
+    upto: u8,
+) -> Result<Mesh> {
     let mut topo = Topo::new(base.vertex_count());
     topo.idx = base.faces;
     topo.starts = base.face_starts;
     let mut x: [Vec<i64>; 3] =
         std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect());
+    let mut level = Level::new(&topo)?;
+    let mut sharp = vec![false; if h.creases.is_empty() { 0 } else { level.ne() }];
+    for &e in &h.creases {
+        *sharp
+            .get_mut(e as usize)
+            .ok_or_else(|| Error::corrupt("HEAD", format!("crease {e} is not a base edge")))? =
+            true;
+    }
     for l in 0..upto as usize {
-        let level = Level::new(&topo)?;
         check_refinement_size(h, level.fine_nv(), level.fine_faces_with(&[]))?;
         if l + 1 < h.levels as usize && !c.sections[2 + l].payload.is_empty() {
             return Err(
@@ -569,10 +582,18 @@ fn synthesise_fit(c: &Container<'_>, h: &Header, base: Mesh, bits: u8, upto: u8)
             );
         }
         for xs in x.iter_mut() {
-            fit::subdivide(&level, xs);
+            fit::subdivide(&level, &sharp, xs);
         }
-        topo = level.fine();
+        let fine = level.next();
+        sharp = fit::sharp_below(&level, &sharp, &fine);
+        level = fine;
     }
+    if limit {
+        for xs in x.iter_mut() {
+            fit::place_on_limit(&level, &sharp, xs);
+        }
+    }
+    let topo = level.coarse;
     if upto == h.levels {
         check_finest_counts(h, &topo)?;
         let s = &c.sections[1 + upto as usize];

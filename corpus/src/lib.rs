@@ -7,7 +7,7 @@
 // Numeric kernels index several arrays (axes, positions, weights) in lockstep.
 #![allow(clippy::needless_range_loop)]
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::fmt::Write;
 
 /// A polygon mesh with `f64` positions.
@@ -55,6 +55,18 @@ impl PolyMesh {
     /// Positions follow the Catmull-Clark rules (boundary edges and vertices use the
     /// cubic B-spline curve rules).
     pub fn catmull_clark(&self) -> PolyMesh {
+        self.catmull_clark_creased(&HashSet::new()).0
+    }
+
+    /// One Catmull-Clark step with infinitely sharp edges (`creases`, as ordered pairs
+    /// `(min, max)`): a creased edge's point is its midpoint, a vertex with two hard
+    /// (boundary or creased) edges takes the curve rule along them, one with more
+    /// keeps its place. Also returns the creased edges of the result (both halves of
+    /// each creased edge).
+    pub fn catmull_clark_creased(
+        &self,
+        creases: &HashSet<(u32, u32)>,
+    ) -> (PolyMesh, HashSet<(u32, u32)>) {
         let nv = self.positions.len();
         let mut edge_id: HashMap<(u32, u32), usize> = HashMap::new();
         let mut edges: Vec<(u32, u32)> = Vec::new();
@@ -79,10 +91,11 @@ impl PolyMesh {
             .collect();
         let mut pos = vec![[0.0; 3]; nv + ne + self.faces.len()];
         let boundary_edge = |e: usize| edge_faces[e].len() < 2;
+        let hard_edge = |e: usize| boundary_edge(e) || creases.contains(&edges[e]);
         for (e, &(a, b)) in edges.iter().enumerate() {
             let pa = self.positions[a as usize];
             let pb = self.positions[b as usize];
-            pos[nv + e] = if boundary_edge(e) {
+            pos[nv + e] = if hard_edge(e) {
                 mean([pa, pb].into_iter())
             } else {
                 mean([pa, pb, face_pt[edge_faces[e][0]], face_pt[edge_faces[e][1]]].into_iter())
@@ -105,11 +118,12 @@ impl PolyMesh {
             let bnd: Vec<usize> = v_edges[v]
                 .iter()
                 .copied()
-                .filter(|&e| boundary_edge(e))
+                .filter(|&e| hard_edge(e))
                 .collect();
+            let on_boundary = v_edges[v].iter().any(|&e| boundary_edge(e));
             pos[v] = if v_edges[v].is_empty() {
                 p
-            } else if !bnd.is_empty() {
+            } else if on_boundary || bnd.len() >= 2 {
                 if bnd.len() == 2 {
                     let mut s = [0.0; 3];
                     for &e in &bnd {
@@ -148,10 +162,104 @@ impl PolyMesh {
                 faces.push(vec![f[i], e_of(i), fp, e_of((i + k - 1) % k)]);
             }
         }
-        PolyMesh {
-            positions: pos,
-            faces,
+        let below = creases
+            .iter()
+            .flat_map(|&(a, b)| {
+                let mid = (nv + edge_id[&(a, b)]) as u32;
+                [(a.min(mid), a.max(mid)), (b.min(mid), b.max(mid))]
+            })
+            .collect();
+        (
+            PolyMesh {
+                positions: pos,
+                faces,
+            },
+            below,
+        )
+    }
+
+    /// The subdivision surface as modelling tools write it: `levels` Catmull-Clark
+    /// steps with the infinitely sharp `creases` (vertex pairs of this mesh), then,
+    /// when `limit`, every vertex moved to the limit surface: inside, with `n` edges,
+    /// `(n^2 v + 4 sum of neighbours + sum of the opposite corners of its quads) /
+    /// (n (n + 5))`; on a crease or boundary (two hard edges to `a`, `b`) `(a + 4 v +
+    /// b) / 6`; elsewhere kept. A float reference for the codec's integer rules.
+    pub fn subdivision_surface(&self, levels: u32, creases: &[[u32; 2]], limit: bool) -> PolyMesh {
+        let mut sharp: HashSet<(u32, u32)> =
+            creases.iter().map(|&[a, b]| (a.min(b), a.max(b))).collect();
+        let mut m = self.clone();
+        for _ in 0..levels {
+            (m, sharp) = m.catmull_clark_creased(&sharp);
         }
+        if limit {
+            m.positions = m.limit_positions(&sharp);
+        }
+        m
+    }
+
+    /// The limit positions of [`PolyMesh::subdivision_surface`].
+    fn limit_positions(&self, sharp: &HashSet<(u32, u32)>) -> Vec<[f64; 3]> {
+        let nv = self.positions.len();
+        let mut edge_faces: HashMap<(u32, u32), usize> = HashMap::new();
+        let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); nv];
+        let mut opposite: Vec<Vec<Option<u32>>> = vec![Vec::new(); nv];
+        for f in &self.faces {
+            let k = f.len();
+            for i in 0..k {
+                let (a, b) = (f[i], f[(i + 1) % k]);
+                let n = edge_faces.entry((a.min(b), a.max(b))).or_insert(0);
+                if *n == 0 {
+                    neighbours[a as usize].push(b);
+                    neighbours[b as usize].push(a);
+                }
+                *n += 1;
+                opposite[f[i] as usize].push((k == 4).then(|| f[(i + 2) % 4]));
+            }
+        }
+        (0..nv)
+            .map(|v| {
+                let p = self.positions[v];
+                let key = |o: u32| (o.min(v as u32), o.max(v as u32));
+                let boundary = neighbours[v].iter().any(|&o| edge_faces[&key(o)] < 2);
+                let hard: Vec<u32> = neighbours[v]
+                    .iter()
+                    .copied()
+                    .filter(|&o| edge_faces[&key(o)] < 2 || sharp.contains(&key(o)))
+                    .collect();
+                let n = neighbours[v].len();
+                if hard.len() == 2 {
+                    let (a, b) = (
+                        self.positions[hard[0] as usize],
+                        self.positions[hard[1] as usize],
+                    );
+                    [0, 1, 2].map(|k| (a[k] + 4.0 * p[k] + b[k]) / 6.0)
+                } else if hard.len() <= 1
+                    && !boundary
+                    && n >= 3
+                    && opposite[v].len() == n
+                    && opposite[v].iter().all(Option::is_some)
+                {
+                    let nf = n as f64;
+                    let mut s = [0.0; 3];
+                    for k in 0..3 {
+                        s[k] = nf * nf * p[k];
+                    }
+                    for &o in &neighbours[v] {
+                        for k in 0..3 {
+                            s[k] += 4.0 * self.positions[o as usize][k];
+                        }
+                    }
+                    for d in opposite[v].iter().flatten() {
+                        for k in 0..3 {
+                            s[k] += self.positions[*d as usize][k];
+                        }
+                    }
+                    s.map(|x| x / (nf * (nf + 5.0)))
+                } else {
+                    p
+                }
+            })
+            .collect()
     }
 
     /// One sqrt(2) step of a closed mesh: every vertex kept, a face point at each face's
@@ -526,6 +634,17 @@ pub fn mixed_polygons() -> PolyMesh {
     PolyMesh { positions, faces }
 }
 
+/// A folded sheet as a modeller makes one: a 5 x 4 grid of quads bent into a tent along
+/// its third column of vertices, and that fold's four edges (to crease).
+pub fn folded_sheet() -> (PolyMesh, Vec<[u32; 2]>) {
+    let mut control = open_grid(5, 4);
+    for p in &mut control.positions {
+        p[2] = 0.5 * (p[0] - 0.4).abs() + 0.1 * (3.0 * p[1]).sin();
+    }
+    let fold = (0..4u32).map(|y| [y * 6 + 2, (y + 1) * 6 + 2]).collect();
+    (control, fold)
+}
+
 /// An open quad strip with a boundary: `w x h` quads.
 pub fn open_grid(w: u32, h: u32) -> PolyMesh {
     let mut positions = Vec::new();
@@ -679,6 +798,11 @@ pub fn small_corpus() -> Vec<(&'static str, Vec<u8>)> {
     let mut textured = cube().refined(3);
     textured.displace(0.05, 0.002, &mut rng);
     out.push(("textured_cc3.obj", textured.to_obj_textured().into_bytes()));
+    // A subdivision surface as modelling tools write it: the folded sheet's fold
+    // creased, three levels, every vertex on the limit surface (SPEC.md 9.10).
+    let (sheet, fold) = folded_sheet();
+    let surface = sheet.subdivision_surface(3, &fold, true);
+    out.push(("limit_creased_cc3.obj", surface.to_obj(6).into_bytes()));
     out
 }
 

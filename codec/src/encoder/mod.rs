@@ -1,8 +1,10 @@
 //! The encoder: options, the container it writes, and the order it keeps (SPEC.md 2, 7).
 //! Which hierarchy and transform codes smallest is the search's ([`search`]).
 
+mod fitting;
 mod search;
 
+pub(crate) use fitting::*;
 pub(crate) use search::*;
 
 use std::collections::HashMap;
@@ -291,6 +293,7 @@ pub(crate) fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -
         has_corner_indices: false,
         has_normals: false,
         poles: Vec::new(),
+        creases: Vec::new(),
         disc: DiscTransform::None,
     }
 }

@@ -128,89 +128,12 @@ pub(crate) fn hierarchy_base(
     (header, base::encode(&base))
 }
 
-/// Mean [`fit::defect`] over the axes of the finest level above which `auto` does not
-/// try the fit: rounded subdivision gives about 70 / 12 (the variance of the rounding
-/// noise it sums), fitted detail far more.
-pub(crate) const FIT_SCREEN: f64 = 12.0;
-
-/// The least-squares fit stops when no control value moves by more than this (units of
-/// the grid): far below the 2^-10 of the finest precision tried.
-pub(crate) const FIT_TOLERANCE: f64 = 1e-5;
-
 /// No bound on a hierarchy coding's size ([`code_hierarchy`]).
 pub(crate) const UNBOUNDED: usize = usize::MAX;
 
 /// `auto` codes the best-ranked other transform of a family in every mode when its
 /// ranking size is below this many hundredths of the first transform's size.
 pub(crate) const RANK_MARGIN: usize = 103;
-
-/// Extra bits `auto` tries for the fit's control values.
-pub(crate) const FIT_BITS: [u8; 3] = [6, 8, 10];
-
-/// Codes a Catmull-Clark hierarchy as a subdivision fit (SPEC.md 9.10): the control
-/// values from least squares, then for each precision in `bits` the integer subdivision
-/// and the residuals; the smallest coding (B = 0 when no precision in `bits` keeps the
-/// values in range). `None` when `screen` is set and the finest level is far from any
-/// subdivision.
-pub(crate) fn code_fit(
-    canon: &Canonical,
-    pos: &[Vec<i64>; 3],
-    header: &Header,
-    bits: &[u8],
-    screen: bool,
-) -> Option<Payloads> {
-    let last = canon.levels.last()?;
-    if !canon.poles.is_empty() {
-        return None;
-    }
-    if screen {
-        let d: f64 = pos
-            .iter()
-            .map(|x| fit::defect(last, x).unwrap_or(f64::MAX))
-            .sum();
-        if d / 3.0 > FIT_SCREEN {
-            return None;
-        }
-    }
-    let nb = canon.base.nv;
-    let op = fit::Operator::new(&canon.levels);
-    let fine: Vec<[f64; 3]> = (0..pos[0].len())
-        .map(|i| std::array::from_fn(|k| pos[k][i] as f64))
-        .collect();
-    let control = op.fit(&fine, &fine[..nb], 400, FIT_TOLERANCE);
-    let mut best: Option<Payloads> = None;
-    // B = 0 last, for values too large for any precision asked for.
-    for b in bits.iter().copied().chain([0]) {
-        if b == 0 && best.is_some() {
-            break;
-        }
-        let s = (1u64 << b) as f64;
-        let mut x: [Vec<i64>; 3] =
-            std::array::from_fn(|k| control.iter().map(|v| (v[k] * s).round() as i64).collect());
-        if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
-            continue;
-        }
-        let (mut h, base_bytes) = hierarchy_base(canon, &x, header);
-        for l in &canon.levels {
-            for xs in x.iter_mut() {
-                fit::subdivide(l, xs);
-            }
-        }
-        let mut level_bytes = vec![Vec::new(); canon.levels.len() - 1];
-        level_bytes.push(levl::fit::encode_residuals(&x, pos, b));
-        h.transform = Transform::Fit { bits: b };
-        let p = Payloads {
-            header: h,
-            base: base_bytes,
-            levels: level_bytes,
-            order: None,
-        };
-        if best.as_ref().is_none_or(|q| p.size() < q.size()) {
-            best = Some(p);
-        }
-    }
-    best
-}
 
 /// A hierarchy's coding and the hierarchy.
 type Candidate = (Payloads, Canonical);

@@ -28,10 +28,14 @@ pub enum Transform {
     /// A lifted wavelet on Catmull-Clark levels.
     Wavelet(Wavelet),
     /// The subdivision fit (SPEC.md 9.10): a control mesh with `bits` extra bits of
-    /// precision, refined by plain Catmull-Clark rules, and the finest values' residuals.
+    /// precision, refined by Catmull-Clark rules (with the header's creases), the
+    /// finest values placed on the limit surface when `limit`, and the finest values'
+    /// residuals.
     Fit {
         /// Extra bits of the control values, `0..=16`.
         bits: u8,
+        /// The finest values are the limit surface's (SPEC.md 9.10).
+        limit: bool,
     },
 }
 
@@ -145,6 +149,9 @@ pub struct Header {
     /// Polar hierarchies: the transform of the poles' discs (SPEC.md 9.9); `None` for
     /// every other family.
     pub disc: DiscTransform,
+    /// Subdivision fits: the base mesh's infinitely sharp edges (creases), numbered as
+    /// in SPEC.md 8.1, increasing; empty for every other transform.
+    pub creases: Vec<u32>,
 }
 
 const FLAG_ORDER: u64 = 1;
@@ -155,6 +162,10 @@ const FLAG_CORNER_INDICES: u64 = 16;
 const FLAG_NORMALS: u64 = 32;
 /// The transform code of the subdivision fit.
 const FIT_CODE: u8 = 9;
+/// Fit rules: the finest values are the limit surface's.
+const FIT_LIMIT: u8 = 1;
+/// Fit rules: a list of creased base edges ends the header.
+const FIT_CREASES: u8 = 2;
 
 impl Header {
     /// Serialises the header.
@@ -173,8 +184,9 @@ impl Header {
         w.u8(self.levels);
         w.u8(self.family.code());
         w.u8(self.transform.code());
-        if let Transform::Fit { bits } = self.transform {
+        if let Transform::Fit { bits, limit } = self.transform {
             w.u8(bits);
+            w.u8(u8::from(limit) | if self.creases.is_empty() { 0 } else { FIT_CREASES });
         }
         match self.quantization {
             Quantization::Decimal { decimals } => {
@@ -209,14 +221,11 @@ impl Header {
                 | flag(self.has_normals, FLAG_NORMALS),
         );
         if self.family == Family::Polar {
-            w.varint(self.poles.len() as u64);
-            let mut prev = 0u64;
-            for (i, &p) in self.poles.iter().enumerate() {
-                let p = p as u64;
-                w.varint(if i == 0 { p } else { p - prev - 1 });
-                prev = p;
-            }
+            write_increasing(&mut w, &self.poles);
             w.u8(self.disc.code());
+        }
+        if !self.creases.is_empty() {
+            write_increasing(&mut w, &self.creases);
         }
         w.out
     }
@@ -263,7 +272,7 @@ impl Header {
                 )))
             }
         };
-        let transform = read_transform(&mut r)?;
+        let (transform, creased) = read_transform(&mut r)?;
         let quantization = read_quantization(&mut r)?;
         let source = Source::from_code(r.u8("source format")?);
         let at = r.offset();
@@ -284,6 +293,12 @@ impl Header {
             read_poles(&mut r, base_vertices)?
         } else {
             (Vec::new(), DiscTransform::None)
+        };
+        // Fits with creases: the creased base edges, as gaps (SPEC.md 5).
+        let creases = if creased {
+            read_increasing(&mut r, "crease", base_corners)?
+        } else {
+            Vec::new()
         };
         r.finish("the header")?;
         let h = Header {
@@ -306,6 +321,7 @@ impl Header {
             has_normals: flags & FLAG_NORMALS != 0,
             poles,
             disc,
+            creases,
         };
         h.check(offset, limits)?;
         Ok(h)
@@ -431,11 +447,49 @@ fn malformed(offset: u64, what: impl Into<String>) -> Error {
     subwave_container::Error::malformed(offset, what).into()
 }
 
-/// The header's transform (SPEC.md 5).
-fn read_transform(r: &mut ByteReader<'_>) -> Result<Transform> {
+/// Writes increasing numbers as SPEC.md 5 lists poles and creases: the count, then the
+/// first number and each further one's gap less one.
+fn write_increasing(w: &mut ByteWriter, list: &[u32]) {
+    w.varint(list.len() as u64);
+    let mut prev = 0u64;
+    for (i, &p) in list.iter().enumerate() {
+        let p = p as u64;
+        w.varint(if i == 0 { p } else { p - prev - 1 });
+        prev = p;
+    }
+}
+
+/// Reads what [`write_increasing`] wrote: at least one and at most `bound` numbers,
+/// each below `bound`.
+fn read_increasing(r: &mut ByteReader<'_>, what: &'static str, bound: u64) -> Result<Vec<u32>> {
+    let n = r.varint(what)?;
+    if n == 0 || n > bound {
+        return Err(malformed(
+            r.offset(),
+            format!("{n} {what}s where at most {bound} can be"),
+        ));
+    }
+    let mut list = Vec::new();
+    let mut next = 0u64;
+    for _ in 0..n {
+        let p = next.saturating_add(r.varint(what)?);
+        if p >= bound {
+            return Err(malformed(
+                r.offset(),
+                format!("{what} {p} is past {bound}"),
+            ));
+        }
+        list.push(p as u32);
+        next = p + 1;
+    }
+    Ok(list)
+}
+
+/// The header's transform (SPEC.md 5), and for a fit whether creases end the header.
+fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, bool)> {
     let at = r.offset();
     Ok(match r.u8("transform")? {
-        0 => Transform::None,
+        0 => (Transform::None, false),
         FIT_CODE => {
             let at = r.offset();
             let bits = r.u8("fit precision")?;
@@ -445,10 +499,18 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<Transform> {
                     format!("a fit with {bits} extra bits, at most 16"),
                 ));
             }
-            Transform::Fit { bits }
+            let at = r.offset();
+            let rules = r.u8("fit rules")?;
+            if rules & !(FIT_LIMIT | FIT_CREASES) != 0 {
+                return Err(Error::Unsupported(format!(
+                    "fit rules {rules:#x} (byte {at})"
+                )));
+            }
+            let limit = rules & FIT_LIMIT != 0;
+            (Transform::Fit { bits, limit }, rules & FIT_CREASES != 0)
         }
         t => match Wavelet::from_code(t) {
-            Some(w) => Transform::Wavelet(w),
+            Some(w) => (Transform::Wavelet(w), false),
             _ => {
                 return Err(Error::Unsupported(format!(
                     "transform code {t} (byte {at})"
@@ -509,26 +571,7 @@ fn read_quantization(r: &mut ByteReader<'_>) -> Result<Quantization> {
 
 /// A polar hierarchy's poles, as gaps, and its discs' transform (SPEC.md 5).
 fn read_poles(r: &mut ByteReader<'_>, base_vertices: u64) -> Result<(Vec<u32>, DiscTransform)> {
-    let n = r.varint("pole count")?;
-    if n == 0 || n > base_vertices {
-        return Err(malformed(
-            r.offset(),
-            format!("{n} poles for {base_vertices} base vertices"),
-        ));
-    }
-    let mut poles = Vec::new();
-    let mut next = 0u64;
-    for _ in 0..n {
-        let p = next.saturating_add(r.varint("pole")?);
-        if p >= base_vertices {
-            return Err(malformed(
-                r.offset(),
-                format!("pole {p} is not a base vertex"),
-            ));
-        }
-        poles.push(p as u32);
-        next = p + 1;
-    }
+    let poles = read_increasing(r, "pole", base_vertices)?;
     let at = r.offset();
     let code = r.u8("disc transform")?;
     let disc = DiscTransform::from_code(code).ok_or_else(|| {

@@ -1,12 +1,15 @@
 //! The subdivision fit (SPEC.md 9.10): a Catmull-Clark hierarchy whose finest positions
-//! are plain Catmull-Clark subdivision of a control mesh, rounded to the grid ("a
-//! subdivided model"), is coded as that control mesh at `k` extra bits of precision
-//! plus, per finest vertex, the difference between its value and the control mesh's
-//! subdivision, computed in integers and rounded.
+//! are Catmull-Clark subdivision of a control mesh, rounded to the grid ("a subdivided
+//! model"), is coded as that control mesh at `k` extra bits of precision plus, per
+//! finest vertex, the difference between its value and the control mesh's subdivision,
+//! computed in integers and rounded. The subdivision follows [`Rules`]: plain
+//! refinement, or, as modelling tools write it (Blender's Subdivision Surface,
+//! OpenSubdiv), with infinitely sharp creases and with the finest points placed on the
+//! limit surface.
 //!
 //! The encoder finds the control mesh by least squares in floating point (any values
 //! serve: the decoder only repeats the integer subdivision); the decoder runs only the
-//! integer rules of [`subdivide`].
+//! integer rules of [`subdivide`] and [`place_on_limit`].
 
 use crate::topology::Level;
 use crate::transform::round_div;
@@ -14,37 +17,88 @@ use crate::transform::round_div;
 /// Most extra bits of precision the control values may carry (SPEC.md 9.10).
 pub const MAX_EXTRA_BITS: u8 = 16;
 
+/// The rules a fit's subdivision follows (SPEC.md 9.10).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Rules {
+    /// The finest values are placed on the limit surface (the limit masks of 9.10).
+    pub limit: bool,
+    /// Per base edge, whether it is an infinitely sharp crease; empty: none is.
+    pub sharp: Vec<bool>,
+}
+
 /// Which vertex rule of SPEC.md 9.10 coarse vertex `v` takes.
 enum VertexRule {
-    /// Exactly two boundary edges, to these vertices.
-    Boundary([u32; 2]),
-    /// No boundary edge, at least three edges and as many face corners.
+    /// Exactly two hard edges (boundary or sharp), to these vertices.
+    Crease([u32; 2]),
+    /// No boundary edge, at most one sharp edge (a dart), at least three edges and as
+    /// many face corners.
     Inside,
     /// Anything else: the value is kept.
     Kept,
 }
 
-fn vertex_rule(level: &Level, v: usize) -> VertexRule {
-    match level.boundary_edges(v) {
-        (2, be) => VertexRule::Boundary(be.map(|e| level.other_end(e, v))),
-        (0, _)
-            if level.v_edges(v).len() >= 3 && level.v_faces(v).len() == level.v_edges(v).len() =>
-        {
-            VertexRule::Inside
+#[inline]
+fn is_sharp(sharp: &[bool], e: u32) -> bool {
+    sharp.get(e as usize).copied().unwrap_or(false)
+}
+
+fn vertex_rule(level: &Level, v: usize, sharp: &[bool]) -> VertexRule {
+    let (mut hard, mut boundary, mut ends) = (0usize, false, [0u32; 2]);
+    for &e in level.v_edges(v) {
+        let b = level.is_boundary(e as usize);
+        if b || is_sharp(sharp, e) {
+            if hard < 2 {
+                ends[hard] = level.other_end(e, v);
+            }
+            hard += 1;
+            boundary |= b;
         }
+    }
+    let n = level.v_edges(v).len();
+    match hard {
+        2 => VertexRule::Crease(ends),
+        0 | 1 if !boundary && n >= 3 && level.v_faces(v).len() == n => VertexRule::Inside,
         _ => VertexRule::Kept,
     }
 }
 
-/// One plain Catmull-Clark refinement in integers (SPEC.md 9.10): `x` holds the
-/// coarse values (`level.nv`) and gets the fine ones (`level.fine_nv()`), every rule
-/// rounded with `[n / d]`:
+/// The two halves in `fine` (the level after `level`, `level.next()`) of `level`'s
+/// edge `e`: the fine edges from each end to the edge point.
+pub fn halves<'a>(level: &Level, e: usize, fine: &'a Level) -> impl Iterator<Item = u32> + 'a {
+    let mid = (level.nv + e) as u32;
+    level.edges[e].into_iter().filter_map(move |end| {
+        fine.v_edges(end as usize)
+            .iter()
+            .copied()
+            .find(|&h| fine.other_end(h, end as usize) == mid)
+    })
+}
+
+/// The sharp edges of `fine` (the level after `level`): both halves of every sharp
+/// edge of `level`; empty when none is sharp.
+pub fn sharp_below(level: &Level, sharp: &[bool], fine: &Level) -> Vec<bool> {
+    if !sharp.contains(&true) {
+        return Vec::new();
+    }
+    let mut out = vec![false; fine.ne()];
+    for e in (0..level.ne()).filter(|&e| sharp[e]) {
+        for h in halves(level, e, fine) {
+            out[h as usize] = true;
+        }
+    }
+    out
+}
+
+/// One Catmull-Clark refinement in integers (SPEC.md 9.10): `x` holds the coarse
+/// values (`level.nv`) and gets the fine ones (`level.fine_nv()`), every rule rounded
+/// with `[n / d]`; `sharp` flags `level`'s creased edges (empty: none):
 /// * face point: `[sum of corners / k]`;
-/// * edge point: `[(a + b + f0 + f1) / 4]` inside, `[(a + b) / 2]` on a boundary;
+/// * edge point: `[(a + b + f0 + f1) / 4]` inside, `[(a + b) / 2]` on a boundary or a
+///   crease;
 /// * vertex, inside, `n` edges: `[(n (n - 2) v + sum of neighbours + sum of the face
-///   points of its faces) / n^2]`; on a boundary with two boundary edges to `a`, `b`:
+///   points of its faces) / n^2]`; with two hard (boundary or sharp) edges to `a`, `b`:
 ///   `[(a + 6 v + b) / 8]`; otherwise (a corner, or a vertex with no faces) unchanged.
-pub fn subdivide(level: &Level, x: &mut Vec<i64>) {
+pub fn subdivide(level: &Level, sharp: &[bool], x: &mut Vec<i64>) {
     let (nv, ne) = (level.nv, level.ne());
     x.resize(level.fine_nv(), 0);
     for f in 0..level.nf() {
@@ -54,7 +108,7 @@ pub fn subdivide(level: &Level, x: &mut Vec<i64>) {
     }
     for (e, &[a, b]) in level.edges.iter().enumerate() {
         let ends = x[a as usize] as i128 + x[b as usize] as i128;
-        x[nv + e] = if level.is_boundary(e) {
+        x[nv + e] = if level.is_boundary(e) || is_sharp(sharp, e as u32) {
             round_div(ends, 2)
         } else {
             let [f0, f1] = level.edge_faces[e];
@@ -64,16 +118,16 @@ pub fn subdivide(level: &Level, x: &mut Vec<i64>) {
             )
         };
     }
-    let moved: Vec<i64> = (0..nv).map(|v| moved_vertex(level, v, x)).collect();
+    let moved: Vec<i64> = (0..nv).map(|v| moved_vertex(level, v, sharp, x)).collect();
     x[..nv].copy_from_slice(&moved);
 }
 
 /// The vertex rule of [`subdivide`] for coarse vertex `v` (its neighbours still
 /// coarse, the face points already written).
-fn moved_vertex(level: &Level, v: usize, x: &[i64]) -> i64 {
+fn moved_vertex(level: &Level, v: usize, sharp: &[bool], x: &[i64]) -> i64 {
     let xv = x[v] as i128;
-    match vertex_rule(level, v) {
-        VertexRule::Boundary([a, b]) => {
+    match vertex_rule(level, v, sharp) {
+        VertexRule::Crease([a, b]) => {
             round_div(x[a as usize] as i128 + 6 * xv + x[b as usize] as i128, 8)
         }
         VertexRule::Kept => x[v],
@@ -93,9 +147,71 @@ fn moved_vertex(level: &Level, v: usize, x: &[i64]) -> i64 {
     }
 }
 
+/// The corner of face `f` of `level` opposite vertex `v` (two places on), for a quad;
+/// `None` for any other face.
+fn opposite(level: &Level, f: u32, v: usize) -> Option<u32> {
+    let face = level.coarse.face(f as usize);
+    let i = face.iter().position(|&c| c as usize == v)?;
+    (face.len() == 4).then(|| face[(i + 2) % 4])
+}
+
+/// The limit weights of vertex `v` of `level` (whose coarse mesh is the finest one),
+/// as `(vertex, weight)` over a common denominator: `None` where the value is kept.
+fn limit_mask(level: &Level, v: usize, sharp: &[bool]) -> Option<(Vec<(u32, i128)>, i128)> {
+    match vertex_rule(level, v, sharp) {
+        VertexRule::Crease([a, b]) => Some((vec![(a, 1), (v as u32, 4), (b, 1)], 6)),
+        VertexRule::Kept => None,
+        VertexRule::Inside => {
+            let edges = level.v_edges(v);
+            let n = edges.len() as i128;
+            let mut w = vec![(v as u32, n * n)];
+            for &e in edges {
+                w.push((level.other_end(e, v), 4));
+            }
+            for &f in level.v_faces(v) {
+                w.push((opposite(level, f, v)?, 1));
+            }
+            Some((w, n * (n + 5)))
+        }
+    }
+}
+
+/// Places refined values on the limit surface (SPEC.md 9.10): `level` is the level
+/// whose coarse mesh is the finest one (its faces quads), `sharp` its creased edges.
+/// Inside, a vertex of `n` edges becomes `[(n^2 v + 4 sum of neighbours + sum of the
+/// opposite corners of its faces) / (n (n + 5))]`; with two hard edges to `a`, `b`,
+/// `[(a + 4 v + b) / 6]`; otherwise (or beside a face that is not a quad) it is kept.
+pub fn place_on_limit(level: &Level, sharp: &[bool], x: &mut [i64]) {
+    let placed: Vec<i64> = (0..level.nv)
+        .map(|v| match limit_mask(level, v, sharp) {
+            Some((w, d)) => round_div(w.iter().map(|&(u, c)| c * x[u as usize] as i128).sum(), d),
+            None => x[v],
+        })
+        .collect();
+    x[..level.nv].copy_from_slice(&placed);
+}
+
+/// The whole refinement of `rules` over `levels` (coarsest first), per axis: `x` holds
+/// the control values and gets the finest ones. `finest` is the level after the last
+/// (`levels.last().next()`), whose coarse mesh is the finest one.
+pub fn refine(levels: &[Level], finest: &Level, rules: &Rules, x: &mut [Vec<i64>; 3]) {
+    let mut sharp = rules.sharp.clone();
+    for (i, l) in levels.iter().enumerate() {
+        for xs in x.iter_mut() {
+            subdivide(l, &sharp, xs);
+        }
+        sharp = sharp_below(l, &sharp, levels.get(i + 1).unwrap_or(finest));
+    }
+    if rules.limit {
+        for xs in x.iter_mut() {
+            place_on_limit(finest, &sharp, xs);
+        }
+    }
+}
+
 /// The same refinement in floating point, without rounding, as a linear map: the
 /// weights of fine vertex `i` on coarse vertices, as `(coarse, weight)` rows.
-fn rows(level: &Level) -> Vec<Vec<(u32, f64)>> {
+fn rows(level: &Level, sharp: &[bool]) -> Vec<Vec<(u32, f64)>> {
     let (nv, ne) = (level.nv, level.ne());
     let mut rows: Vec<Vec<(u32, f64)>> = vec![Vec::new(); level.fine_nv()];
     for f in 0..level.nf() {
@@ -104,7 +220,7 @@ fn rows(level: &Level) -> Vec<Vec<(u32, f64)>> {
         rows[nv + ne + f] = face.iter().map(|&v| (v, w)).collect();
     }
     for (e, &[a, b]) in level.edges.iter().enumerate() {
-        rows[nv + e] = if level.is_boundary(e) {
+        rows[nv + e] = if level.is_boundary(e) || is_sharp(sharp, e as u32) {
             vec![(a, 0.5), (b, 0.5)]
         } else {
             let mut r = vec![(a, 0.25), (b, 0.25)];
@@ -117,8 +233,8 @@ fn rows(level: &Level) -> Vec<Vec<(u32, f64)>> {
         };
     }
     for v in 0..nv {
-        rows[v] = match vertex_rule(level, v) {
-            VertexRule::Boundary([a, b]) => vec![(a, 0.125), (v as u32, 0.75), (b, 0.125)],
+        rows[v] = match vertex_rule(level, v, sharp) {
+            VertexRule::Crease([a, b]) => vec![(a, 0.125), (v as u32, 0.75), (b, 0.125)],
             VertexRule::Kept => vec![(v as u32, 1.0)],
             VertexRule::Inside => {
                 let edges = level.v_edges(v);
@@ -154,28 +270,41 @@ pub struct Operator {
 }
 
 impl Operator {
-    /// The composed refinement of `levels` (coarsest first).
-    pub fn new(levels: &[Level]) -> Operator {
-        let levels = levels
-            .iter()
-            .map(|l| {
-                let mut m = Csr {
-                    starts: vec![0],
-                    cols: Vec::new(),
-                    weights: Vec::new(),
-                    coarse: l.nv,
-                };
-                for row in rows(l) {
-                    for (c, w) in row {
-                        m.cols.push(c);
-                        m.weights.push(w);
-                    }
-                    m.starts.push(m.cols.len() as u32);
+    /// The composed refinement of `rules` over `levels` (coarsest first), `finest` the
+    /// level after the last.
+    pub fn new(levels: &[Level], finest: &Level, rules: &Rules) -> Operator {
+        let csr = |rows: Vec<Vec<(u32, f64)>>, coarse: usize| {
+            let mut m = Csr {
+                starts: vec![0],
+                cols: Vec::new(),
+                weights: Vec::new(),
+                coarse,
+            };
+            for row in rows {
+                for (c, w) in row {
+                    m.cols.push(c);
+                    m.weights.push(w);
                 }
-                m
-            })
-            .collect();
-        Operator { levels }
+                m.starts.push(m.cols.len() as u32);
+            }
+            m
+        };
+        let mut out = Vec::with_capacity(levels.len() + 1);
+        let mut sharp = rules.sharp.clone();
+        for (i, l) in levels.iter().enumerate() {
+            out.push(csr(rows(l, &sharp), l.nv));
+            sharp = sharp_below(l, &sharp, levels.get(i + 1).unwrap_or(finest));
+        }
+        if rules.limit {
+            let limit = (0..finest.nv)
+                .map(|v| match limit_mask(finest, v, &sharp) {
+                    Some((w, d)) => w.iter().map(|&(u, c)| (u, c as f64 / d as f64)).collect(),
+                    None => vec![(v as u32, 1.0)],
+                })
+                .collect();
+            out.push(csr(limit, finest.nv));
+        }
+        Operator { levels: out }
     }
 
     /// Finest values from control values (three axes at once).
@@ -222,14 +351,23 @@ impl Operator {
 
     /// The control values whose refinement is nearest `fine` in least squares, each
     /// axis on its own (conjugate gradients on the normal equations, from `start`),
-    /// stopping after `iterations` or once no value moves by more than `tolerance`.
+    /// stopping after `iterations` or once no value moves by more than `tolerance`;
+    /// finest vertices where `ignored` is set (if any) do not count.
     pub fn fit(
         &self,
         fine: &[[f64; 3]],
         start: &[[f64; 3]],
+        ignored: &[bool],
         iterations: usize,
         tolerance: f64,
     ) -> Vec<[f64; 3]> {
+        // A^T W v, W zero at the ignored vertices.
+        let apply_tw = |mut v: Vec<[f64; 3]>| {
+            for (x, _) in v.iter_mut().zip(ignored).filter(|(_, &i)| i) {
+                *x = [0.0; 3];
+            }
+            self.apply_t(&v)
+        };
         let dot = |a: &[[f64; 3]], b: &[[f64; 3]]| {
             let mut s = [0.0; 3];
             for (u, v) in a.iter().zip(b) {
@@ -246,7 +384,7 @@ impl Operator {
             .zip(&ab)
             .map(|(y, p)| std::array::from_fn(|k| y[k] - p[k]))
             .collect();
-        let mut r = self.apply_t(&resid);
+        let mut r = apply_tw(resid);
         let mut p = r.clone();
         let mut rr = dot(&r, &r);
         // Axes still iterating.
@@ -258,7 +396,7 @@ impl Operator {
             if !live.contains(&true) {
                 break;
             }
-            let q = self.apply_t(&self.apply(&p));
+            let q = apply_tw(self.apply(&p));
             let pq = dot(&p, &q);
             let mut alpha = [0.0; 3];
             for k in 0..3 {
@@ -320,6 +458,75 @@ pub fn defect(level: &Level, x: &[i64]) -> Option<f64> {
     (n > 0).then(|| sum / n as f64)
 }
 
+/// How far the finest values are from any Catmull-Clark surface, refined or on the
+/// limit: the median, over runs of five finest vertices along a line through regular
+/// (four-edge, four-quad, inside) vertices within the closed domain of one level-1
+/// face, of the square of the run's fourth difference `x0 - 4 x1 + 6 x2 - 4 x3 + x4`.
+/// Inside a regular patch the surface is a bicubic, so both its refined control points
+/// and its limit points make cubic runs whose fourth difference is only the rounding's
+/// (about 70 / 12 in variance, a median square near 3); detail makes it far larger.
+/// `levels` is the hierarchy, `finest` the level after its last; `None` without such
+/// runs (fewer than three levels).
+pub fn roughness(levels: &[Level], finest: &Level, x: &[i64]) -> Option<f64> {
+    // The level-1 face each finest face lies in (faces are numbered by their coarse
+    // face's corners, SPEC.md 8.1).
+    let mut piece: Vec<u32> = (0..levels.first()?.coarse.idx.len() as u32).collect();
+    for l in &levels[1..] {
+        let mut next = vec![0u32; l.coarse.idx.len()];
+        for (f, &p) in piece.iter().enumerate() {
+            let (a, b) = (l.coarse.starts[f] as usize, l.coarse.starts[f + 1] as usize);
+            next[a..b].fill(p);
+        }
+        piece = next;
+    }
+    let in_piece = |v: usize, p: u32| finest.v_faces(v).iter().any(|&f| piece[f as usize] == p);
+    let regular = |v: usize| {
+        finest.v_edges(v).len() == 4
+            && finest.v_faces(v).len() == 4
+            && finest.v_edges(v).iter().all(|&e| !finest.is_boundary(e as usize))
+    };
+    // The edge of regular vertex v that shares no face with its edge e, and its end.
+    let beyond = |v: usize, e: u32| -> Option<(u32, usize)> {
+        let faces = finest.edge_faces[e as usize];
+        let o = *finest.v_edges(v).iter().find(|&&o| {
+            o != e && finest.edge_faces[o as usize].iter().all(|f| !faces.contains(f))
+        })?;
+        Some((o, finest.other_end(o, v) as usize))
+    };
+    let step = (finest.nv / 20_000).max(1);
+    let mut squares = Vec::new();
+    for v2 in (0..finest.nv).step_by(step).filter(|&v| regular(v)) {
+        for &e in &finest.v_edges(v2)[..2] {
+            let run = (|| {
+                let v1 = finest.other_end(e, v2) as usize;
+                let (e3, v3) = beyond(v2, e)?;
+                if !regular(v1) || !regular(v3) {
+                    return None;
+                }
+                let (_, v0) = beyond(v1, e)?;
+                let (_, v4) = beyond(v3, e3)?;
+                let run = [v0, v1, v2, v3, v4];
+                finest.v_faces(v2).iter().any(|&f| {
+                    run.iter().all(|&v| in_piece(v, piece[f as usize]))
+                }).then_some(run)
+            })();
+            if let Some(r) = run {
+                let d = [1i128, -4, 6, -4, 1]
+                    .iter()
+                    .zip(r)
+                    .map(|(&c, v)| c * x[v] as i128)
+                    .sum::<i128>() as f64;
+                squares.push(d * d);
+            }
+        }
+    }
+    if squares.is_empty() {
+        return None;
+    }
+    let mid = squares.len() / 2;
+    Some(*squares.select_nth_unstable_by(mid, f64::total_cmp).1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -371,18 +578,36 @@ mod tests {
             .collect()
     }
 
+    /// Every rule set of a hierarchy: plain, limit, creases (the base mesh's first
+    /// face's edges), both.
+    fn rule_sets(levels: &[Level]) -> Vec<Rules> {
+        let first = levels[0].f_edges(0).to_vec();
+        let sharp: Vec<bool> = (0..levels[0].ne() as u32).map(|e| first.contains(&e)).collect();
+        [false, true]
+            .into_iter()
+            .flat_map(|limit| {
+                [Vec::new(), sharp.clone()]
+                    .into_iter()
+                    .map(move |sharp| Rules { limit, sharp })
+            })
+            .collect()
+    }
+
     #[test]
     fn the_transpose_is_the_transpose() {
         for levels in hierarchies(2) {
-            let op = Operator::new(&levels);
-            let nb = levels[0].nv;
-            let nf = levels.last().unwrap().fine_nv();
-            let b = triples(&values(3 * nb, 1));
-            let y = triples(&values(3 * nf, 2));
-            for k in 0..3 {
-                let ab: f64 = op.apply(&b).iter().zip(&y).map(|(a, b)| a[k] * b[k]).sum();
-                let bt: f64 = b.iter().zip(op.apply_t(&y)).map(|(a, b)| a[k] * b[k]).sum();
-                assert!((ab - bt).abs() <= 1e-9 * ab.abs().max(1.0), "{ab} {bt}");
+            let finest = levels.last().unwrap().next();
+            for rules in rule_sets(&levels) {
+                let op = Operator::new(&levels, &finest, &rules);
+                let nb = levels[0].nv;
+                let nf = levels.last().unwrap().fine_nv();
+                let b = triples(&values(3 * nb, 1));
+                let y = triples(&values(3 * nf, 2));
+                for k in 0..3 {
+                    let ab: f64 = op.apply(&b).iter().zip(&y).map(|(a, b)| a[k] * b[k]).sum();
+                    let bt: f64 = b.iter().zip(op.apply_t(&y)).map(|(a, b)| a[k] * b[k]).sum();
+                    assert!((ab - bt).abs() <= 1e-9 * ab.abs().max(1.0), "{ab} {bt}");
+                }
             }
         }
     }
@@ -390,23 +615,33 @@ mod tests {
     #[test]
     fn integer_refinement_follows_the_linear_map() {
         // The rounded refinement stays within a unit per level of the exact one, so
-        // the integer rules and the weights the encoder fits with agree.
+        // the integer rules and the weights the encoder fits with agree, for every
+        // rule set; and the rule sets differ.
         for levels in hierarchies(3) {
-            let op = Operator::new(&levels);
+            let finest = levels.last().unwrap().next();
             let b = values(3 * levels[0].nv, 3);
-            let exact = op.apply(&triples(&b));
-            for k in 0..3 {
-                let mut x: Vec<i64> = b.iter().skip(k).step_by(3).copied().collect();
-                for l in &levels {
-                    subdivide(l, &mut x);
+            let mut outputs = Vec::new();
+            for rules in rule_sets(&levels) {
+                let op = Operator::new(&levels, &finest, &rules);
+                let exact = op.apply(&triples(&b));
+                let mut x: [Vec<i64>; 3] =
+                    std::array::from_fn(|k| b.iter().skip(k).step_by(3).copied().collect());
+                refine(&levels, &finest, &rules, &mut x);
+                for k in 0..3 {
+                    assert_eq!(x[k].len(), exact.len());
+                    for (i, (&a, e)) in x[k].iter().zip(&exact).enumerate() {
+                        assert!(
+                            (a as f64 - e[k]).abs() <= 4.0,
+                            "{rules:?} vertex {i}: {a} vs {}",
+                            e[k]
+                        );
+                    }
                 }
-                assert_eq!(x.len(), exact.len());
-                for (i, (&a, e)) in x.iter().zip(&exact).enumerate() {
-                    assert!(
-                        (a as f64 - e[k]).abs() <= 3.0,
-                        "vertex {i}: {a} vs {}",
-                        e[k]
-                    );
+                outputs.push(x);
+            }
+            for i in 0..outputs.len() {
+                for j in 0..i {
+                    assert_ne!(outputs[i], outputs[j], "rule sets {j} and {i}");
                 }
             }
         }
@@ -415,16 +650,60 @@ mod tests {
     #[test]
     fn least_squares_recovers_the_control_values() {
         for levels in hierarchies(2) {
-            let op = Operator::new(&levels);
-            let b = triples(&values(3 * levels[0].nv, 4));
-            let y = op.apply(&b);
-            let start = vec![[0.0; 3]; b.len()];
-            let got = op.fit(&y, &start, 400, 1e-9);
-            for (g, w) in got.iter().zip(&b) {
-                for k in 0..3 {
-                    assert!((g[k] - w[k]).abs() < 1e-3, "{g:?} vs {w:?}");
+            let finest = levels.last().unwrap().next();
+            for rules in rule_sets(&levels) {
+                let op = Operator::new(&levels, &finest, &rules);
+                let b = triples(&values(3 * levels[0].nv, 4));
+                let y = op.apply(&b);
+                let start = vec![[0.0; 3]; b.len()];
+                let got = op.fit(&y, &start, &[], 400, 1e-9);
+                for (g, w) in got.iter().zip(&b) {
+                    for k in 0..3 {
+                        assert!((g[k] - w[k]).abs() < 1e-3, "{rules:?}: {g:?} vs {w:?}");
+                    }
                 }
             }
+        }
+    }
+
+    #[test]
+    fn ignored_vertices_do_not_pull_the_fit() {
+        // A refinement with a few values moved far: fitted without them, the control
+        // values come back; with them, they do not.
+        let levels = hierarchies(2).remove(0);
+        let finest = levels.last().unwrap().next();
+        let op = Operator::new(&levels, &finest, &Rules::default());
+        let b = triples(&values(3 * levels[0].nv, 4));
+        let mut y = op.apply(&b);
+        let mut ignored = vec![false; y.len()];
+        for i in [3, 40, 77] {
+            y[i][0] += 1e6;
+            ignored[i] = true;
+        }
+        let start = vec![[0.0; 3]; b.len()];
+        let near = |got: &[[f64; 3]]| got.iter().zip(&b).all(|(g, w)| (g[0] - w[0]).abs() < 1e-3);
+        assert!(near(&op.fit(&y, &start, &ignored, 400, 1e-9)));
+        assert!(!near(&op.fit(&y, &start, &[], 400, 1e-9)));
+    }
+
+    #[test]
+    fn the_roughness_of_a_rounded_surface_is_small_and_of_detail_large() {
+        // The open grid's hierarchy has runs of regular vertices; plain and limit
+        // surfaces alike are cubic along them.
+        let levels = hierarchies(3).remove(1);
+        let finest = levels.last().unwrap().next();
+        for rules in [Rules::default(), Rules { limit: true, sharp: Vec::new() }] {
+            let b = values(3 * levels[0].nv, 5);
+            let mut x: [Vec<i64>; 3] =
+                std::array::from_fn(|k| b.iter().skip(k).step_by(3).copied().collect());
+            refine(&levels, &finest, &rules, &mut x);
+            let r = roughness(&levels, &finest, &x[0]).unwrap();
+            assert!(r < 16.0, "{rules:?}: {r}");
+            let noise = values(x[0].len(), 6);
+            for (v, n) in x[0].iter_mut().zip(noise) {
+                *v += n / 1000;
+            }
+            assert!(roughness(&levels, &finest, &x[0]).unwrap() > 1000.0);
         }
     }
 
@@ -434,7 +713,7 @@ mod tests {
             let mut x = values(levels[0].nv, 5);
             let last = levels.last().unwrap();
             for l in &levels {
-                subdivide(l, &mut x);
+                subdivide(l, &[], &mut x);
             }
             let d = defect(last, &x).unwrap();
             assert!(d < 12.0, "{d}");

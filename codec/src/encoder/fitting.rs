@@ -1,0 +1,224 @@
+//! The encoder's subdivision fit (not part of the format beyond SPEC.md 9.10): which
+//! rules a subdivided model follows, its control mesh by least squares, and the
+//! precision that codes it smallest.
+
+use super::*;
+use crate::topology::Level;
+use crate::transform::fit::Rules;
+
+/// Mean [`fit::defect`] over the axes of the finest level above which `auto` does not
+/// try the fit, unless [`ROUGH_SCREEN`] lets it: rounded subdivision gives about 70 /
+/// 12 (the variance of the rounding noise it sums), fitted detail far more.
+pub(crate) const FIT_SCREEN: f64 = 12.0;
+
+/// Mean [`fit::roughness`] over the axes of the finest level above which `auto` does
+/// not try the fit, unless [`FIT_SCREEN`] lets it: a rounded subdivision surface
+/// (refined or on the limit) gives about 3 in its regular patches, Blender's limit
+/// surfaces 1 to 3, detail hundreds and more.
+pub(crate) const ROUGH_SCREEN: f64 = 16.0;
+
+/// The least-squares fit stops when no control value moves by more than this (units of
+/// the grid): far below the 2^-10 of the finest precision tried.
+pub(crate) const FIT_TOLERANCE: f64 = 1e-5;
+
+/// Extra bits `auto` tries for the fit's control values.
+pub(crate) const FIT_BITS: [u8; 3] = [6, 8, 10];
+
+/// Codes a Catmull-Clark hierarchy as a subdivision fit (SPEC.md 9.10): the control
+/// values from least squares, then for each precision in `bits` the integer subdivision
+/// and the residuals; the smallest coding (B = 0 when no precision in `bits` keeps the
+/// values in range). `None` when `screen` is set and the finest level is far from any
+/// subdivision.
+pub(crate) fn code_fit(
+    canon: &Canonical,
+    pos: &[Vec<i64>; 3],
+    header: &Header,
+    bits: &[u8],
+    screen: bool,
+) -> Option<Payloads> {
+    if !canon.poles.is_empty() {
+        return None;
+    }
+    // The level whose coarse mesh is the finest one.
+    let finest = canon.levels.last()?.next();
+    if screen {
+        let mean = |f: &dyn Fn(&[i64]) -> Option<f64>| {
+            pos.iter().map(|x| f(x).unwrap_or(f64::MAX)).sum::<f64>() / 3.0
+        };
+        let last = canon.levels.last()?;
+        if mean(&|x| fit::defect(last, x)) > FIT_SCREEN
+            && mean(&|x| fit::roughness(&canon.levels, &finest, x)) > ROUGH_SCREEN
+        {
+            return None;
+        }
+    }
+    let nb = canon.base.nv;
+    let fine: Vec<[f64; 3]> = (0..pos[0].len())
+        .map(|i| std::array::from_fn(|k| pos[k][i] as f64))
+        .collect();
+    let mut best: Option<Payloads> = None;
+    for rules in rule_sets(canon, &finest, pos) {
+        let op = fit::Operator::new(&canon.levels, &finest, &rules);
+        let control = robust_fit(&op, &fine, nb);
+        drop(op);
+        // B = 0 last, for values too large for any precision asked for.
+        let mut found = false;
+        for b in bits.iter().copied().chain([0]) {
+            if b == 0 && found {
+                break;
+            }
+            let s = (1u64 << b) as f64;
+            let mut x: [Vec<i64>; 3] = std::array::from_fn(|k| {
+                control.iter().map(|v| (v[k] * s).round() as i64).collect()
+            });
+            if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
+                continue;
+            }
+            found = true;
+            let (mut h, base_bytes) = hierarchy_base(canon, &x, header);
+            fit::refine(&canon.levels, &finest, &rules, &mut x);
+            let mut level_bytes = vec![Vec::new(); canon.levels.len() - 1];
+            level_bytes.push(levl::fit::encode_residuals(&x, pos, b));
+            h.transform = Transform::Fit {
+                bits: b,
+                limit: rules.limit,
+            };
+            h.creases = (0..rules.sharp.len() as u32)
+                .filter(|&e| rules.sharp[e as usize])
+                .collect();
+            let p = Payloads {
+                header: h,
+                base: base_bytes,
+                levels: level_bytes,
+                order: None,
+            };
+            if best.as_ref().is_none_or(|q| p.size() < q.size()) {
+                best = Some(p);
+            }
+        }
+    }
+    best
+}
+
+/// Finest vertices whose distance from the first fit exceeds this many times the
+/// median distance (and [`OUTLIER_FLOOR`]) do not count in the second: a few points a
+/// modelling tool places by other rules (OpenSubdiv's patches beside extraordinary
+/// vertices) would otherwise pull the whole control mesh off.
+const OUTLIER_FACTOR: f64 = 16.0;
+
+/// Grid units below which no vertex is an outlier.
+const OUTLIER_FLOOR: f64 = 4.0;
+
+/// The control values of `op` nearest `fine` in least squares, fitted again without
+/// the outliers of the first fit.
+fn robust_fit(op: &fit::Operator, fine: &[[f64; 3]], nb: usize) -> Vec<[f64; 3]> {
+    let first = op.fit(fine, &fine[..nb], &[], 400, FIT_TOLERANCE);
+    let dist: Vec<f64> = op
+        .apply(&first)
+        .iter()
+        .zip(fine)
+        .map(|(p, y)| (0..3).map(|k| (p[k] - y[k]).abs()).fold(0.0, f64::max))
+        .collect();
+    let mut sorted = dist.clone();
+    sorted.sort_by(f64::total_cmp);
+    let cut = (OUTLIER_FACTOR * sorted[sorted.len() / 2]).max(OUTLIER_FLOOR);
+    let ignored: Vec<bool> = dist.iter().map(|&d| d > cut).collect();
+    // Refit only where a few points are outliers (many are no rule's misses).
+    let n = ignored.iter().filter(|&&i| i).count();
+    if n == 0 || n * 8 > dist.len() {
+        return first;
+    }
+    op.fit(fine, &first, &ignored, 400, FIT_TOLERANCE)
+}
+
+/// The rule sets the fit tries: plain refinement, the limit surface, and the limit
+/// surface with the creases the finest level shows.
+fn rule_sets(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<Rules> {
+    let mut sets = vec![
+        Rules::default(),
+        Rules {
+            limit: true,
+            sharp: Vec::new(),
+        },
+    ];
+    let sharp = creases(canon, finest, pos);
+    if !sharp.is_empty() {
+        sets.push(Rules {
+            limit: true,
+            sharp: sharp.clone(),
+        });
+        sets.push(Rules {
+            limit: false,
+            sharp,
+        });
+    }
+    sets
+}
+
+/// The mean angle (radians) between the finest faces beside a base edge's descendants
+/// above which the encoder tries the edge as a crease: a smooth surface's finest faces
+/// meet at a few degrees, a crease at its fold.
+const CREASE_ANGLE: f64 = 0.3;
+
+/// The base edges along which the finest surface folds (mean angle between the finest
+/// faces beside the edge's descendants above [`CREASE_ANGLE`]): the creases the fit
+/// tries. Empty when there is none.
+fn creases(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<bool> {
+    // Per edge of each level, the base edge it descends from (NONE: none).
+    let none = u32::MAX;
+    let mut owner: Vec<u32> = (0..canon.levels[0].ne() as u32).collect();
+    for (l, level) in canon.levels.iter().enumerate() {
+        let fine = canon.levels.get(l + 1).unwrap_or(finest);
+        let mut below = vec![none; fine.ne()];
+        for (e, &o) in owner.iter().enumerate().filter(|&(_, &o)| o != none) {
+            for h in fit::halves(level, e, fine) {
+                below[h as usize] = o;
+            }
+        }
+        owner = below;
+    }
+    let p = |v: u32| -> [f64; 3] { std::array::from_fn(|k| pos[k][v as usize] as f64) };
+    let normal = |f: u32| {
+        let c = finest.coarse.face(f as usize);
+        let (a, b) = if c.len() == 4 {
+            ((c[0], c[2]), (c[1], c[3]))
+        } else {
+            ((c[0], c[1]), (c[0], c[2]))
+        };
+        let (u, w) = (sub(p(a.1), p(a.0)), sub(p(b.1), p(b.0)));
+        [
+            u[1] * w[2] - u[2] * w[1],
+            u[2] * w[0] - u[0] * w[2],
+            u[0] * w[1] - u[1] * w[0],
+        ]
+    };
+    let mut sum = vec![(0.0f64, 0usize); canon.levels[0].ne()];
+    for (h, &o) in owner.iter().enumerate().filter(|&(_, &o)| o != none) {
+        if finest.is_boundary(h) {
+            continue;
+        }
+        let [f0, f1] = finest.edge_faces[h];
+        let (n0, n1) = (normal(f0), normal(f1));
+        let dot: f64 = (0..3).map(|k| n0[k] * n1[k]).sum();
+        let len = (0..3).map(|k| n0[k] * n0[k]).sum::<f64>().sqrt()
+            * (0..3).map(|k| n1[k] * n1[k]).sum::<f64>().sqrt();
+        if len > 0.0 {
+            let s = &mut sum[o as usize];
+            s.0 += (dot / len).clamp(-1.0, 1.0).acos();
+            s.1 += 1;
+        }
+    }
+    let sharp: Vec<bool> = sum
+        .iter()
+        .map(|&(a, n)| n > 0 && a / n as f64 > CREASE_ANGLE)
+        .collect();
+    if sharp.contains(&true) {
+        sharp
+    } else {
+        Vec::new()
+    }
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|k| a[k] - b[k])
+}
