@@ -2,15 +2,19 @@
 //! finest positions (SPEC.md 9.10), per recovered hierarchy and per rule set (plain,
 //! limit surface; no creases): the fit's residual RMS per axis, then per precision B
 //! the share of nonzero residuals and their order-0 entropy.
-//! `cargo run --release --example fit_probe -- MESH [Q]`
+//! `cargo run --release --example fit_probe -- MESH [Q | exact]`
 use subwave_codec::topology::{canonicalise, cc, Topo};
 use subwave_codec::transform::fit::{defect, refine, roughness, Operator, Rules};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let path = args.first().expect("usage: fit_probe MESH [Q]");
-    let bits: u8 = args.get(1).map_or(16, |q| q.parse().expect("Q"));
-    let mesh = subwave::load(&std::fs::read(path).expect("read"), Some(bits))
+    let path = args.first().expect("usage: fit_probe MESH [Q | exact]");
+    // Q bits, or `exact` for the file's own values.
+    let bits: Option<u8> = match args.get(1).map(String::as_str) {
+        Some("exact") => None,
+        q => Some(q.map_or(16, |q| q.parse().expect("Q or exact"))),
+    };
+    let mesh = subwave::load(&std::fs::read(path).expect("read"), bits)
         .expect("load")
         .mesh;
     let mut topo = Topo::new(mesh.vertex_count());
