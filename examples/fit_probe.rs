@@ -50,7 +50,7 @@ fn main() {
         for limit in [false, true] {
             let rules = Rules {
                 limit,
-                sharp: Vec::new(),
+                ..Rules::default()
             };
             println!(" limit {limit}");
             let op = Operator::new(&canon.levels, &finest, &rules);

@@ -53,6 +53,10 @@ pub fn info(info: &Info) -> Value {
             Transform::Fit { limit, .. } => Some(limit),
             _ => None,
         },
+        "fit_corners": match h.transform {
+            Transform::Fit { corners, .. } => Some(corners),
+            _ => None,
+        },
         "creases": h.creases,
         "quantization": quantization(&h.quantization),
         "keep_order": h.has_order,

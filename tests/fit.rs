@@ -167,7 +167,12 @@ fn hostile_fit_containers_are_refused() {
     // (the transform code comes just before it).
     let m = own("subdivided_cc3.obj", Some(16));
     let enc = encode(&m.mesh, &m.quantization, TransformChoice::Auto);
-    let Transform::Fit { bits, limit } = enc.header.transform else {
+    let Transform::Fit {
+        bits,
+        limit,
+        corners,
+    } = enc.header.transform
+    else {
         panic!("not a fit")
     };
     let head = enc.header.write();
@@ -175,6 +180,7 @@ fn hostile_fit_containers_are_refused() {
     other.transform = Transform::Fit {
         bits: bits + 1,
         limit,
+        corners,
     };
     let at = head
         .iter()
@@ -242,7 +248,7 @@ fn hostile_fit_containers_are_refused() {
         }
     }
     // Fit rules the format does not define are unsupported, not guessed at.
-    match subwave::decode_slice(&rewritten(|h| h[at + 1] |= 4, |_, _| {})) {
+    match subwave::decode_slice(&rewritten(|h| h[at + 1] |= 8, |_, _| {})) {
         Err(Error::Unsupported(what)) => assert!(what.contains("fit rules"), "{what}"),
         other => panic!("unknown fit rules: {other:?}"),
     }
@@ -343,25 +349,48 @@ fn auto_finds_a_creased_limit_surface() {
 }
 
 #[test]
+fn kept_boundary_corners_are_found() {
+    // An open sheet with Blender's "Keep Corners": its four corners stay, which plain
+    // boundary rules would round off; the fit finds the rule, with and without the
+    // limit surface.
+    let (control, _) = subwave_corpus::folded_sheet();
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    for limit in [false, true] {
+        let surface = control.subdivision_surface_with(3, &[], limit, true);
+        let mesh = common::to_mesh(&surface, 1e6);
+        let enc = encode(&mesh, &q, TransformChoice::Fit);
+        assert!(
+            matches!(
+                enc.header.transform,
+                Transform::Fit {
+                    corners: true,
+                    limit: l,
+                    ..
+                } if l == limit
+            ),
+            "limit {limit}: {:?}",
+            enc.header.transform
+        );
+        assert_exact(&enc.bytes, &mesh, "kept corners");
+        let (n, r) = (mesh.vertex_count(), residual_bytes(&enc.bytes));
+        assert!(
+            8 * r < n,
+            "limit {limit}: {r} B of residuals for {n} vertices"
+        );
+        // The corners are where the control mesh's are.
+        let plain = common::to_mesh(&control.subdivision_surface(3, &[], limit), 1e6);
+        assert_ne!(plain.positions, mesh.positions);
+    }
+}
+
+#[test]
 fn hostile_crease_lists_are_refused() {
     let (control, rims) = prism_and_rims();
     let mesh = common::to_mesh(&control.subdivision_surface(2, &rims, true), 1e5);
     let q = subwave::Quantization::Decimal { decimals: 0 };
     let enc = encode(&mesh, &q, TransformChoice::Fit);
     assert!(!enc.header.creases.is_empty());
-    let c = subwave_container::Container::parse(&enc.bytes, &Limits::default()).unwrap();
-    let with_header = |h: &subwave::Header| {
-        let mut w = ContainerWriter::new();
-        for s in c.sections.iter().filter(|s| s.kind != SectionKind::END) {
-            let p = if s.kind == SectionKind::HEADER {
-                h.write()
-            } else {
-                s.payload.to_vec()
-            };
-            w.section(s.kind, &p);
-        }
-        w.finish()
-    };
+    let with_header = |h: &subwave::Header| common::with_header(&enc.bytes, h);
     assert!(subwave::decode_slice(&with_header(&enc.header)).is_ok());
     // An edge number the base mesh does not have (below the corner count, so only
     // the base mesh can tell), and one past every corner.

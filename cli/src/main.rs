@@ -948,16 +948,23 @@ fn print_info(info: &subwave::Info, as_json: bool) {
         println!("disc transform  {}", h.disc.name());
     }
     match h.transform {
-        subwave::Transform::Fit { bits, limit } => {
-            let rules = match (limit, h.creases.len()) {
-                (false, 0) => String::new(),
-                (true, 0) => ", limit surface".to_string(),
-                (l, n) => format!(
-                    ", {n} creased base edge{}{}",
-                    if n == 1 { "" } else { "s" },
-                    if l { ", limit surface" } else { "" }
-                ),
-            };
+        subwave::Transform::Fit {
+            bits,
+            limit,
+            corners,
+        } => {
+            let mut rules = String::new();
+            let n = h.creases.len();
+            if n > 0 {
+                let s = if n == 1 { "" } else { "s" };
+                rules += &format!(", {n} creased base edge{s}");
+            }
+            if corners {
+                rules += ", boundary corners kept";
+            }
+            if limit {
+                rules += ", limit surface";
+            }
             println!("transform       fit (control values with {bits} extra bits{rules})")
         }
         t => println!("transform       {}", t.name()),

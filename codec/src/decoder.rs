@@ -209,7 +209,11 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
     let mut mesh = match h.transform {
         _ if h.levels == 0 => base,
         Transform::Wavelet(w) => synthesise_levels(&c, &h, base, w, level)?,
-        Transform::Fit { bits, limit } => synthesise_fit(&c, &h, base, (bits, limit), level)?,
+        Transform::Fit {
+            bits,
+            limit,
+            corners,
+        } => synthesise_fit(&c, &h, base, (bits, limit, corners), level)?,
         Transform::None => return Err(Error::Unsupported("levels without a transform".into())),
     };
     if let Some(m) = &vmap {
@@ -551,13 +555,13 @@ fn coarse_mesh(h: &Header, w: Wavelet, upto: u8, x: &[Vec<i64>; 3], topo: Topo) 
 }
 
 /// Rebuilds levels 1..=`upto` of a subdivision fit (SPEC.md 9.10, 10.4): the control
-/// values refined in integers (with the header's creases; placed on the limit surface
-/// when `limit`), rounded to the grid, and at the finest level the residuals added.
+/// values refined in integers (with the header's creases, and boundary corners kept
+/// when `corners`; placed on the limit surface when `limit`), rounded to the grid, and at the finest level the residuals added.
 fn synthesise_fit(
     c: &Container<'_>,
     h: &Header,
     base: Mesh,
-    (bits, limit): (u8, bool),
+    (bits, limit, corners): (u8, bool, bool),
     upto: u8,
 ) -> Result<Mesh> {
     let mut topo = Topo::new(base.vertex_count());
@@ -582,7 +586,14 @@ fn synthesise_fit(
             );
         }
         for xs in x.iter_mut() {
-            fit::subdivide(&level, &sharp, xs);
+            fit::subdivide(
+                &level,
+                fit::Hard {
+                    edges: &sharp,
+                    corners,
+                },
+                xs,
+            );
         }
         let fine = level.next();
         sharp = fit::sharp_below(&level, &sharp, &fine);
@@ -590,7 +601,14 @@ fn synthesise_fit(
     }
     if limit {
         for xs in x.iter_mut() {
-            fit::place_on_limit(&level, &sharp, xs);
+            fit::place_on_limit(
+                &level,
+                fit::Hard {
+                    edges: &sharp,
+                    corners,
+                },
+                xs,
+            );
         }
     }
     let topo = level.coarse;

@@ -55,17 +55,18 @@ impl PolyMesh {
     /// Positions follow the Catmull-Clark rules (boundary edges and vertices use the
     /// cubic B-spline curve rules).
     pub fn catmull_clark(&self) -> PolyMesh {
-        self.catmull_clark_creased(&HashSet::new()).0
+        self.catmull_clark_creased(&HashSet::new(), false).0
     }
 
     /// One Catmull-Clark step with infinitely sharp edges (`creases`, as ordered pairs
     /// `(min, max)`): a creased edge's point is its midpoint, a vertex with two hard
     /// (boundary or creased) edges takes the curve rule along them, one with more
-    /// keeps its place. Also returns the creased edges of the result (both halves of
-    /// each creased edge).
+    /// keeps its place, and so does a boundary vertex with one face when `corners`.
+    /// Also returns the creased edges of the result (both halves of each creased edge).
     pub fn catmull_clark_creased(
         &self,
         creases: &HashSet<(u32, u32)>,
+        corners: bool,
     ) -> (PolyMesh, HashSet<(u32, u32)>) {
         let nv = self.positions.len();
         let mut edge_id: HashMap<(u32, u32), usize> = HashMap::new();
@@ -121,7 +122,7 @@ impl PolyMesh {
                 .filter(|&e| hard_edge(e))
                 .collect();
             let on_boundary = v_edges[v].iter().any(|&e| boundary_edge(e));
-            pos[v] = if v_edges[v].is_empty() {
+            pos[v] = if v_edges[v].is_empty() || (corners && on_boundary && v_faces[v].len() == 1) {
                 p
             } else if on_boundary || bnd.len() >= 2 {
                 if bnd.len() == 2 {
@@ -185,20 +186,32 @@ impl PolyMesh {
     /// (n (n + 5))`; on a crease or boundary (two hard edges to `a`, `b`) `(a + 4 v +
     /// b) / 6`; elsewhere kept. A float reference for the codec's integer rules.
     pub fn subdivision_surface(&self, levels: u32, creases: &[[u32; 2]], limit: bool) -> PolyMesh {
+        self.subdivision_surface_with(levels, creases, limit, false)
+    }
+
+    /// [`PolyMesh::subdivision_surface`], with boundary vertices of one face kept
+    /// where they are when `corners` (Blender's "Keep Corners").
+    pub fn subdivision_surface_with(
+        &self,
+        levels: u32,
+        creases: &[[u32; 2]],
+        limit: bool,
+        corners: bool,
+    ) -> PolyMesh {
         let mut sharp: HashSet<(u32, u32)> =
             creases.iter().map(|&[a, b]| (a.min(b), a.max(b))).collect();
         let mut m = self.clone();
         for _ in 0..levels {
-            (m, sharp) = m.catmull_clark_creased(&sharp);
+            (m, sharp) = m.catmull_clark_creased(&sharp, corners);
         }
         if limit {
-            m.positions = m.limit_positions(&sharp);
+            m.positions = m.limit_positions(&sharp, corners);
         }
         m
     }
 
     /// The limit positions of [`PolyMesh::subdivision_surface`].
-    fn limit_positions(&self, sharp: &HashSet<(u32, u32)>) -> Vec<[f64; 3]> {
+    fn limit_positions(&self, sharp: &HashSet<(u32, u32)>, corners: bool) -> Vec<[f64; 3]> {
         let nv = self.positions.len();
         let mut edge_faces: HashMap<(u32, u32), usize> = HashMap::new();
         let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); nv];
@@ -227,7 +240,9 @@ impl PolyMesh {
                     .filter(|&o| edge_faces[&key(o)] < 2 || sharp.contains(&key(o)))
                     .collect();
                 let n = neighbours[v].len();
-                if hard.len() == 2 {
+                if corners && boundary && opposite[v].len() == 1 {
+                    p
+                } else if hard.len() == 2 {
                     let (a, b) = (
                         self.positions[hard[0] as usize],
                         self.positions[hard[1] as usize],

@@ -73,3 +73,20 @@ pub fn up_to(level: u8) -> subwave::DecodeOptions {
         ..Default::default()
     }
 }
+
+/// The container `bytes` with its header payload replaced by `h` (every other section as
+/// it is): a header the encoder would not write, for the decoder to judge.
+pub fn with_header(bytes: &[u8], h: &subwave::Header) -> Vec<u8> {
+    use subwave_container::{Container, ContainerWriter, Limits, SectionKind};
+    let c = Container::parse(bytes, &Limits::default()).unwrap();
+    let mut w = ContainerWriter::new();
+    for s in c.sections.iter().filter(|s| s.kind != SectionKind::END) {
+        let p = if s.kind == SectionKind::HEADER {
+            h.write()
+        } else {
+            s.payload.to_vec()
+        };
+        w.section(s.kind, &p);
+    }
+    w.finish()
+}

@@ -82,6 +82,7 @@ pub(crate) fn code_fit(
             h.transform = Transform::Fit {
                 bits: b,
                 limit: rules.limit,
+                corners: rules.corners,
             };
             h.creases = (0..rules.sharp.len() as u32)
                 .filter(|&e| rules.sharp[e as usize])
@@ -132,13 +133,14 @@ fn robust_fit(op: &fit::Operator, fine: &[[f64; 3]], nb: usize) -> Vec<[f64; 3]>
 }
 
 /// The rule sets the fit tries: plain refinement, the limit surface, and the limit
-/// surface with the creases the finest level shows.
+/// surface with the creases the finest level shows; each also with boundary corners
+/// kept where the base mesh has a boundary vertex with one face.
 fn rule_sets(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<Rules> {
     let mut sets = vec![
         Rules::default(),
         Rules {
             limit: true,
-            sharp: Vec::new(),
+            ..Rules::default()
         },
     ];
     let sharp = creases(canon, finest, pos);
@@ -146,11 +148,30 @@ fn rule_sets(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<Rule
         sets.push(Rules {
             limit: true,
             sharp: sharp.clone(),
+            corners: false,
         });
         sets.push(Rules {
-            limit: false,
             sharp,
+            ..Rules::default()
         });
+    }
+    let base = &canon.levels[0];
+    let corner = |v: usize| {
+        base.v_faces(v).len() == 1
+            && base
+                .v_edges(v)
+                .iter()
+                .any(|&e| base.is_boundary(e as usize))
+    };
+    if (0..base.nv).any(corner) {
+        let kept: Vec<Rules> = sets
+            .iter()
+            .map(|r| Rules {
+                corners: true,
+                ..r.clone()
+            })
+            .collect();
+        sets.extend(kept);
     }
     sets
 }

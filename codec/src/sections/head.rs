@@ -36,6 +36,8 @@ pub enum Transform {
         bits: u8,
         /// The finest values are the limit surface's (SPEC.md 9.10).
         limit: bool,
+        /// Boundary vertices with one face keep their values (SPEC.md 9.10).
+        corners: bool,
     },
 }
 
@@ -166,6 +168,8 @@ const FIT_CODE: u8 = 9;
 const FIT_LIMIT: u8 = 1;
 /// Fit rules: a list of creased base edges ends the header.
 const FIT_CREASES: u8 = 2;
+/// Fit rules: boundary vertices with one face keep their values.
+const FIT_CORNERS: u8 = 4;
 
 impl Header {
     /// Serialises the header.
@@ -184,9 +188,19 @@ impl Header {
         w.u8(self.levels);
         w.u8(self.family.code());
         w.u8(self.transform.code());
-        if let Transform::Fit { bits, limit } = self.transform {
+        if let Transform::Fit {
+            bits,
+            limit,
+            corners,
+        } = self.transform
+        {
             w.u8(bits);
-            w.u8(u8::from(limit) | if self.creases.is_empty() { 0 } else { FIT_CREASES });
+            let flag = |on: bool, bit: u8| if on { bit } else { 0 };
+            w.u8(
+                flag(limit, FIT_LIMIT)
+                    | flag(!self.creases.is_empty(), FIT_CREASES)
+                    | flag(corners, FIT_CORNERS),
+            );
         }
         match self.quantization {
             Quantization::Decimal { decimals } => {
@@ -501,13 +515,17 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, bool)> {
             }
             let at = r.offset();
             let rules = r.u8("fit rules")?;
-            if rules & !(FIT_LIMIT | FIT_CREASES) != 0 {
+            if rules & !(FIT_LIMIT | FIT_CREASES | FIT_CORNERS) != 0 {
                 return Err(Error::Unsupported(format!(
                     "fit rules {rules:#x} (byte {at})"
                 )));
             }
-            let limit = rules & FIT_LIMIT != 0;
-            (Transform::Fit { bits, limit }, rules & FIT_CREASES != 0)
+            let fit = Transform::Fit {
+                bits,
+                limit: rules & FIT_LIMIT != 0,
+                corners: rules & FIT_CORNERS != 0,
+            };
+            (fit, rules & FIT_CREASES != 0)
         }
         t => match Wavelet::from_code(t) {
             Some(w) => (Transform::Wavelet(w), false),

@@ -24,6 +24,29 @@ pub struct Rules {
     pub limit: bool,
     /// Per base edge, whether it is an infinitely sharp crease; empty: none is.
     pub sharp: Vec<bool>,
+    /// Boundary vertices with one face keep their values (Blender's "Keep Corners",
+    /// OpenSubdiv's sharp boundary corners).
+    pub corners: bool,
+}
+
+impl Rules {
+    /// A level's sharp features under these rules, `edges` its creased edges.
+    pub fn hard<'a>(&self, edges: &'a [bool]) -> Hard<'a> {
+        Hard {
+            edges,
+            corners: self.corners,
+        }
+    }
+}
+
+/// A level's sharp features: its creased edges (empty: none) and whether boundary
+/// vertices with one face are corners that keep their values.
+#[derive(Clone, Copy, Debug)]
+pub struct Hard<'a> {
+    /// Per edge of the level, whether it is creased.
+    pub edges: &'a [bool],
+    /// Boundary vertices with one face keep their values.
+    pub corners: bool,
 }
 
 /// Which vertex rule of SPEC.md 9.10 coarse vertex `v` takes.
@@ -42,7 +65,8 @@ fn is_sharp(sharp: &[bool], e: u32) -> bool {
     sharp.get(e as usize).copied().unwrap_or(false)
 }
 
-fn vertex_rule(level: &Level, v: usize, sharp: &[bool]) -> VertexRule {
+fn vertex_rule(level: &Level, v: usize, hard: Hard<'_>) -> VertexRule {
+    let (sharp, corners_kept) = (hard.edges, hard.corners);
     let (mut hard, mut boundary, mut ends) = (0usize, false, [0u32; 2]);
     for &e in level.v_edges(v) {
         let b = level.is_boundary(e as usize);
@@ -55,6 +79,9 @@ fn vertex_rule(level: &Level, v: usize, sharp: &[bool]) -> VertexRule {
         }
     }
     let n = level.v_edges(v).len();
+    if boundary && corners_kept && level.v_faces(v).len() == 1 {
+        return VertexRule::Kept;
+    }
     match hard {
         2 => VertexRule::Crease(ends),
         0 | 1 if !boundary && n >= 3 && level.v_faces(v).len() == n => VertexRule::Inside,
@@ -98,7 +125,7 @@ pub fn sharp_below(level: &Level, sharp: &[bool], fine: &Level) -> Vec<bool> {
 /// * vertex, inside, `n` edges: `[(n (n - 2) v + sum of neighbours + sum of the face
 ///   points of its faces) / n^2]`; with two hard (boundary or sharp) edges to `a`, `b`:
 ///   `[(a + 6 v + b) / 8]`; otherwise (a corner, or a vertex with no faces) unchanged.
-pub fn subdivide(level: &Level, sharp: &[bool], x: &mut Vec<i64>) {
+pub fn subdivide(level: &Level, hard: Hard<'_>, x: &mut Vec<i64>) {
     let (nv, ne) = (level.nv, level.ne());
     x.resize(level.fine_nv(), 0);
     for f in 0..level.nf() {
@@ -108,7 +135,7 @@ pub fn subdivide(level: &Level, sharp: &[bool], x: &mut Vec<i64>) {
     }
     for (e, &[a, b]) in level.edges.iter().enumerate() {
         let ends = x[a as usize] as i128 + x[b as usize] as i128;
-        x[nv + e] = if level.is_boundary(e) || is_sharp(sharp, e as u32) {
+        x[nv + e] = if level.is_boundary(e) || is_sharp(hard.edges, e as u32) {
             round_div(ends, 2)
         } else {
             let [f0, f1] = level.edge_faces[e];
@@ -118,15 +145,15 @@ pub fn subdivide(level: &Level, sharp: &[bool], x: &mut Vec<i64>) {
             )
         };
     }
-    let moved: Vec<i64> = (0..nv).map(|v| moved_vertex(level, v, sharp, x)).collect();
+    let moved: Vec<i64> = (0..nv).map(|v| moved_vertex(level, v, hard, x)).collect();
     x[..nv].copy_from_slice(&moved);
 }
 
 /// The vertex rule of [`subdivide`] for coarse vertex `v` (its neighbours still
 /// coarse, the face points already written).
-fn moved_vertex(level: &Level, v: usize, sharp: &[bool], x: &[i64]) -> i64 {
+fn moved_vertex(level: &Level, v: usize, hard: Hard<'_>, x: &[i64]) -> i64 {
     let xv = x[v] as i128;
-    match vertex_rule(level, v, sharp) {
+    match vertex_rule(level, v, hard) {
         VertexRule::Crease([a, b]) => {
             round_div(x[a as usize] as i128 + 6 * xv + x[b as usize] as i128, 8)
         }
@@ -157,8 +184,8 @@ fn opposite(level: &Level, f: u32, v: usize) -> Option<u32> {
 
 /// The limit weights of vertex `v` of `level` (whose coarse mesh is the finest one),
 /// as `(vertex, weight)` over a common denominator: `None` where the value is kept.
-fn limit_mask(level: &Level, v: usize, sharp: &[bool]) -> Option<(Vec<(u32, i128)>, i128)> {
-    match vertex_rule(level, v, sharp) {
+fn limit_mask(level: &Level, v: usize, hard: Hard<'_>) -> Option<(Vec<(u32, i128)>, i128)> {
+    match vertex_rule(level, v, hard) {
         VertexRule::Crease([a, b]) => Some((vec![(a, 1), (v as u32, 4), (b, 1)], 6)),
         VertexRule::Kept => None,
         VertexRule::Inside => {
@@ -181,9 +208,9 @@ fn limit_mask(level: &Level, v: usize, sharp: &[bool]) -> Option<(Vec<(u32, i128
 /// Inside, a vertex of `n` edges becomes `[(n^2 v + 4 sum of neighbours + sum of the
 /// opposite corners of its faces) / (n (n + 5))]`; with two hard edges to `a`, `b`,
 /// `[(a + 4 v + b) / 6]`; otherwise (or beside a face that is not a quad) it is kept.
-pub fn place_on_limit(level: &Level, sharp: &[bool], x: &mut [i64]) {
+pub fn place_on_limit(level: &Level, hard: Hard<'_>, x: &mut [i64]) {
     let placed: Vec<i64> = (0..level.nv)
-        .map(|v| match limit_mask(level, v, sharp) {
+        .map(|v| match limit_mask(level, v, hard) {
             Some((w, d)) => round_div(w.iter().map(|&(u, c)| c * x[u as usize] as i128).sum(), d),
             None => x[v],
         })
@@ -198,20 +225,20 @@ pub fn refine(levels: &[Level], finest: &Level, rules: &Rules, x: &mut [Vec<i64>
     let mut sharp = rules.sharp.clone();
     for (i, l) in levels.iter().enumerate() {
         for xs in x.iter_mut() {
-            subdivide(l, &sharp, xs);
+            subdivide(l, rules.hard(&sharp), xs);
         }
         sharp = sharp_below(l, &sharp, levels.get(i + 1).unwrap_or(finest));
     }
     if rules.limit {
         for xs in x.iter_mut() {
-            place_on_limit(finest, &sharp, xs);
+            place_on_limit(finest, rules.hard(&sharp), xs);
         }
     }
 }
 
 /// The same refinement in floating point, without rounding, as a linear map: the
 /// weights of fine vertex `i` on coarse vertices, as `(coarse, weight)` rows.
-fn rows(level: &Level, sharp: &[bool]) -> Vec<Vec<(u32, f64)>> {
+fn rows(level: &Level, hard: Hard<'_>) -> Vec<Vec<(u32, f64)>> {
     let (nv, ne) = (level.nv, level.ne());
     let mut rows: Vec<Vec<(u32, f64)>> = vec![Vec::new(); level.fine_nv()];
     for f in 0..level.nf() {
@@ -220,7 +247,7 @@ fn rows(level: &Level, sharp: &[bool]) -> Vec<Vec<(u32, f64)>> {
         rows[nv + ne + f] = face.iter().map(|&v| (v, w)).collect();
     }
     for (e, &[a, b]) in level.edges.iter().enumerate() {
-        rows[nv + e] = if level.is_boundary(e) || is_sharp(sharp, e as u32) {
+        rows[nv + e] = if level.is_boundary(e) || is_sharp(hard.edges, e as u32) {
             vec![(a, 0.5), (b, 0.5)]
         } else {
             let mut r = vec![(a, 0.25), (b, 0.25)];
@@ -233,7 +260,7 @@ fn rows(level: &Level, sharp: &[bool]) -> Vec<Vec<(u32, f64)>> {
         };
     }
     for v in 0..nv {
-        rows[v] = match vertex_rule(level, v, sharp) {
+        rows[v] = match vertex_rule(level, v, hard) {
             VertexRule::Crease([a, b]) => vec![(a, 0.125), (v as u32, 0.75), (b, 0.125)],
             VertexRule::Kept => vec![(v as u32, 1.0)],
             VertexRule::Inside => {
@@ -292,12 +319,12 @@ impl Operator {
         let mut out = Vec::with_capacity(levels.len() + 1);
         let mut sharp = rules.sharp.clone();
         for (i, l) in levels.iter().enumerate() {
-            out.push(csr(rows(l, &sharp), l.nv));
+            out.push(csr(rows(l, rules.hard(&sharp)), l.nv));
             sharp = sharp_below(l, &sharp, levels.get(i + 1).unwrap_or(finest));
         }
         if rules.limit {
             let limit = (0..finest.nv)
-                .map(|v| match limit_mask(finest, v, &sharp) {
+                .map(|v| match limit_mask(finest, v, rules.hard(&sharp)) {
                     Some((w, d)) => w.iter().map(|&(u, c)| (u, c as f64 / d as f64)).collect(),
                     None => vec![(v as u32, 1.0)],
                 })
@@ -588,7 +615,11 @@ mod tests {
             .flat_map(|limit| {
                 [Vec::new(), sharp.clone()]
                     .into_iter()
-                    .map(move |sharp| Rules { limit, sharp })
+                    .map(move |sharp| Rules {
+                        limit,
+                        sharp,
+                        corners: false,
+                    })
             })
             .collect()
     }
@@ -692,7 +723,10 @@ mod tests {
         // surfaces alike are cubic along them.
         let levels = hierarchies(3).remove(1);
         let finest = levels.last().unwrap().next();
-        for rules in [Rules::default(), Rules { limit: true, sharp: Vec::new() }] {
+        for rules in [Rules::default(), Rules {
+            limit: true,
+            ..Rules::default()
+        }] {
             let b = values(3 * levels[0].nv, 5);
             let mut x: [Vec<i64>; 3] =
                 std::array::from_fn(|k| b.iter().skip(k).step_by(3).copied().collect());
@@ -713,7 +747,7 @@ mod tests {
             let mut x = values(levels[0].nv, 5);
             let last = levels.last().unwrap();
             for l in &levels {
-                subdivide(l, &[], &mut x);
+                subdivide(l, Hard { edges: &[], corners: false }, &mut x);
             }
             let d = defect(last, &x).unwrap();
             assert!(d < 12.0, "{d}");
