@@ -556,7 +556,8 @@ fn coarse_mesh(h: &Header, w: Wavelet, upto: u8, x: &[Vec<i64>; 3], topo: Topo) 
 
 /// Rebuilds levels 1..=`upto` of a subdivision fit (SPEC.md 9.10, 10.4): the control
 /// values refined in integers (with the header's creases, and boundary corners kept
-/// when `corners`; placed on the limit surface when `limit`), rounded to the grid, and at the finest level the residuals added.
+/// when `corners`; placed on the limit surface when `limit`), rounded to the grid, and
+/// at the finest level the residuals added.
 fn synthesise_fit(
     c: &Container<'_>,
     h: &Header,

@@ -40,12 +40,12 @@ pub(crate) fn code_fit(
         return None;
     }
     // The level whose coarse mesh is the finest one.
-    let finest = canon.levels.last()?.next();
+    let last = canon.levels.last()?;
+    let finest = last.next();
     if screen {
         let mean = |f: &dyn Fn(&[i64]) -> Option<f64>| {
             pos.iter().map(|x| f(x).unwrap_or(f64::MAX)).sum::<f64>() / 3.0
         };
-        let last = canon.levels.last()?;
         if mean(&|x| fit::defect(last, x)) > FIT_SCREEN
             && mean(&|x| fit::roughness(&canon.levels, &finest, x)) > ROUGH_SCREEN
         {
@@ -190,13 +190,7 @@ fn creases(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<bool> 
     let mut owner: Vec<u32> = (0..canon.levels[0].ne() as u32).collect();
     for (l, level) in canon.levels.iter().enumerate() {
         let fine = canon.levels.get(l + 1).unwrap_or(finest);
-        let mut below = vec![none; fine.ne()];
-        for (e, &o) in owner.iter().enumerate().filter(|&(_, &o)| o != none) {
-            for h in fit::halves(level, e, fine) {
-                below[h as usize] = o;
-            }
-        }
-        owner = below;
+        owner = fit::tags_below(level, &owner, none, fine);
     }
     let p = |v: u32| -> [f64; 3] { std::array::from_fn(|k| pos[k][v as usize] as f64) };
     let normal = |f: u32| {

@@ -66,23 +66,23 @@ fn is_sharp(sharp: &[bool], e: u32) -> bool {
 }
 
 fn vertex_rule(level: &Level, v: usize, hard: Hard<'_>) -> VertexRule {
-    let (sharp, corners_kept) = (hard.edges, hard.corners);
-    let (mut hard, mut boundary, mut ends) = (0usize, false, [0u32; 2]);
+    // The count of hard edges, the first two's other ends, and whether any is a boundary.
+    let (mut count, mut boundary, mut ends) = (0usize, false, [0u32; 2]);
     for &e in level.v_edges(v) {
         let b = level.is_boundary(e as usize);
-        if b || is_sharp(sharp, e) {
-            if hard < 2 {
-                ends[hard] = level.other_end(e, v);
+        if b || is_sharp(hard.edges, e) {
+            if count < 2 {
+                ends[count] = level.other_end(e, v);
             }
-            hard += 1;
+            count += 1;
             boundary |= b;
         }
     }
     let n = level.v_edges(v).len();
-    if boundary && corners_kept && level.v_faces(v).len() == 1 {
+    if boundary && hard.corners && level.v_faces(v).len() == 1 {
         return VertexRule::Kept;
     }
-    match hard {
+    match count {
         2 => VertexRule::Crease(ends),
         0 | 1 if !boundary && n >= 3 && level.v_faces(v).len() == n => VertexRule::Inside,
         _ => VertexRule::Kept,
@@ -101,24 +101,31 @@ pub fn halves<'a>(level: &Level, e: usize, fine: &'a Level) -> impl Iterator<Ite
     })
 }
 
+/// Carries per-edge tags of `level` to `fine` (the level after it): both halves of each
+/// edge whose tag is not `none` get its tag, every other fine edge `none`.
+pub fn tags_below<T: Copy + PartialEq>(level: &Level, tags: &[T], none: T, fine: &Level) -> Vec<T> {
+    let mut out = vec![none; fine.ne()];
+    for (e, &t) in tags.iter().enumerate().filter(|&(_, &t)| t != none) {
+        for h in halves(level, e, fine) {
+            out[h as usize] = t;
+        }
+    }
+    out
+}
+
 /// The sharp edges of `fine` (the level after `level`): both halves of every sharp
 /// edge of `level`; empty when none is sharp.
 pub fn sharp_below(level: &Level, sharp: &[bool], fine: &Level) -> Vec<bool> {
     if !sharp.contains(&true) {
         return Vec::new();
     }
-    let mut out = vec![false; fine.ne()];
-    for e in (0..level.ne()).filter(|&e| sharp[e]) {
-        for h in halves(level, e, fine) {
-            out[h as usize] = true;
-        }
-    }
-    out
+    tags_below(level, sharp, false, fine)
 }
 
 /// One Catmull-Clark refinement in integers (SPEC.md 9.10): `x` holds the coarse
 /// values (`level.nv`) and gets the fine ones (`level.fine_nv()`), every rule rounded
-/// with `[n / d]`; `sharp` flags `level`'s creased edges (empty: none):
+/// with `[n / d]`; `hard` holds `level`'s creased edges and whether boundary corners
+/// are kept (a kept corner is unchanged):
 /// * face point: `[sum of corners / k]`;
 /// * edge point: `[(a + b + f0 + f1) / 4]` inside, `[(a + b) / 2]` on a boundary or a
 ///   crease;
@@ -204,7 +211,7 @@ fn limit_mask(level: &Level, v: usize, hard: Hard<'_>) -> Option<(Vec<(u32, i128
 }
 
 /// Places refined values on the limit surface (SPEC.md 9.10): `level` is the level
-/// whose coarse mesh is the finest one (its faces quads), `sharp` its creased edges.
+/// whose coarse mesh is the finest one (its faces quads), `hard` its sharp features.
 /// Inside, a vertex of `n` edges becomes `[(n^2 v + 4 sum of neighbours + sum of the
 /// opposite corners of its faces) / (n (n + 5))]`; with two hard edges to `a`, `b`,
 /// `[(a + 4 v + b) / 6]`; otherwise (or beside a face that is not a quad) it is kept.
