@@ -107,7 +107,8 @@ def draco_whole(path, raw):
 
 
 def whole_files(args):
-    """The whole-file table: subwave default and --keep-order, xz, zstd, Draco."""
+    """The whole-file table: subwave --canonical (positions and faces) and --keep-order
+    (the default for these files), xz, zstd, Draco."""
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     folder = args[0] if args else os.path.join(root, "..", "shared", "corpus", "blender")
     exe = subwave_bin()
@@ -118,7 +119,7 @@ def whole_files(args):
             path = os.path.join(folder, name)
             raw = open(path, "rb").read()
             out = {}
-            for tag, extra in [("default", []), ("keep", ["--keep-order"])]:
+            for tag, extra in [("canonical", ["--canonical"]), ("keep", ["--keep-order"])]:
                 swv = os.path.join(tmp, tag + ".swv")
                 subprocess.run([exe, "-q", "compress", path, swv, "-f"] + extra, check=True)
                 out[tag] = os.path.getsize(swv)
@@ -127,8 +128,8 @@ def whole_files(args):
             exact = open(back, "rb").read() == raw
             xz = len(subprocess.run(["xz", "-9e", "-c"], input=raw, capture_output=True, check=True).stdout)
             zst = len(subprocess.run(["zstd", "-19", "-c", "-q"], input=raw, capture_output=True, check=True).stdout)
-            rows.append((name, len(raw), out["default"], out["keep"], exact, xz, zst, draco_whole(path, raw)))
-    print("| file | bytes | subwave default | subwave --keep-order | same bytes back | xz -9e | zstd -19 | Draco cl10 (q16/12/10, lossy) | keep-order / xz |")
+            rows.append((name, len(raw), out["canonical"], out["keep"], exact, xz, zst, draco_whole(path, raw)))
+    print("| file | bytes | subwave --canonical (positions, faces) | subwave --keep-order (default) | same bytes back | xz -9e | zstd -19 | Draco cl10 (q16/12/10, lossy) | keep-order / xz |")
     print("|---|---:|---:|---:|---|---:|---:|---:|---:|")
     for r in rows:
         d = "-" if r[7] is None else str(r[7])

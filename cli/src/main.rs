@@ -52,9 +52,15 @@ enum Command {
     Compress {
         #[command(flatten)]
         io: Files,
-        /// Store the input's vertex and face order so decompression restores it.
-        #[arg(long)]
+        /// Store the input's order and its own bytes so decompression gives the file back
+        /// byte for byte. Implied when the file holds more than positions and faces (UVs,
+        /// normals, colours, materials, groups, other properties), unless --canonical.
+        #[arg(long, conflicts_with = "canonical")]
         keep_order: bool,
+        /// Positions and faces only, in canonical order: drops whatever else the file
+        /// holds (with a warning naming it) for a smaller container.
+        #[arg(long)]
+        canonical: bool,
         #[command(flatten)]
         coding: Coding,
     },
@@ -390,10 +396,21 @@ fn max_grid_error(raw: &subwave::RawCoords, mesh: &subwave::Mesh, q: &Quantizati
     worst
 }
 
+/// Which order (and so how much of the file) `compress` keeps.
+#[derive(Clone, Copy)]
+enum Order {
+    /// The file's order and bytes when it holds more than positions and faces.
+    Auto,
+    /// The file's order and bytes (`--keep-order`).
+    Keep,
+    /// Positions and faces in canonical order (`--canonical`).
+    Canonical,
+}
+
 /// What a batch does to each file.
 enum Job<'a> {
     Compress {
-        keep_order: bool,
+        order: Order,
         coding: &'a Coding,
     },
     Decompress {
@@ -551,8 +568,8 @@ fn batch_one(cli: &Cli, job: &Job<'_>, input: &str, out: &Path) -> Result<(u64, 
         bar: indicatif::ProgressBar::hidden(),
     };
     let written = match job {
-        Job::Compress { keep_order, coding } => {
-            compress(cli, input, &out_name, *keep_order, coding, true, &quiet)?
+        Job::Compress { order, coding } => {
+            compress(cli, input, &out_name, *order, coding, true, &quiet)?
         }
         Job::Decompress { format, max_level } => {
             let out_name = match Format::from_path(&out_name) {
@@ -637,7 +654,7 @@ fn compress(
     cli: &Cli,
     input: &str,
     output: &str,
-    keep_order: bool,
+    order: Order,
     coding: &Coding,
     in_batch: bool,
     progress: &Progress,
@@ -647,8 +664,14 @@ fn compress(
     let mut bytes = read_input(input)?;
     check_kind(input, &bytes)?;
     let loaded = subwave::load(&bytes, coding.bits).map_err(|e| fail(input, e))?;
+    let keep_order = match order {
+        Order::Keep => true,
+        Order::Canonical => false,
+        // Nothing the file holds is left out by default.
+        Order::Auto => !loaded.dropped.is_empty(),
+    };
     if !keep_order {
-        warn_dropped(cli.quiet, input, &loaded);
+        warn_dropped(cli.quiet, input, &loaded, "--canonical: positions and faces only");
         // The file's bytes are needed no more: free them before coding.
         bytes = Vec::new();
     }
@@ -829,11 +852,12 @@ fn write_output(path: &str, bytes: &[u8]) -> Result<(), Failure> {
     Ok(())
 }
 
-fn warn_dropped(quiet: bool, file: &str, loaded: &subwave::Loaded) {
+/// Warns that what `loaded` holds besides positions and faces is left out, and why.
+fn warn_dropped(quiet: bool, file: &str, loaded: &subwave::Loaded, why: &str) {
     if !quiet && !loaded.dropped.is_empty() {
         let list: Vec<&str> = loaded.dropped.iter().map(String::as_str).collect();
         eprintln!(
-            "subwave: warning: {file}: not carried (positions and faces only; --keep-order keeps the whole file): {}",
+            "subwave: warning: {file}: not carried ({why}): {}",
             list.join(", ")
         );
     }
@@ -866,18 +890,21 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
                     recursive,
                 },
             keep_order,
+            canonical,
             coding,
         } => {
-            let job = Job::Compress {
-                keep_order: *keep_order,
-                coding,
+            let order = match (keep_order, canonical) {
+                (true, _) => Order::Keep,
+                (_, true) => Order::Canonical,
+                _ => Order::Auto,
             };
+            let job = Job::Compress { order, coding };
             match output_dir {
                 Some(dir) => batch(cli, &job, files, dir, *recursive, coding.threads),
                 None => {
                     let (input, output) = pair(files, *recursive)?;
                     let progress = Progress::new(false);
-                    compress(cli, input, output, *keep_order, coding, false, &progress)?;
+                    compress(cli, input, output, order, coding, false, &progress)?;
                     Ok(ExitCode::SUCCESS)
                 }
             }
@@ -1025,7 +1052,12 @@ fn verify(
     let bytes = read_input(input)?;
     check_kind(input, &bytes)?;
     let loaded = subwave::load(&bytes, coding.bits).map_err(|e| fail(input, e))?;
-    warn_dropped(cli.quiet, input, &loaded);
+    warn_dropped(
+        cli.quiet,
+        input,
+        &loaded,
+        "verify checks positions and faces only",
+    );
     let opts = &EncodeOptions {
         progress: progress.encoder(),
         ..coding.options(loaded.mesh.vertex_count())

@@ -260,7 +260,34 @@ fn usage_errors_exit_2_and_help_works() {
 }
 
 #[test]
-fn warnings_name_what_was_dropped_and_q_silences_them() {
+fn by_default_a_file_with_attributes_comes_back_whole() {
+    // UVs, normals, a material and a group: without options nothing is dropped, the
+    // file comes back byte for byte, and no warning is printed.
+    let input = corpus("textured_cc3.obj");
+    let swv = compressed(&input, "textured_default.swv", &[]);
+    let back = tmp("textured_default.obj");
+    let o = run(&["decompress", swv.to_str().unwrap(), back.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read(&back).unwrap(), std::fs::read(&input).unwrap());
+    let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
+    assert_eq!(v["keep_order"], true, "{v}");
+    // A file of positions and faces alone stays in canonical order (no ORDR).
+    let plain = compressed(&corpus("cube_cc4.obj"), "plain_default.swv", &[]);
+    let v = json(&run(&["info", plain.to_str().unwrap(), "--json"]));
+    assert_eq!(v["keep_order"], false, "{v}");
+    // --keep-order and --canonical contradict each other: a usage error.
+    let o = run(&[
+        "compress",
+        input.to_str().unwrap(),
+        tmp("both.swv").to_str().unwrap(),
+        "--keep-order",
+        "--canonical",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn canonical_warns_what_it_drops_and_q_silences_it() {
     let p = tmp("attrs.obj");
     std::fs::write(
         &p,
@@ -271,6 +298,7 @@ fn warnings_name_what_was_dropped_and_q_silences_them() {
         "compress",
         p.to_str().unwrap(),
         tmp("attrs.swv").to_str().unwrap(),
+        "--canonical",
     ]);
     assert!(o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
@@ -284,8 +312,17 @@ fn warnings_name_what_was_dropped_and_q_silences_them() {
         "compress",
         p.to_str().unwrap(),
         tmp("attrs.swv").to_str().unwrap(),
+        "--canonical",
     ]);
     assert!(o.stderr.is_empty());
+    // Without --canonical nothing is dropped, so nothing is said.
+    let o = run(&[
+        "-f",
+        "compress",
+        p.to_str().unwrap(),
+        tmp("attrs.swv").to_str().unwrap(),
+    ]);
+    assert!(o.status.success() && o.stderr.is_empty(), "{o:?}");
 }
 
 #[test]
