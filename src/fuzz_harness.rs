@@ -88,14 +88,23 @@ fn arbitrary_coordinates(b: &mut Bytes<'_>, n: usize) -> Vec<[i64; 3]> {
 pub fn decode_tight(data: &[u8]) {
     let opts = DecodeOptions {
         limits: Limits::tight(),
-        max_level: None,
+        ..DecodeOptions::default()
     };
-    if let Ok(d) = crate::decode(data, &opts) {
+    let one = crate::decode(data, &opts);
+    if let Ok(d) = &one {
         d.mesh.validate().expect("decoded mesh is valid");
+    }
+    // Two threads decode the same mesh, or refuse the same container.
+    let two = crate::decode(data, &DecodeOptions { threads: 2, ..opts });
+    match (&one, &two) {
+        (Ok(a), Ok(b)) => assert_eq!(a.mesh, b.mesh, "threads change the mesh"),
+        (Err(_), Err(_)) => {}
+        _ => panic!("one thread and two disagree on whether the container decodes"),
     }
     let prefix = DecodeOptions {
         limits: Limits::tight(),
         max_level: Some(data.first().copied().unwrap_or(0) % 4),
+        ..DecodeOptions::default()
     };
     let _ = crate::decode(data, &prefix);
     let _ = crate::inspect(data, &Limits::tight());
@@ -248,7 +257,7 @@ pub fn coder_roundtrip(data: &[u8]) {
 pub fn decode_twice(data: &[u8]) {
     let opts = DecodeOptions {
         limits: Limits::tight(),
-        max_level: None,
+        ..DecodeOptions::default()
     };
     let mut a = Mesh::new();
     a.positions = vec![[7; 3]; 64];

@@ -123,7 +123,7 @@ fn huge_declared_counts_hit_limits_before_allocation() {
     let b = with_header(1 << 24, 1 << 24, 1 << 26);
     let tight = DecodeOptions {
         limits: Limits::tight(),
-        max_level: None,
+        ..DecodeOptions::default()
     };
     assert!(matches!(
         subwave::decode(&b, &tight),
@@ -244,7 +244,7 @@ fn counts_within_limits_but_beyond_the_bytes_are_refused_before_allocation() {
     limits.max_expansion = u64::MAX;
     let opts = DecodeOptions {
         limits,
-        max_level: None,
+        ..DecodeOptions::default()
     };
     match subwave::decode(&b, &opts) {
         Err(Error::CorruptStream {

@@ -78,7 +78,8 @@ enum Command {
         /// after level K's section.
         #[arg(long, value_name = "K")]
         max_level: Option<u8>,
-        /// With -o: files decoded at once (0: one per core).
+        /// Threads (0: one per core): with -o, files decoded at once (each on one);
+        /// for one file, the decoder's (the mesh is the same for every count).
         #[arg(long, value_name = "N", default_value_t = 0)]
         threads: usize,
     },
@@ -576,7 +577,7 @@ fn batch_one(cli: &Cli, job: &Job<'_>, input: &str, out: &Path) -> Result<(u64, 
                 None => with_extension(input, &out_name, *format)?,
                 Some(_) => out_name.into_owned(),
             };
-            decompress(cli, input, &out_name, *format, *max_level, &quiet)?
+            decompress(cli, input, &out_name, *format, *max_level, 1, &quiet)?
         }
     };
     let read = std::fs::metadata(input).map_or(0, |m| m.len());
@@ -671,7 +672,12 @@ fn compress(
         Order::Auto => !loaded.dropped.is_empty(),
     };
     if !keep_order {
-        warn_dropped(cli.quiet, input, &loaded, "--canonical: positions and faces only");
+        warn_dropped(
+            cli.quiet,
+            input,
+            &loaded,
+            "--canonical: positions and faces only",
+        );
         // The file's bytes are needed no more: free them before coding.
         bytes = Vec::new();
     }
@@ -704,6 +710,7 @@ fn decompress(
     output: &str,
     format: Option<OutFormat>,
     max_level: Option<u8>,
+    threads: usize,
     progress: &Progress,
 ) -> Result<u64, Failure> {
     if format.is_none() && output != "-" && Format::from_path(output).is_none() {
@@ -724,6 +731,7 @@ fn decompress(
     let opts = DecodeOptions {
         limits: Limits::default(),
         max_level,
+        threads,
     };
     let dec = subwave::decode(&bytes, &opts).map_err(|e| fail(input, e))?;
     let fmt = match format {
@@ -929,7 +937,11 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
                 None => {
                     let (input, output) = pair(files, *recursive)?;
                     let progress = Progress::new(false);
-                    decompress(cli, input, output, *format, *max_level, &progress)?;
+                    let threads = match *threads {
+                        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+                        n => n,
+                    };
+                    decompress(cli, input, output, *format, *max_level, threads, &progress)?;
                     Ok(ExitCode::SUCCESS)
                 }
             }
@@ -1071,7 +1083,14 @@ fn verify(
         encode_times.push(t0.elapsed().as_secs_f64() * 1e3);
         progress.stage("decoding");
         let t1 = Instant::now();
-        let dec = subwave::decode_slice(&enc.bytes).map_err(|e| fail(input, e))?;
+        let dec = subwave::decode(
+            &enc.bytes,
+            &DecodeOptions {
+                threads: opts.threads.max(1),
+                ..DecodeOptions::default()
+            },
+        )
+        .map_err(|e| fail(input, e))?;
         decode_times.push(t1.elapsed().as_secs_f64() * 1e3);
         // The coding is deterministic: every run writes the same container.
         if last
@@ -1108,6 +1127,7 @@ fn verify(
             "encode_threads": opts.threads.max(1),
             "effort": opts.effort,
             "decode_ms": decode_ms,
+            "decode_threads": opts.threads.max(1),
             "repeat": repeat,
             "exact": exact,
             "levels": enc.header.levels,
@@ -1120,15 +1140,15 @@ fn verify(
         println!("{v}");
     } else {
         println!(
-            "{}: {} vertices, {} faces -> {} bytes, {:.3} bits per vertex; encode {:.1} ms ({} threads), decode {:.1} ms{}; {}",
+            "{}: {} vertices, {} faces -> {} bytes, {:.3} bits per vertex; encode {:.1} ms, decode {:.1} ms ({} threads each){}; {}",
             Path::new(input).file_name().map_or(input.into(), |f| f.to_string_lossy()),
             n,
             loaded.mesh.face_count(),
             enc.bytes.len(),
             subwave::json::bits_per_vertex(enc.bytes.len(), n),
             encode_ms,
-            opts.threads.max(1),
             decode_ms,
+            opts.threads.max(1),
             if repeat > 1 {
                 format!(" (medians of {repeat})")
             } else {

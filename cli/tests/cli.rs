@@ -268,7 +268,10 @@ fn by_default_a_file_with_attributes_comes_back_whole() {
     let back = tmp("textured_default.obj");
     let o = run(&["decompress", swv.to_str().unwrap(), back.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(std::fs::read(&back).unwrap(), std::fs::read(&input).unwrap());
+    assert_eq!(
+        std::fs::read(&back).unwrap(),
+        std::fs::read(&input).unwrap()
+    );
     let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
     assert_eq!(v["keep_order"], true, "{v}");
     // A file of positions and faces alone stays in canonical order (no ORDR).

@@ -24,6 +24,9 @@ pub struct DecodeOptions {
     /// Decode only up to this level (0 = the base mesh). The container may then be cut
     /// off anywhere after that level's section.
     pub max_level: Option<u8>,
+    /// Threads the decoder may use (0 and 1: the calling thread only). The mesh is the
+    /// same for every count.
+    pub threads: usize,
 }
 
 /// The result of [`decode`].
@@ -208,7 +211,7 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
     )?;
     let mut mesh = match h.transform {
         _ if h.levels == 0 => base,
-        Transform::Wavelet(w) => synthesise_levels(&c, &h, base, w, level)?,
+        Transform::Wavelet(w) => synthesise_levels(&c, &h, base, w, level, opts.threads)?,
         Transform::Fit {
             bits,
             limit,
@@ -329,7 +332,7 @@ fn attribute(payload: &[u8], limits: &Limits, order: Option<&[u8]>) -> Result<At
     let (width, nested) = attr::decode(payload, limits, order)?;
     let opts = DecodeOptions {
         limits: limits.clone(),
-        max_level: None,
+        ..DecodeOptions::default()
     };
     let d = decode_nested(&nested, &opts)
         .map_err(|e| Error::corrupt("ATTR", format!("nested container: {e}")))?;
@@ -402,6 +405,7 @@ fn synthesise_levels(
     base: Mesh,
     w: Wavelet,
     upto: u8,
+    threads: usize,
 ) -> Result<Mesh> {
     let mut topo = Topo::new(base.vertex_count());
     topo.idx = base.faces;
@@ -417,6 +421,7 @@ fn synthesise_levels(
         x: std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect()),
         models: levl::LevelModels::new(),
         pole: pole_flags(h, &topo)?,
+        threads,
     };
     // A level's successor, derived from it (cheaper than from its fine faces).
     let mut next: Option<Level> = None;
@@ -463,6 +468,8 @@ struct Synthesis<'h> {
     models: levl::LevelModels,
     /// Polar hierarchies: which vertices are poles.
     pole: Vec<bool>,
+    /// Threads the level decoder may use.
+    threads: usize,
 }
 
 impl Synthesis<'_> {
@@ -488,34 +495,57 @@ impl Synthesis<'_> {
         // memory, which is smaller than making them after. Modes 6 and 9 read the
         // predictions' phases (SPEC.md 10.6, 10.9).
         let phased = levl::reads_phases(payload);
-        let t = LevelTransform::new(&self.scheme, &level, l, x, phased);
-        // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
-        let targets = levl::reads_targets(payload)
-            .then(|| t.tangent_targets(&level, x))
-            .flatten();
-        let phaser = phased.then(|| t.phaser(&level)).flatten();
-        let phasing = match (t.phases(), &phaser) {
-            (Some(p), _) => Some(levl::Phasing::Ready(p)),
-            (None, Some(p)) => Some(levl::Phasing::Cc(p)),
-            (None, None) => None,
-        };
         let models = &mut self.models;
-        levl::decode(
-            payload,
-            &level,
-            family,
-            x,
-            models,
-            targets.as_deref(),
-            phasing,
-        )?;
+        let threads = self.threads;
+        // On more than one thread, a level whose reading needs nothing of its transform
+        // (no phases, no tangent targets) has the transform made beside the reading,
+        // from a copy of the coarse values.
+        let beside = threads > 1
+            && !phased
+            && !levl::reads_targets(payload)
+            && family.details(&level) >= levl::BESIDE_MIN;
+        let t = if beside {
+            let coarse = x.clone();
+            let (scheme, level) = (&self.scheme, &level);
+            let t = std::thread::scope(|s| -> Result<LevelTransform<'_>> {
+                let made = s.spawn(|| LevelTransform::new(scheme, level, l, &coarse, false));
+                let read = levl::decode(payload, level, family, x, models, None, None, threads);
+                let t = made.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+                read.map(|()| t)
+            })?;
+            t.synthesise(level, x);
+            t
+        } else {
+            let t = LevelTransform::new(&self.scheme, &level, l, x, phased);
+            // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
+            let targets = levl::reads_targets(payload)
+                .then(|| t.tangent_targets(&level, x))
+                .flatten();
+            let phaser = phased.then(|| t.phaser(&level)).flatten();
+            let phasing = match (t.phases(), &phaser) {
+                (Some(p), _) => Some(levl::Phasing::Ready(p)),
+                (None, Some(p)) => Some(levl::Phasing::Cc(p)),
+                (None, None) => None,
+            };
+            levl::decode(
+                payload,
+                &level,
+                family,
+                x,
+                models,
+                targets.as_deref(),
+                phasing,
+                threads,
+            )?;
+            // A Catmull-Clark level in mode 6 or 9 is synthesised as it is read.
+            if phaser.is_none() {
+                t.synthesise(&level, x);
+            }
+            t
+        };
         if last {
             // The last level read: its magnitudes serve no later level.
             *models = levl::LevelModels::new();
-        }
-        // A Catmull-Clark level in mode 6 or 9 is synthesised as it is read.
-        if phaser.is_none() {
-            t.synthesise(&level, x);
         }
         drop(t);
         if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {

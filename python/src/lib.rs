@@ -297,11 +297,12 @@ fn parts<'py>(py: Python<'py>, mesh: &Mesh, q: &Quantization) -> PyResult<MeshPa
 /// Decompresses a container: the mesh's parts, then its levels, family and whether the
 /// vertices are in the input's order.
 #[pyfunction]
-#[pyo3(signature = (data, max_level=None))]
+#[pyo3(signature = (data, max_level=None, threads=1))]
 fn decompress<'py>(
     py: Python<'py>,
     data: &[u8],
     max_level: Option<u8>,
+    threads: usize,
 ) -> PyResult<(MeshParts<'py>, u8, String, bool)> {
     let dec = py
         .detach(|| {
@@ -310,6 +311,7 @@ fn decompress<'py>(
                 &DecodeOptions {
                     limits: Limits::default(),
                     max_level,
+                    threads,
                 },
             )
         })

@@ -257,7 +257,11 @@ def compress(
 
 
 def decompress(
-    data: Union[bytes, bytearray, memoryview], *, max_level: Optional[int] = None, integers: bool = False
+    data: Union[bytes, bytearray, memoryview],
+    *,
+    max_level: Optional[int] = None,
+    integers: bool = False,
+    threads: int = 1,
 ) -> Mesh:
     """Decompresses a container into a :class:`Mesh`.
 
@@ -266,8 +270,11 @@ def decompress(
         max_level: decode only up to refinement level ``max_level`` (0 = the base mesh);
             also works on a container cut off after that level.
         integers: give ``vertices`` as the coded int64 integers instead of values.
+        threads: threads the decoder may use (the mesh is the same for every count).
     """
-    parts, levels, family, input_order = _subwave.decompress(bytes(data), max_level)
+    if threads < 1:
+        raise ValueError(f"threads must be at least 1, not {threads}")
+    parts, levels, family, input_order = _subwave.decompress(bytes(data), max_level, threads)
     mesh = _mesh(
         parts,
         levels=levels,

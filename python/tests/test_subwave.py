@@ -272,3 +272,23 @@ def test_shared_corpus_round_trips_exactly():
     for path in files:
         mesh = subwave.read(path)
         check_round_trip(mesh.vertices, mesh.flat_faces, mesh.face_offsets, keep_order=True, threads=2)
+
+
+def test_decoder_threads_give_the_same_mesh():
+    # A 129 x 129 grid of random heights: levels with enough details for the decoder's
+    # work beside the reading.
+    rng = np.random.default_rng(7)
+    n = 129
+    ys, xs = np.mgrid[0:n, 0:n]
+    verts = np.stack([xs.ravel(), ys.ravel(), rng.integers(0, 4000, n * n)], axis=1).astype(np.int64)
+    idx = (ys[:-1, :-1] * n + xs[:-1, :-1]).ravel()
+    faces = np.stack([idx, idx + 1, idx + n + 1, idx + n], axis=1)
+    data = subwave.compress(verts, faces, keep_order=True)
+    one = subwave.decompress(data, threads=1)
+    assert same_bits(one.vertices, verts)
+    for threads in (2, 3):
+        other = subwave.decompress(data, threads=threads)
+        assert same_bits(other.vertices, one.vertices)
+        assert faces_of(other) == faces_of(one)
+    with pytest.raises(ValueError):
+        subwave.decompress(data, threads=0)

@@ -15,7 +15,7 @@ use frames::*;
 use models::*;
 
 pub use models::LevelModels;
-pub use read::decode;
+pub use read::{decode, BESIDE_MIN};
 pub use write::encode;
 
 use crate::entropy::{class_of, Decoder, Encoder, IntModel};

@@ -66,7 +66,8 @@ pub(super) fn get(
 
 /// Decodes what [`encode`] wrote into `x[k][nv..]`; `x[k][..nv]` are the coarse values.
 /// `targets` are the level's tangent targets (modes 2 and 7), `phasing` its phases (mode
-/// 6), each where the level has them.
+/// 6), each where the level has them. With `threads` above 1 a rotated level's rotations
+/// are made on another thread while its values are read (the same values either way).
 #[allow(clippy::too_many_arguments)]
 pub fn decode(
     payload: &[u8],
@@ -76,6 +77,7 @@ pub fn decode(
     models: &mut LevelModels,
     targets: Option<&[[i64; 3]]>,
     phasing: Option<Phasing<'_>>,
+    threads: usize,
 ) -> Result<()> {
     let (nv, nd) = (level.nv, family.details(level));
     // Density bound (SPEC.md 2.6), checked before the level's arrays are sized.
@@ -119,6 +121,11 @@ pub fn decode(
     // Mode 9 with joint rounding also reads the predictions' fractions.
     let joint = matches!(mode, Mode::CorrectedPhased(_, Rounding::Joint));
     let (mut preds, mut cc_phases) = edge_predictions(phasing.as_ref(), corr_phased, x, ne.min(nd), joint);
+    let rotated = matches!(mode, Mode::Rotated | Mode::Shifted(..));
+    if rotated && threads > 1 && nd >= BESIDE_MIN {
+        return decode_rotated(&mut dec, &mut m, level, family, x, mags, &normals, mode, (unbinned, zero))
+            .map(|()| models.last = Some(m));
+    }
     for i in 0..nd {
         // What a Catmull-Clark level in mode 6 adds to the detail: its prediction.
         let mut fine = [0i64; 3];
@@ -188,6 +195,77 @@ pub fn decode(
         finish_cc(p, level, x, corr_phased.then_some(&preds));
     }
     models.last = Some(m);
+    Ok(())
+}
+
+/// Fewest details for which a level's work beside its reading (a rotated level's
+/// rotations, the decoder's transform) goes to another thread.
+pub const BESIDE_MIN: usize = 4096;
+
+/// Details per block of [`decode_rotated`]: the rotations of one block are made while
+/// the values of the one before are read (a bounded store, whatever the level's size).
+const ROT_BLOCK: usize = 16384;
+
+/// A rotated level (modes 4 and 5, SPEC.md 10.5) read as [`decode`] reads it, on two
+/// threads: no value read depends on a rotation (their models see the rotated values,
+/// and no frame predicts), so each block's rotations are made beside the reading of its
+/// values, and applied after. The coarse values `x[k][..nv]` are read-only meanwhile.
+#[allow(clippy::too_many_arguments)]
+fn decode_rotated(
+    dec: &mut Decoder,
+    m: &mut Models,
+    level: &Level,
+    family: Family,
+    x: &mut [Vec<i64>; 3],
+    mags: &mut [[u8; 3]],
+    normals: &[[i128; 3]],
+    mode: Mode<'_>,
+    (unbinned, zero): (bool, u8),
+) -> Result<()> {
+    let (nv, nd) = (level.nv, family.details(level));
+    let shifted = matches!(mode, Mode::Shifted(..));
+    let [x0, x1, x2] = x;
+    let (c0, f0) = x0.split_at_mut(nv);
+    let (c1, f1) = x1.split_at_mut(nv);
+    let (c2, f2) = x2.split_at_mut(nv);
+    // `RotFrame::new` reads the coarse values as whole arrays: a copy of them.
+    let coarse: [Vec<i64>; 3] = [c0.to_vec(), c1.to_vec(), c2.to_vec()];
+    let coarse = &coarse;
+    let rotations = |lo: usize, hi: usize| -> Vec<Option<(Rotation, [i64; 3])>> {
+        (lo..hi)
+            .map(|i| {
+                let fd = if family == Family::Sqrt2 { level.ne() + i } else { i };
+                frame(level, normals, fd).map(|(_, n)| {
+                    let f = RotFrame::new(level, coarse, family, fd, n, shifted);
+                    (f.rot, f.pred(mode))
+                })
+            })
+            .collect()
+    };
+    let mut lo = 0;
+    while lo < nd {
+        let hi = (lo + ROT_BLOCK).min(nd);
+        let rots = std::thread::scope(|s| -> Result<_> {
+            let made = s.spawn(|| rotations(lo, hi));
+            for i in lo..hi {
+                let (class, bins, _) = contexts(level, mags, family, i);
+                let (r, mg) = get(dec, m, class, bins, None, Phased::No, unbinned, zero)?;
+                mags[nv + i] = mg;
+                f0[i] = r[0];
+                f1[i] = r[1];
+                f2[i] = r[2];
+            }
+            Ok(made.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+        })?;
+        for (i, rot) in (lo..hi).zip(rots) {
+            if let Some((rot, pred)) = rot {
+                let r = [f0[i], f1[i], f2[i]];
+                let d = in_range(Some(rot.inverse(in_range(plus(r, pred))?)))?;
+                (f0[i], f1[i], f2[i]) = (d[0], d[1], d[2]);
+            }
+        }
+        lo = hi;
+    }
     Ok(())
 }
 

@@ -27,7 +27,7 @@ fn decode_fresh(
 ) -> Result<[Vec<i64>; 3]> {
     let mut y = coarse.clone();
     let mut models = LevelModels::new();
-    decode(bytes, level, family, &mut y, &mut models, targets, phasing)?;
+    decode(bytes, level, family, &mut y, &mut models, targets, phasing, 1)?;
     Ok(y)
 }
 
