@@ -32,7 +32,14 @@ struct Walk {
     row_next: Option<u32>,
     /// The row start before this row's.
     last_row: Option<u32>,
+    /// The last two slots, and how many slots there are.
     slot: usize,
+    slot2: usize,
+    slots: usize,
+    /// Items in the current row, and in the one before (0 before the first).
+    run: usize,
+    last_run: usize,
+    /// Per context ([`Walk::context`]), a model of the slots.
     models: Vec<AdaptiveModel>,
     /// The last item reached by the escape, and the model of the next one's distance.
     jumped: u32,
@@ -51,10 +58,20 @@ impl Walk {
             row_next: None,
             last_row: None,
             slot: 0,
-            models: (0..slots).map(|_| AdaptiveModel::new(slots)).collect(),
+            slot2: 0,
+            slots,
+            run: 0,
+            last_run: 0,
+            models: (0..2 * slots * slots).map(|_| AdaptiveModel::new(slots)).collect(),
             jumped: 0,
             jump: IntModel::new(),
         }
+    }
+
+    /// The model of the next slot (SPEC.md 7.2): by the previous two slots, and whether
+    /// the current row is as long as the one before (where grids' rows end).
+    fn context(&self) -> usize {
+        2 * (self.slot2 * self.slots + self.slot) + (self.run == self.last_run) as usize
     }
 
     /// The item after the previous one in canonical order (the first at the start).
@@ -70,7 +87,8 @@ impl Walk {
         let escape = cands.len();
         // Of the slots that predict x, the one seen most often in this context (the
         // first on ties): the walk then keeps to one kind of step where several agree.
-        let model = &self.models[self.slot];
+        let ctx = self.context();
+        let model = &self.models[ctx];
         let slot = (0..escape)
             .filter(|&i| cands[i].0 == Some(x))
             .fold(None, |best: Option<usize>, i| match best {
@@ -78,7 +96,7 @@ impl Walk {
                 _ => Some(i),
             })
             .unwrap_or(escape);
-        e.symbol(&mut self.models[self.slot], slot);
+        e.symbol(&mut self.models[ctx], slot);
         if slot == escape {
             // The rank among the items not met, as a distance from the last escape's.
             let r = self.unused.rank(x as usize) as i64;
@@ -99,7 +117,8 @@ impl Walk {
         candidate: &dyn Fn(&Walk, usize) -> Candidate,
         adjacent: Adjacent<'_>,
     ) -> Result<u32> {
-        let slot = d.symbol(&mut self.models[self.slot])?;
+        let ctx = self.context();
+        let slot = d.symbol(&mut self.models[ctx])?;
         let (x, from) = if slot == escape {
             let r0 = self.unused.rank(self.jumped as usize) as i64;
             let r = r0 + d.int(&mut self.jump)?;
@@ -132,13 +151,17 @@ impl Walk {
             if self.row_next.is_none() {
                 self.row_next = Some(x);
             }
+            self.run += 1;
         } else {
             self.last_row = self.row;
             self.row = Some(x);
             self.row_next = None;
+            self.last_run = self.run;
+            self.run = 1;
         }
         self.from = from.or(self.prev.filter(|_| step));
         self.prev = Some(x);
+        self.slot2 = self.slot;
         self.slot = slot;
     }
 }
@@ -278,7 +301,7 @@ impl<'a> FaceWalk<'a> {
             around,
             walk: Walk::new(nf, F_SLOTS),
             firsts: vec![0; nf],
-            corner_models: (0..C_SLOTS).map(|_| AdaptiveModel::new(C_SLOTS)).collect(),
+            corner_models: (0..C_SLOTS * F_SLOTS).map(|_| AdaptiveModel::new(C_SLOTS)).collect(),
             corner_slot: 0,
         }
     }
@@ -318,7 +341,7 @@ impl<'a> FaceWalk<'a> {
             .iter()
             .position(|&c| c == Some(first))
             .unwrap_or(C_SLOTS - 1);
-        e.symbol(&mut self.corner_models[self.corner_slot], slot);
+        e.symbol(&mut self.corner_models[self.corner_slot * F_SLOTS + self.walk.slot], slot);
         if slot == C_SLOTS - 1 {
             e.uniform(first as u64, self.around.face(g as usize).len() as u64);
         }
@@ -340,7 +363,7 @@ impl<'a> FaceWalk<'a> {
         })?;
         let k = self.around.face(g as usize).len();
         let corners = self.corner_candidates(g, &prev);
-        let slot = d.symbol(&mut self.corner_models[self.corner_slot])?;
+        let slot = d.symbol(&mut self.corner_models[self.corner_slot * F_SLOTS + self.walk.slot])?;
         let first = if slot == C_SLOTS - 1 {
             Some(d.uniform(k.max(1) as u64)? as usize)
         } else {
