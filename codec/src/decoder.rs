@@ -425,21 +425,41 @@ fn synthesise_levels(
     };
     // A level's successor, derived from it (cheaper than from its fine faces).
     let mut next: Option<Level> = None;
+    let family = s.scheme.family;
+    let lists = w == Wavelet::Sqrt2Sym;
     for l in 0..upto as usize {
-        let level = match next.take() {
+        let mut level = match next.take() {
             Some(n) => n,
             None => Level::new(&topo)?,
         };
         let section = &c.sections[2 + l];
         let last = l + 1 == upto as usize;
-        let level = s
-            .level(level, l, section.payload, last)
-            .map_err(|e| e.in_level(l + 1, section.offset))?;
-        match s.scheme.family {
+        let at = |e: Error| e.in_level(l + 1, section.offset);
+        s.prepare(&mut level).map_err(at)?;
+        // On more than one thread the successor's topology is made beside the level's
+        // reading (it needs only the level's).
+        if threads > 1 && !last && (family == Family::Sqrt2 || s.pole.is_empty()) {
+            let (read, made) = std::thread::scope(|sc| {
+                let made = sc.spawn(|| match family {
+                    Family::Sqrt2 => topology::sqrt2::next_level_of(&level, lists),
+                    _ => Ok(level.next()),
+                });
+                let read = s.read(&level, l, section.payload, last);
+                (
+                    read,
+                    made.join().unwrap_or_else(|e| std::panic::resume_unwind(e)),
+                )
+            });
+            read.map_err(at)?;
+            next = Some(made?);
+            continue;
+        }
+        s.read(&level, l, section.payload, last).map_err(at)?;
+        match family {
             // Only sqrt2-sym reads the per-vertex lists: the others' levels are made
             // without them.
             Family::Sqrt2 if !last => {
-                next = Some(topology::sqrt2::next_level(level, w == Wavelet::Sqrt2Sym)?);
+                next = Some(topology::sqrt2::next_level(level, lists)?);
             }
             // The finest topology needs only the level's edges: its other arrays go first.
             Family::Sqrt2 => topo = topology::sqrt2::fine_owned(level),
@@ -473,23 +493,27 @@ struct Synthesis<'h> {
 }
 
 impl Synthesis<'_> {
-    /// Reads level `l`'s details from `payload` and synthesises the level's fine
-    /// values (SPEC.md 9, 10). Returns the level for its successor.
-    fn level(&mut self, mut level: Level, l: usize, payload: &[u8], last: bool) -> Result<Level> {
+    /// Checks `level` before its reading: its refinement within the header's counts (a
+    /// sqrt(2) level closed); drops the per-vertex lists that only sqrt2-sym reads.
+    fn prepare(&self, level: &mut Level) -> Result<()> {
         let family = self.scheme.family;
         // Refuse a refinement larger than the header's finest mesh before building it.
-        let (nv, nf) = (
-            family.fine_nv(&level),
-            family.fine_faces(&level, &self.pole),
-        );
+        let (nv, nf) = (family.fine_nv(level), family.fine_faces(level, &self.pole));
         check_refinement_size(self.h, nv, nf)?;
-        if family == Family::Sqrt2 && !topology::sqrt2::closed(&level) {
+        if family == Family::Sqrt2 && !topology::sqrt2::closed(level) {
             return Err(Error::corrupt("BASE", "a sqrt(2) level with a boundary"));
         }
         // Only sqrt2-sym (SPEC.md 9.8) reads the per-vertex lists.
         if family == Family::Sqrt2 && self.scheme.wavelet != Wavelet::Sqrt2Sym {
             level.free_vertex_adjacency();
         }
+        Ok(())
+    }
+
+    /// Reads level `l`'s details from `payload` and synthesises the level's fine
+    /// values (SPEC.md 9, 10); `level` went through [`Synthesis::prepare`].
+    fn read(&mut self, level: &Level, l: usize, payload: &[u8], last: bool) -> Result<()> {
+        let family = self.scheme.family;
         let x = &mut self.x;
         // Made before the details are decoded: while the coarse values alone are in
         // memory, which is smaller than making them after. Modes 6 and 9 read the
@@ -503,10 +527,10 @@ impl Synthesis<'_> {
         let beside = threads > 1
             && !phased
             && !levl::reads_targets(payload)
-            && family.details(&level) >= levl::BESIDE_MIN;
+            && family.details(level) >= levl::BESIDE_MIN;
         let t = if beside {
             let coarse = x.clone();
-            let (scheme, level) = (&self.scheme, &level);
+            let scheme = &self.scheme;
             let t = std::thread::scope(|s| -> Result<LevelTransform<'_>> {
                 let made = s.spawn(|| LevelTransform::new(scheme, level, l, &coarse, false));
                 let read = levl::decode(payload, level, family, x, models, None, None, threads);
@@ -516,12 +540,12 @@ impl Synthesis<'_> {
             t.synthesise(level, x);
             t
         } else {
-            let t = LevelTransform::new(&self.scheme, &level, l, x, phased);
+            let t = LevelTransform::new(&self.scheme, level, l, x, phased);
             // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
             let targets = levl::reads_targets(payload)
-                .then(|| t.tangent_targets(&level, x))
+                .then(|| t.tangent_targets(level, x))
                 .flatten();
-            let phaser = phased.then(|| t.phaser(&level)).flatten();
+            let phaser = phased.then(|| t.phaser(level)).flatten();
             let phasing = match (t.phases(), &phaser) {
                 (Some(p), _) => Some(levl::Phasing::Ready(p)),
                 (None, Some(p)) => Some(levl::Phasing::Cc(p)),
@@ -529,7 +553,7 @@ impl Synthesis<'_> {
             };
             levl::decode(
                 payload,
-                &level,
+                level,
                 family,
                 x,
                 models,
@@ -539,7 +563,7 @@ impl Synthesis<'_> {
             )?;
             // A Catmull-Clark level in mode 6 or 9 is synthesised as it is read.
             if phaser.is_none() {
-                t.synthesise(&level, x);
+                t.synthesise(level, x);
             }
             t
         };
@@ -551,7 +575,7 @@ impl Synthesis<'_> {
         if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
             return Err(Error::corrupt("LEVL", "reconstructed value out of range"));
         }
-        Ok(level)
+        Ok(())
     }
 }
 
