@@ -43,8 +43,9 @@ def triangles(mesh):
 def side_by_side(paths, repeats, encode=False):
     """Per mesh: (name, vertices, subwave bytes, Draco bytes, subwave decode ms, Draco
     decode ms, decode speed ratio, subwave encode ms, Draco encode ms, encode speed
-    ratio); medians of `repeats` alternating runs, one thread. Encode times only with
-    `encode` (else None)."""
+    ratio, subwave decode ms on two threads, its speed ratio); medians of `repeats`
+    alternating runs, one thread unless said. Encode times only with `encode` (else
+    None)."""
     import DracoPy
 
     rows = []
@@ -59,12 +60,16 @@ def side_by_side(paths, repeats, encode=False):
             "draco": lambda: DracoPy.encode(v32, tris, quantization_bits=16, compression_level=10),
         }
         swv, drc = enc["subwave"](), enc["draco"]()
-        dec = {"subwave": lambda: subwave.decompress(swv), "draco": lambda: DracoPy.decode(drc)}
-        times = {(k, n): [] for k in ("dec", "enc") for n in ("subwave", "draco")}
+        dec = {
+            "subwave": lambda: subwave.decompress(swv),
+            "draco": lambda: DracoPy.decode(drc),
+            "subwave2": lambda: subwave.decompress(swv, threads=2),
+        }
+        times = {(k, n): [] for k in ("dec", "enc") for n in ("subwave", "draco", "subwave2")}
         for _ in range(repeats):
-            for name in ("subwave", "draco"):
+            for name in ("subwave", "draco", "subwave2"):
                 for kind, fns in (("dec", dec), ("enc", enc)):
-                    if kind == "enc" and not encode:
+                    if kind == "enc" and (not encode or name not in fns):
                         continue
                     t = time.perf_counter()
                     fns[name]()
@@ -72,8 +77,9 @@ def side_by_side(paths, repeats, encode=False):
         med = {k: statistics.median(v) if v else None for k, v in times.items()}
         s, d = med[("dec", "subwave")], med[("dec", "draco")]
         es, ed = med[("enc", "subwave")], med[("enc", "draco")]
+        s2 = med[("dec", "subwave2")]
         rows.append(
-            (os.path.basename(path), len(mesh.vertices), len(swv), len(drc), s, d, d / s, es, ed, ed / es if encode else None)
+            (os.path.basename(path), len(mesh.vertices), len(swv), len(drc), s, d, d / s, es, ed, ed / es if encode else None, s2, d / s2)
         )
     return rows
 
