@@ -57,6 +57,10 @@ pub fn info(info: &Info) -> Value {
             Transform::Fit { corners, .. } => Some(corners),
             _ => None,
         },
+        "fit_linear_boundaries": match h.transform {
+            Transform::Fit { linear, .. } => Some(linear),
+            _ => None,
+        },
         "creases": h.creases,
         "quantization": quantization(&h.quantization),
         "keep_order": h.has_order,

@@ -9,7 +9,7 @@ use std::path::Path;
 use proptest::prelude::*;
 use subwave::{EncodeOptions, Error, Limits, Mesh, Transform, TransformChoice};
 use subwave_container::{ContainerWriter, SectionKind};
-use subwave_corpus::Rng;
+use subwave_corpus::{Kept, Rng};
 
 fn own(name: &str, bits: Option<u8>) -> subwave::Loaded {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -171,6 +171,7 @@ fn hostile_fit_containers_are_refused() {
         bits,
         limit,
         corners,
+        linear,
     } = enc.header.transform
     else {
         panic!("not a fit")
@@ -181,6 +182,7 @@ fn hostile_fit_containers_are_refused() {
         bits: bits + 1,
         limit,
         corners,
+        linear,
     };
     let at = head
         .iter()
@@ -248,7 +250,7 @@ fn hostile_fit_containers_are_refused() {
         }
     }
     // Fit rules the format does not define are unsupported, not guessed at.
-    match subwave::decode_slice(&rewritten(|h| h[at + 1] |= 8, |_, _| {})) {
+    match subwave::decode_slice(&rewritten(|h| h[at + 1] |= 16, |_, _| {})) {
         Err(Error::Unsupported(what)) => assert!(what.contains("fit rules"), "{what}"),
         other => panic!("unknown fit rules: {other:?}"),
     }
@@ -356,7 +358,7 @@ fn kept_boundary_corners_are_found() {
     let (control, _) = subwave_corpus::folded_sheet();
     let q = subwave::Quantization::Decimal { decimals: 0 };
     for limit in [false, true] {
-        let surface = control.subdivision_surface_with(3, &[], limit, true);
+        let surface = control.subdivision_surface_with(3, &[], limit, Kept::Corners);
         let mesh = common::to_mesh(&surface, 1e6);
         let enc = encode(&mesh, &q, TransformChoice::Fit);
         assert!(
@@ -461,4 +463,44 @@ proptest! {
             let _ = subwave::decode_slice(&bad);
         }
     }
+}
+
+#[test]
+fn uv_charts_with_linear_boundaries_are_found_by_auto() {
+    // A UV map as Blender's Subdivision Surface writes it (UV Smooth "Keep
+    // Boundaries"): charts cut at their seams, every boundary vertex kept, the limit
+    // surface inside. Two charts (a jittered grid and a strip beside it), flat (the
+    // third axis 0, as ATTR codes a UV map): `auto` tries that rule set, finds it, and
+    // the residuals cost next to nothing; the other rules predict it worse.
+    let mut rng = Rng::new(9);
+    let mut chart = subwave_corpus::open_grid(5, 4);
+    for p in &mut chart.positions {
+        p[0] += 0.04 * (rng.unit() - 0.5);
+        p[1] += 0.04 * (rng.unit() - 0.5);
+    }
+    let strip = subwave_corpus::translate(subwave_corpus::open_grid(6, 1), [1.3, 0.0, 0.0]);
+    let control = subwave_corpus::union(&[chart, strip]);
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    let surface = control.subdivision_surface_with(3, &[], true, Kept::Boundary);
+    let mesh = common::to_mesh(&surface, 1e6);
+    assert!(mesh.positions.iter().all(|p| p[2] == 0));
+    let enc = encode(&mesh, &q, TransformChoice::Auto);
+    assert!(
+        matches!(
+            enc.header.transform,
+            Transform::Fit {
+                linear: true,
+                limit: true,
+                ..
+            }
+        ),
+        "{:?}",
+        enc.header.transform
+    );
+    assert_exact(&enc.bytes, &mesh, "linear boundaries");
+    let (n, r) = (mesh.vertex_count(), residual_bytes(&enc.bytes));
+    assert!(8 * r < n, "{r} B of residuals for {n} vertices");
+    // Kept corners alone (B-spline boundaries between them) are another surface.
+    let corners = control.subdivision_surface_with(3, &[], true, Kept::Corners);
+    assert_ne!(common::to_mesh(&corners, 1e6).positions, mesh.positions);
 }

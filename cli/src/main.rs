@@ -991,6 +991,7 @@ fn print_info(info: &subwave::Info, as_json: bool) {
             bits,
             limit,
             corners,
+            linear,
         } => {
             let mut rules = String::new();
             let n = h.creases.len();
@@ -1000,6 +1001,9 @@ fn print_info(info: &subwave::Info, as_json: bool) {
             }
             if corners {
                 rules += ", boundary corners kept";
+            }
+            if linear {
+                rules += ", linear boundaries";
             }
             if limit {
                 rules += ", limit surface";

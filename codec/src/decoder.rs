@@ -216,7 +216,8 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
             bits,
             limit,
             corners,
-        } => synthesise_fit(&c, &h, base, (bits, limit, corners), level)?,
+            linear,
+        } => synthesise_fit(&c, &h, base, (bits, limit, corners, linear), level)?,
         Transform::None => return Err(Error::Unsupported("levels without a transform".into())),
     };
     if let Some(m) = &vmap {
@@ -609,14 +610,14 @@ fn coarse_mesh(h: &Header, w: Wavelet, upto: u8, x: &[Vec<i64>; 3], topo: Topo) 
 }
 
 /// Rebuilds levels 1..=`upto` of a subdivision fit (SPEC.md 9.10, 10.4): the control
-/// values refined in integers (with the header's creases, and boundary corners kept
-/// when `corners`; placed on the limit surface when `limit`), rounded to the grid, and
-/// at the finest level the residuals added.
+/// values refined in integers (with the header's creases, boundary corners kept when
+/// `corners`, every boundary vertex kept when `linear`; placed on the limit surface
+/// when `limit`), rounded to the grid, and at the finest level the residuals added.
 fn synthesise_fit(
     c: &Container<'_>,
     h: &Header,
     base: Mesh,
-    (bits, limit, corners): (u8, bool, bool),
+    (bits, limit, corners, linear): (u8, bool, bool, bool),
     upto: u8,
 ) -> Result<Mesh> {
     let mut topo = Topo::new(base.vertex_count());
@@ -646,6 +647,7 @@ fn synthesise_fit(
                 fit::Hard {
                     edges: &sharp,
                     corners,
+                    linear,
                 },
                 xs,
             );
@@ -661,6 +663,7 @@ fn synthesise_fit(
                 fit::Hard {
                     edges: &sharp,
                     corners,
+                    linear,
                 },
                 xs,
             );

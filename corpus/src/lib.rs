@@ -55,18 +55,18 @@ impl PolyMesh {
     /// Positions follow the Catmull-Clark rules (boundary edges and vertices use the
     /// cubic B-spline curve rules).
     pub fn catmull_clark(&self) -> PolyMesh {
-        self.catmull_clark_creased(&HashSet::new(), false).0
+        self.catmull_clark_creased(&HashSet::new(), Kept::Nothing).0
     }
 
     /// One Catmull-Clark step with infinitely sharp edges (`creases`, as ordered pairs
     /// `(min, max)`): a creased edge's point is its midpoint, a vertex with two hard
     /// (boundary or creased) edges takes the curve rule along them, one with more
-    /// keeps its place, and so does a boundary vertex with one face when `corners`.
+    /// keeps its place, and so do the boundary vertices `kept` names.
     /// Also returns the creased edges of the result (both halves of each creased edge).
     pub fn catmull_clark_creased(
         &self,
         creases: &HashSet<(u32, u32)>,
-        corners: bool,
+        kept: Kept,
     ) -> (PolyMesh, HashSet<(u32, u32)>) {
         let nv = self.positions.len();
         let mut edge_id: HashMap<(u32, u32), usize> = HashMap::new();
@@ -122,7 +122,7 @@ impl PolyMesh {
                 .filter(|&e| hard_edge(e))
                 .collect();
             let on_boundary = v_edges[v].iter().any(|&e| boundary_edge(e));
-            pos[v] = if v_edges[v].is_empty() || (corners && on_boundary && v_faces[v].len() == 1) {
+            pos[v] = if v_edges[v].is_empty() || kept.keeps(on_boundary, v_faces[v].len()) {
                 p
             } else if on_boundary || bnd.len() >= 2 {
                 if bnd.len() == 2 {
@@ -186,32 +186,32 @@ impl PolyMesh {
     /// (n (n + 5))`; on a crease or boundary (two hard edges to `a`, `b`) `(a + 4 v +
     /// b) / 6`; elsewhere kept. A float reference for the codec's integer rules.
     pub fn subdivision_surface(&self, levels: u32, creases: &[[u32; 2]], limit: bool) -> PolyMesh {
-        self.subdivision_surface_with(levels, creases, limit, false)
+        self.subdivision_surface_with(levels, creases, limit, Kept::Nothing)
     }
 
-    /// [`PolyMesh::subdivision_surface`], with boundary vertices of one face kept
-    /// where they are when `corners` (Blender's "Keep Corners").
+    /// [`PolyMesh::subdivision_surface`], with the boundary vertices `kept` names kept
+    /// where they are (Blender's "Keep Corners", or its UV rule "Keep Boundaries").
     pub fn subdivision_surface_with(
         &self,
         levels: u32,
         creases: &[[u32; 2]],
         limit: bool,
-        corners: bool,
+        kept: Kept,
     ) -> PolyMesh {
         let mut sharp: HashSet<(u32, u32)> =
             creases.iter().map(|&[a, b]| (a.min(b), a.max(b))).collect();
         let mut m = self.clone();
         for _ in 0..levels {
-            (m, sharp) = m.catmull_clark_creased(&sharp, corners);
+            (m, sharp) = m.catmull_clark_creased(&sharp, kept);
         }
         if limit {
-            m.positions = m.limit_positions(&sharp, corners);
+            m.positions = m.limit_positions(&sharp, kept);
         }
         m
     }
 
     /// The limit positions of [`PolyMesh::subdivision_surface`].
-    fn limit_positions(&self, sharp: &HashSet<(u32, u32)>, corners: bool) -> Vec<[f64; 3]> {
+    fn limit_positions(&self, sharp: &HashSet<(u32, u32)>, kept: Kept) -> Vec<[f64; 3]> {
         let nv = self.positions.len();
         let mut edge_faces: HashMap<(u32, u32), usize> = HashMap::new();
         let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); nv];
@@ -240,7 +240,7 @@ impl PolyMesh {
                     .filter(|&o| edge_faces[&key(o)] < 2 || sharp.contains(&key(o)))
                     .collect();
                 let n = neighbours[v].len();
-                if corners && boundary && opposite[v].len() == 1 {
+                if kept.keeps(boundary, opposite[v].len()) {
                     p
                 } else if hard.len() == 2 {
                     let (a, b) = (
@@ -829,6 +829,30 @@ pub fn large_polar(levels: u32) -> PolyMesh {
     let mut m = polar_sphere(8, 7).polar_refined(&[0, 1], levels);
     m.displace(0.02, 0.001, &mut rng);
     m
+}
+
+/// Which boundary vertices a subdivision keeps where they are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kept {
+    /// None: boundaries follow the cubic B-spline curve rules.
+    Nothing,
+    /// Boundary vertices of one face (Blender's "Keep Corners").
+    Corners,
+    /// Every boundary vertex: boundaries stay piecewise linear (Blender's UV rule
+    /// "Keep Boundaries", on a UV map's charts).
+    Boundary,
+}
+
+impl Kept {
+    /// Whether a vertex (on a boundary or not, with `faces` faces) keeps its place.
+    fn keeps(self, on_boundary: bool, faces: usize) -> bool {
+        on_boundary
+            && match self {
+                Kept::Nothing => false,
+                Kept::Corners => faces == 1,
+                Kept::Boundary => true,
+            }
+    }
 }
 
 /// A large mesh for benchmarks: a displaced cube refined `levels` times

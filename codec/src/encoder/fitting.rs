@@ -42,6 +42,8 @@ pub(crate) fn code_fit(
     // The level whose coarse mesh is the finest one.
     let last = canon.levels.last()?;
     let finest = last.next();
+    let base = &canon.levels[0];
+    let mut sets = None;
     if screen {
         let mean = |f: &dyn Fn(&[i64]) -> Option<f64>| {
             pos.iter().map(|x| f(x).unwrap_or(f64::MAX)).sum::<f64>() / 3.0
@@ -49,7 +51,18 @@ pub(crate) fn code_fit(
         if mean(&|x| fit::defect(last, x)) > FIT_SCREEN
             && mean(&|x| fit::roughness(&canon.levels, &finest, x)) > ROUGH_SCREEN
         {
-            return None;
+            // A flat mesh with a boundary (one axis constant: a UV map's charts, cut at
+            // their seams) may still be a modelling tool's subdivision, by its UV rule:
+            // linear boundaries on the limit surface. That rule set alone is tried.
+            let flat = pos.iter().any(|x| x.iter().all(|&v| v == x[0]));
+            if !flat || !(0..base.ne()).any(|e| base.is_boundary(e)) {
+                return None;
+            }
+            sets = Some(vec![Rules {
+                limit: true,
+                linear: true,
+                ..Rules::default()
+            }]);
         }
     }
     let nb = canon.base.nv;
@@ -57,7 +70,8 @@ pub(crate) fn code_fit(
         .map(|i| std::array::from_fn(|k| pos[k][i] as f64))
         .collect();
     let mut best: Option<Payloads> = None;
-    for rules in rule_sets(canon, &finest, pos) {
+    let sets = sets.unwrap_or_else(|| rule_sets(canon, &finest, pos));
+    for rules in sets {
         let op = fit::Operator::new(&canon.levels, &finest, &rules);
         let control = robust_fit(&op, &fine, nb);
         drop(op);
@@ -83,6 +97,7 @@ pub(crate) fn code_fit(
                 bits: b,
                 limit: rules.limit,
                 corners: rules.corners,
+                linear: rules.linear,
             };
             h.creases = (0..rules.sharp.len() as u32)
                 .filter(|&e| rules.sharp[e as usize])
@@ -134,7 +149,8 @@ fn robust_fit(op: &fit::Operator, fine: &[[f64; 3]], nb: usize) -> Vec<[f64; 3]>
 
 /// The rule sets the fit tries: plain refinement, the limit surface, and the limit
 /// surface with the creases the finest level shows; each also with boundary corners
-/// kept where the base mesh has a boundary vertex with one face.
+/// kept where the base mesh has a boundary vertex with one face, and with every
+/// boundary vertex kept (linear boundaries) where it has a boundary.
 fn rule_sets(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<Rules> {
     let mut sets = vec![
         Rules::default(),
@@ -148,7 +164,7 @@ fn rule_sets(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<Rule
         sets.push(Rules {
             limit: true,
             sharp: sharp.clone(),
-            corners: false,
+            ..Rules::default()
         });
         sets.push(Rules {
             sharp,
@@ -156,6 +172,18 @@ fn rule_sets(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<Rule
         });
     }
     let base = &canon.levels[0];
+    // With linear boundaries (UV charts' seams) every boundary vertex is kept, so
+    // boundary corners say nothing more.
+    let linear: Vec<Rules> = if (0..base.ne()).any(|e| base.is_boundary(e)) {
+        sets.iter()
+            .map(|r| Rules {
+                linear: true,
+                ..r.clone()
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
     let corner = |v: usize| {
         base.v_faces(v).len() == 1
             && base
@@ -173,6 +201,7 @@ fn rule_sets(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<Rule
             .collect();
         sets.extend(kept);
     }
+    sets.extend(linear);
     sets
 }
 

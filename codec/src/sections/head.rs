@@ -38,6 +38,8 @@ pub enum Transform {
         limit: bool,
         /// Boundary vertices with one face keep their values (SPEC.md 9.10).
         corners: bool,
+        /// Every boundary vertex keeps its value: linear boundaries (SPEC.md 9.10).
+        linear: bool,
     },
 }
 
@@ -170,6 +172,8 @@ const FIT_LIMIT: u8 = 1;
 const FIT_CREASES: u8 = 2;
 /// Fit rules: boundary vertices with one face keep their values.
 const FIT_CORNERS: u8 = 4;
+/// Fit rules: every boundary vertex keeps its value (linear boundaries).
+const FIT_LINEAR: u8 = 8;
 
 impl Header {
     /// Serialises the header.
@@ -192,6 +196,7 @@ impl Header {
             bits,
             limit,
             corners,
+            linear,
         } = self.transform
         {
             w.u8(bits);
@@ -199,7 +204,8 @@ impl Header {
             w.u8(
                 flag(limit, FIT_LIMIT)
                     | flag(!self.creases.is_empty(), FIT_CREASES)
-                    | flag(corners, FIT_CORNERS),
+                    | flag(corners, FIT_CORNERS)
+                    | flag(linear, FIT_LINEAR),
             );
         }
         match self.quantization {
@@ -515,7 +521,7 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, bool)> {
             }
             let at = r.offset();
             let rules = r.u8("fit rules")?;
-            if rules & !(FIT_LIMIT | FIT_CREASES | FIT_CORNERS) != 0 {
+            if rules & !(FIT_LIMIT | FIT_CREASES | FIT_CORNERS | FIT_LINEAR) != 0 {
                 return Err(Error::Unsupported(format!(
                     "fit rules {rules:#x} (byte {at})"
                 )));
@@ -524,6 +530,7 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, bool)> {
                 bits,
                 limit: rules & FIT_LIMIT != 0,
                 corners: rules & FIT_CORNERS != 0,
+                linear: rules & FIT_LINEAR != 0,
             };
             (fit, rules & FIT_CREASES != 0)
         }

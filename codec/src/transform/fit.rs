@@ -27,6 +27,10 @@ pub struct Rules {
     /// Boundary vertices with one face keep their values (Blender's "Keep Corners",
     /// OpenSubdiv's sharp boundary corners).
     pub corners: bool,
+    /// Every boundary vertex keeps its value, so boundaries stay piecewise linear
+    /// (the UV rule Blender calls "Keep Boundaries", OpenSubdiv's linear face-varying
+    /// boundaries: a UV chart's seams).
+    pub linear: bool,
 }
 
 impl Rules {
@@ -35,18 +39,21 @@ impl Rules {
         Hard {
             edges,
             corners: self.corners,
+            linear: self.linear,
         }
     }
 }
 
-/// A level's sharp features: its creased edges (empty: none) and whether boundary
-/// vertices with one face are corners that keep their values.
+/// A level's sharp features: its creased edges (empty: none) and which boundary
+/// vertices keep their values (those with one face, or all).
 #[derive(Clone, Copy, Debug)]
 pub struct Hard<'a> {
     /// Per edge of the level, whether it is creased.
     pub edges: &'a [bool],
     /// Boundary vertices with one face keep their values.
     pub corners: bool,
+    /// Every boundary vertex keeps its value.
+    pub linear: bool,
 }
 
 /// Which vertex rule of SPEC.md 9.10 coarse vertex `v` takes.
@@ -79,7 +86,7 @@ fn vertex_rule(level: &Level, v: usize, hard: Hard<'_>) -> VertexRule {
         }
     }
     let n = level.v_edges(v).len();
-    if boundary && hard.corners && level.v_faces(v).len() == 1 {
+    if boundary && (hard.linear || hard.corners && level.v_faces(v).len() == 1) {
         return VertexRule::Kept;
     }
     match count {
@@ -626,6 +633,7 @@ mod tests {
                         limit,
                         sharp,
                         corners: false,
+                        linear: false,
                     })
             })
             .collect()
@@ -754,7 +762,15 @@ mod tests {
             let mut x = values(levels[0].nv, 5);
             let last = levels.last().unwrap();
             for l in &levels {
-                subdivide(l, Hard { edges: &[], corners: false }, &mut x);
+                subdivide(
+                    l,
+                    Hard {
+                        edges: &[],
+                        corners: false,
+                        linear: false,
+                    },
+                    &mut x,
+                );
             }
             let d = defect(last, &x).unwrap();
             assert!(d < 12.0, "{d}");
