@@ -438,8 +438,12 @@ fn synthesise_levels(
         let at = |e: Error| e.in_level(l + 1, section.offset);
         s.prepare(&mut level).map_err(at)?;
         // On more than one thread the successor's topology is made beside the level's
-        // reading (it needs only the level's).
-        if threads > 1 && !last && (family == Family::Sqrt2 || s.pole.is_empty()) {
+        // reading (it needs only the level's); small levels are not worth a thread.
+        if threads > 1
+            && !last
+            && (family == Family::Sqrt2 || s.pole.is_empty())
+            && family.details(&level) >= levl::BESIDE_MIN
+        {
             let (read, made) = std::thread::scope(|sc| {
                 let made = sc.spawn(|| match family {
                     Family::Sqrt2 => topology::sqrt2::next_level_of(&level, lists),
