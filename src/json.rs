@@ -67,7 +67,10 @@ pub fn info(info: &Info) -> Value {
         "value_map": h.has_value_map,
         "sections": info.sections.iter().map(|s| match s.mode {
             Some(m) => json!({"kind": s.kind, "bytes": s.bytes, "mode": m, "unbinned": s.unbinned, "joint": s.joint, "zero_slots": s.zero_slots}),
-            None => json!({"kind": s.kind, "bytes": s.bytes}),
+            None => match &s.attribute {
+                Some(a) => json!({"kind": s.kind, "bytes": s.bytes, "attribute": {"width": a.width, "entries": a.entries, "transform": a.transform, "fit_rules": a.rules}}),
+                None => json!({"kind": s.kind, "bytes": s.bytes}),
+            },
         }).collect::<Vec<_>>(),
         "bytes": info.bytes,
         "bits_per_vertex": bits_per_vertex(info.bytes, h.vertices),

@@ -30,10 +30,11 @@ pub mod json;
 
 pub use subwave_codec::io::{read_mesh, write_mesh, Format, RawMesh};
 pub use subwave_codec::{
-    decode, encode, encode_file, inspect, integerize, Decimal, DecodeOptions, Decoded,
-    DiscTransform, EncodeOptions, Encoded, Error, Family, FloatWidth, Header, Info, Limits, Mesh,
-    Progress, Quantization, RawCoords, Result, SectionInfo, Source, Stage, Transform,
-    TransformChoice, Wavelet, DEFAULT_EFFORT, FORMAT_VERSION, MAX_COORD, MAX_DECIMALS, MAX_EFFORT,
+    decode, encode, encode_file, fit_rules, inspect, integerize, AttributeInfo, Decimal,
+    DecodeOptions, Decoded, DiscTransform, EncodeOptions, Encoded, Error, Family, FloatWidth,
+    Header, Info, Limits, Mesh, Progress, Quantization, RawCoords, Result, SectionInfo, Source,
+    Stage, Transform, TransformChoice, Wavelet, DEFAULT_EFFORT, FORMAT_VERSION, MAX_COORD,
+    MAX_DECIMALS, MAX_EFFORT,
 };
 
 /// A mesh file read and turned into integers.

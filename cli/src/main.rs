@@ -987,27 +987,11 @@ fn print_info(info: &subwave::Info, as_json: bool) {
         println!("disc transform  {}", h.disc.name());
     }
     match h.transform {
-        subwave::Transform::Fit {
-            bits,
-            limit,
-            corners,
-            linear,
-        } => {
-            let mut rules = String::new();
-            let n = h.creases.len();
-            if n > 0 {
-                let s = if n == 1 { "" } else { "s" };
-                rules += &format!(", {n} creased base edge{s}");
-            }
-            if corners {
-                rules += ", boundary corners kept";
-            }
-            if linear {
-                rules += ", linear boundaries";
-            }
-            if limit {
-                rules += ", limit surface";
-            }
+        subwave::Transform::Fit { bits, .. } => {
+            let rules = match subwave::fit_rules(h) {
+                r if r.is_empty() => r,
+                r => format!(", {r}"),
+            };
             println!("transform       fit (control values with {bits} extra bits{rules})")
         }
         t => println!("transform       {}", t.name()),
@@ -1040,7 +1024,19 @@ fn print_info(info: &subwave::Info, as_json: bool) {
                 };
                 format!("{} {} B (mode {m}{joint}{unbinned}{zero})", s.kind, s.bytes)
             }
-            None => format!("{} {} B", s.kind, s.bytes),
+            None => match &s.attribute {
+                Some(a) => {
+                    let rules = match a.rules.as_str() {
+                        "" => String::new(),
+                        r => format!(": {r}"),
+                    };
+                    format!(
+                        "{} {} B ({} x {} values, {}{rules})",
+                        s.kind, s.bytes, a.entries, a.width, a.transform
+                    )
+                }
+                None => format!("{} {} B", s.kind, s.bytes),
+            },
         })
         .collect();
     println!("sections        {}", secs.join(", "));

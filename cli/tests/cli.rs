@@ -274,6 +274,19 @@ fn by_default_a_file_with_attributes_comes_back_whole() {
     );
     let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
     assert_eq!(v["keep_order"], true, "{v}");
+    // info describes the attribute (the `vt` table: two values per entry) and how its
+    // nested container codes it.
+    let attrs: Vec<&serde_json::Value> = v["sections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|s| s["kind"] == "ATTR")
+        .collect();
+    assert!(!attrs.is_empty(), "{v}");
+    assert_eq!(attrs[0]["attribute"]["width"], 2, "{v}");
+    assert!(attrs[0]["attribute"]["transform"].is_string(), "{v}");
+    let text = String::from_utf8_lossy(&run(&["info", swv.to_str().unwrap()]).stdout).to_string();
+    assert!(text.contains("x 2 values"), "{text}");
     // A file of positions and faces alone stays in canonical order (no ORDR).
     let plain = compressed(&corpus("cube_cc4.obj"), "plain_default.swv", &[]);
     let v = json(&run(&["info", plain.to_str().unwrap(), "--json"]));

@@ -26,6 +26,22 @@ pub struct SectionInfo {
     /// A level section's slots whose values are all 0 and left out of its stream
     /// (SPEC.md 10.1), in increasing order.
     pub zero_slots: Vec<u8>,
+    /// An ATTR section's attribute (SPEC.md 11.3): its values per entry and how its
+    /// nested container codes them; `None` for other sections.
+    pub attribute: Option<AttributeInfo>,
+}
+
+/// How an ATTR section codes its attribute.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AttributeInfo {
+    /// Values per entry (2 for UVs, 3 for colours or normals).
+    pub width: u8,
+    /// Entries (the nested mesh's vertices).
+    pub entries: u64,
+    /// The nested container's transform, as `info` names it (`fit`, `interp6`, ...).
+    pub transform: String,
+    /// A fit's rules in words (`linear boundaries, limit surface`); empty otherwise.
+    pub rules: String,
 }
 
 /// A parsed header and section table, without decoding any geometry.
@@ -65,7 +81,51 @@ pub(crate) fn section_info(
             }
             false => Vec::new(),
         },
+        attribute: None,
     }
+}
+
+/// An ATTR payload's [`AttributeInfo`] (`order`: the main container's ORDR payload, for
+/// a nested container that shares it); `None` when it does not parse.
+fn attribute_info(payload: &[u8], limits: &Limits, order: Option<&[u8]>) -> Option<AttributeInfo> {
+    let (width, nested) = crate::sections::attr::decode(payload, limits, order).ok()?;
+    let c = Container::parse(&nested, limits).ok()?;
+    let h = layout(&c, limits, true).ok()?;
+    Some(AttributeInfo {
+        width,
+        entries: h.vertices,
+        transform: h.transform.name().to_string(),
+        rules: fit_rules(&h),
+    })
+}
+
+/// A fit's rules in words, as `info` prints them (empty for another transform).
+pub fn fit_rules(h: &Header) -> String {
+    let Transform::Fit {
+        limit,
+        corners,
+        linear,
+        ..
+    } = h.transform
+    else {
+        return String::new();
+    };
+    let mut rules = Vec::new();
+    let n = h.creases.len();
+    if n > 0 {
+        let s = if n == 1 { "" } else { "s" };
+        rules.push(format!("{n} creased base edge{s}"));
+    }
+    if corners {
+        rules.push("boundary corners kept".to_string());
+    }
+    if linear {
+        rules.push("linear boundaries".to_string());
+    }
+    if limit {
+        rules.push("limit surface".to_string());
+    }
+    rules.join(", ")
 }
 
 /// Reads the header and section table (SPEC.md 2, 5), checking every checksum.
@@ -73,13 +133,24 @@ pub fn inspect(bytes: &[u8], limits: &Limits) -> Result<Info> {
     let c = Container::parse(bytes, limits)?;
     let header = layout(&c, limits, true)?;
     let t = header.transform;
+    let order = c
+        .sections
+        .iter()
+        .find(|s| s.kind == SectionKind::ORDER)
+        .map(|s| s.payload);
     Ok(Info {
         version: c.version,
         header,
         sections: c
             .sections
             .iter()
-            .map(|s| section_info(s.kind, s.total_len(), t, s.payload))
+            .map(|s| {
+                let mut i = section_info(s.kind, s.total_len(), t, s.payload);
+                if s.kind == SectionKind::ATTRIBUTE {
+                    i.attribute = attribute_info(s.payload, limits, order);
+                }
+                i
+            })
             .collect(),
         bytes: bytes.len(),
     })

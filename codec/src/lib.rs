@@ -54,4 +54,4 @@ pub use encoder::{
     encode, encode_file, EncodeOptions, Encoded, Progress, Stage, TransformChoice, DEFAULT_EFFORT,
     MAX_EFFORT,
 };
-pub use info::{inspect, Info, SectionInfo};
+pub use info::{fit_rules, inspect, AttributeInfo, Info, SectionInfo};
