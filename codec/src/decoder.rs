@@ -217,7 +217,15 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
             limit,
             corners,
             linear,
-        } => synthesise_fit(&c, &h, base, (bits, limit, corners, linear), level)?,
+        } => {
+            let rules = fit::Rules {
+                limit,
+                sharp: Vec::new(),
+                corners,
+                linear,
+            };
+            synthesise_fit(&c, &h, base, bits, &rules, level)?
+        }
         Transform::None => return Err(Error::Unsupported("levels without a transform".into())),
     };
     if let Some(m) = &vmap {
@@ -614,14 +622,15 @@ fn coarse_mesh(h: &Header, w: Wavelet, upto: u8, x: &[Vec<i64>; 3], topo: Topo) 
 }
 
 /// Rebuilds levels 1..=`upto` of a subdivision fit (SPEC.md 9.10, 10.4): the control
-/// values refined in integers (with the header's creases, boundary corners kept when
-/// `corners`, every boundary vertex kept when `linear`; placed on the limit surface
-/// when `limit`), rounded to the grid, and at the finest level the residuals added.
+/// values (`bits` extra bits) refined in integers by the header's `rules` (its creases
+/// kept apart, per level; `rules.sharp` is not read), rounded to the grid, and at the
+/// finest level the residuals added.
 fn synthesise_fit(
     c: &Container<'_>,
     h: &Header,
     base: Mesh,
-    (bits, limit, corners, linear): (u8, bool, bool, bool),
+    bits: u8,
+    rules: &fit::Rules,
     upto: u8,
 ) -> Result<Mesh> {
     let mut topo = Topo::new(base.vertex_count());
@@ -646,31 +655,15 @@ fn synthesise_fit(
             );
         }
         for xs in x.iter_mut() {
-            fit::subdivide(
-                &level,
-                fit::Hard {
-                    edges: &sharp,
-                    corners,
-                    linear,
-                },
-                xs,
-            );
+            fit::subdivide(&level, rules.hard(&sharp), xs);
         }
         let fine = level.next();
         sharp = fit::sharp_below(&level, &sharp, &fine);
         level = fine;
     }
-    if limit {
+    if rules.limit {
         for xs in x.iter_mut() {
-            fit::place_on_limit(
-                &level,
-                fit::Hard {
-                    edges: &sharp,
-                    corners,
-                    linear,
-                },
-                xs,
-            );
+            fit::place_on_limit(&level, rules.hard(&sharp), xs);
         }
     }
     let topo = level.coarse;

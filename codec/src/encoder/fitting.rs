@@ -55,7 +55,7 @@ pub(crate) fn code_fit(
             // their seams) may still be a modelling tool's subdivision, by its UV rule:
             // linear boundaries on the limit surface. That rule set alone is tried.
             let flat = pos.iter().any(|x| x.iter().all(|&v| v == x[0]));
-            if !flat || !(0..base.ne()).any(|e| base.is_boundary(e)) {
+            if !flat || crate::topology::sqrt2::closed(base) {
                 return None;
             }
             sets = Some(vec![Rules {
@@ -174,7 +174,7 @@ fn rule_sets(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<Rule
     let base = &canon.levels[0];
     // With linear boundaries (UV charts' seams) every boundary vertex is kept, so
     // boundary corners say nothing more.
-    let linear: Vec<Rules> = if (0..base.ne()).any(|e| base.is_boundary(e)) {
+    let linear: Vec<Rules> = if !crate::topology::sqrt2::closed(base) {
         sets.iter()
             .map(|r| Rules {
                 linear: true,

@@ -131,8 +131,8 @@ pub fn sharp_below(level: &Level, sharp: &[bool], fine: &Level) -> Vec<bool> {
 
 /// One Catmull-Clark refinement in integers (SPEC.md 9.10): `x` holds the coarse
 /// values (`level.nv`) and gets the fine ones (`level.fine_nv()`), every rule rounded
-/// with `[n / d]`; `hard` holds `level`'s creased edges and whether boundary corners
-/// are kept (a kept corner is unchanged):
+/// with `[n / d]`; `hard` holds `level`'s creased edges and which boundary vertices
+/// are kept (corners, or all with linear boundaries; a kept vertex is unchanged):
 /// * face point: `[sum of corners / k]`;
 /// * edge point: `[(a + b + f0 + f1) / 4]` inside, `[(a + b) / 2]` on a boundary or a
 ///   crease;

@@ -296,10 +296,19 @@ pub(super) fn contexts(
     family: Family,
     i: usize,
 ) -> (usize, [usize; 3], usize) {
-    let ne = level.ne();
-    let (class, fd) = match (family == Family::Sqrt2, i < ne) {
-        (true, _) => (1, ne + i),
-        (false, edge) => (!edge as usize, i),
+    let class = match family {
+        Family::Sqrt2 => 1,
+        _ => (i >= level.ne()) as usize,
     };
-    (class, slot_bins(level, mags, family, i), fd)
+    (class, slot_bins(level, mags, family, i), frame_detail(level, family, i))
+}
+
+/// Detail `i`'s number for [`frame`]: itself, or on a sqrt(2) level (every detail a
+/// face point) the edge count plus `i`.
+#[inline]
+pub(super) fn frame_detail(level: &Level, family: Family, i: usize) -> usize {
+    match family {
+        Family::Sqrt2 => level.ne() + i,
+        _ => i,
+    }
 }

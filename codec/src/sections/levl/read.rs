@@ -142,14 +142,7 @@ pub fn decode(
         } else {
             None
         };
-        let rotation = match (mode, fr) {
-            (Mode::Rotated | Mode::Shifted(..), Some((_, n))) => {
-                let shifted = matches!(mode, Mode::Shifted(..));
-                let f = RotFrame::new(level, x, family, fd, n, shifted);
-                Some((f.rot, f.pred(mode)))
-            }
-            _ => None,
-        };
+        let rotation = rotation_of(level, x, family, fd, fr, mode);
         let (offset, joint_phases) = detail_offset(level, x, mode, i, fr, &cc_phases)?;
         let ph = match (joint_phases, &phasing, mode, offset) {
             (Some(q), ..) => Phased::Axes(q),
@@ -181,8 +174,8 @@ pub fn decode(
         )?;
         mags[nv + i] = mg;
         let mut d = r;
-        if let Some((rot, pred)) = rotation {
-            d = in_range(Some(rot.inverse(in_range(plus(r, pred))?)))?;
+        if let Some(rot) = rotation {
+            d = unrotate(r, rot)?;
         }
         if let Some(c) = offset {
             d = in_range(plus(r, c))?;
@@ -196,6 +189,33 @@ pub fn decode(
     }
     models.last = Some(m);
     Ok(())
+}
+
+/// Detail `fd`'s rotation into its frame and what its mode subtracts from the rotated
+/// values (SPEC.md 10.5), on a rotated level (modes 4 and 5) where its coarse normal
+/// `fr` is not zero; else `None`.
+fn rotation_of(
+    level: &Level,
+    coarse: &[Vec<i64>; 3],
+    family: Family,
+    fd: usize,
+    fr: Option<(usize, [i64; 3])>,
+    mode: Mode<'_>,
+) -> Option<(Rotation, [i64; 3])> {
+    match (mode, fr) {
+        (Mode::Rotated | Mode::Shifted(..), Some((_, n))) => {
+            let shifted = matches!(mode, Mode::Shifted(..));
+            let f = RotFrame::new(level, coarse, family, fd, n, shifted);
+            Some((f.rot, f.pred(mode)))
+        }
+        _ => None,
+    }
+}
+
+/// A rotated detail from its coded values `r`: what the mode subtracted added back,
+/// then the rotation undone (SPEC.md 10.5), each within the bound of 9.3.
+fn unrotate(r: [i64; 3], (rot, pred): (Rotation, [i64; 3])) -> Result<[i64; 3]> {
+    in_range(Some(rot.inverse(in_range(plus(r, pred))?)))
 }
 
 /// Fewest details for which a level's work beside its reading (a rotated level's
@@ -223,7 +243,6 @@ fn decode_rotated(
     (unbinned, zero): (bool, u8),
 ) -> Result<()> {
     let (nv, nd) = (level.nv, family.details(level));
-    let shifted = matches!(mode, Mode::Shifted(..));
     let [x0, x1, x2] = x;
     let (c0, f0) = x0.split_at_mut(nv);
     let (c1, f1) = x1.split_at_mut(nv);
@@ -234,11 +253,8 @@ fn decode_rotated(
     let rotations = |lo: usize, hi: usize| -> Vec<Option<(Rotation, [i64; 3])>> {
         (lo..hi)
             .map(|i| {
-                let fd = if family == Family::Sqrt2 { level.ne() + i } else { i };
-                frame(level, normals, fd).map(|(_, n)| {
-                    let f = RotFrame::new(level, coarse, family, fd, n, shifted);
-                    (f.rot, f.pred(mode))
-                })
+                let fd = frame_detail(level, family, i);
+                rotation_of(level, coarse, family, fd, frame(level, normals, fd), mode)
             })
             .collect()
     };
@@ -258,9 +274,8 @@ fn decode_rotated(
             Ok(made.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
         })?;
         for (i, rot) in (lo..hi).zip(rots) {
-            if let Some((rot, pred)) = rot {
-                let r = [f0[i], f1[i], f2[i]];
-                let d = in_range(Some(rot.inverse(in_range(plus(r, pred))?)))?;
+            if let Some(rot) = rot {
+                let d = unrotate([f0[i], f1[i], f2[i]], rot)?;
                 (f0[i], f1[i], f2[i]) = (d[0], d[1], d[2]);
             }
         }

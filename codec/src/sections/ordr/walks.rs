@@ -306,6 +306,12 @@ impl<'a> FaceWalk<'a> {
         }
     }
 
+    /// The model of the face just taken's first corner (SPEC.md 7.2): by the previous
+    /// face's corner slot and the slot the face was coded with.
+    fn corner_context(&self) -> usize {
+        self.corner_slot * F_SLOTS + self.walk.slot
+    }
+
     fn corners(&self, g: u32) -> Vec<u32> {
         rotated(self.around.face(g as usize), self.firsts[g as usize])
     }
@@ -341,7 +347,8 @@ impl<'a> FaceWalk<'a> {
             .iter()
             .position(|&c| c == Some(first))
             .unwrap_or(C_SLOTS - 1);
-        e.symbol(&mut self.corner_models[self.corner_slot * F_SLOTS + self.walk.slot], slot);
+        let ctx = self.corner_context();
+        e.symbol(&mut self.corner_models[ctx], slot);
         if slot == C_SLOTS - 1 {
             e.uniform(first as u64, self.around.face(g as usize).len() as u64);
         }
@@ -363,7 +370,8 @@ impl<'a> FaceWalk<'a> {
         })?;
         let k = self.around.face(g as usize).len();
         let corners = self.corner_candidates(g, &prev);
-        let slot = d.symbol(&mut self.corner_models[self.corner_slot * F_SLOTS + self.walk.slot])?;
+        let ctx = self.corner_context();
+        let slot = d.symbol(&mut self.corner_models[ctx])?;
         let first = if slot == C_SLOTS - 1 {
             Some(d.uniform(k.max(1) as u64)? as usize)
         } else {
