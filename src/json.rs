@@ -68,7 +68,7 @@ pub fn info(info: &Info) -> Value {
         "sections": info.sections.iter().map(|s| match s.mode {
             Some(m) => json!({"kind": s.kind, "bytes": s.bytes, "mode": m, "unbinned": s.unbinned, "joint": s.joint, "zero_slots": s.zero_slots}),
             None => match &s.attribute {
-                Some(a) => json!({"kind": s.kind, "bytes": s.bytes, "attribute": {"width": a.width, "entries": a.entries, "transform": a.transform, "fit_rules": a.rules}}),
+                Some(a) => json!({"kind": s.kind, "bytes": s.bytes, "attribute": {"name": a.name, "domain": a.domain, "width": a.width, "entries": a.entries, "transform": a.transform, "fit_rules": a.rules}}),
                 None => json!({"kind": s.kind, "bytes": s.bytes}),
             },
         }).collect::<Vec<_>>(),

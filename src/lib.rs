@@ -28,13 +28,15 @@ use std::collections::BTreeSet;
 
 pub mod json;
 
-pub use subwave_codec::io::{read_mesh, write_mesh, Format, RawMesh};
+pub use subwave_codec::io::{
+    read_mesh, write_mesh, writes_attribute, Format, RawAttribute, RawMesh,
+};
 pub use subwave_codec::{
-    decode, encode, encode_file, fit_rules, inspect, integerize, AttributeInfo, Decimal,
-    DecodeOptions, Decoded, DiscTransform, EncodeOptions, Encoded, Error, Family, FloatWidth,
-    Header, Info, Limits, Mesh, Progress, Quantization, RawCoords, Result, SectionInfo, Source,
-    Stage, Transform, TransformChoice, Wavelet, DEFAULT_EFFORT, FORMAT_VERSION, MAX_COORD,
-    MAX_DECIMALS, MAX_EFFORT,
+    decode, encode, encode_file, fit_rules, inspect, integerize, Attribute, AttributeInfo, Decimal,
+    DecodeOptions, Decoded, DiscTransform, Domain, EncodeOptions, Encoded, Error, Family,
+    FloatWidth, Header, Info, Limits, Mesh, Progress, Quantization, RawCoords, Result, SectionInfo,
+    Source, Stage, Transform, TransformChoice, ValueType, Wavelet, DEFAULT_EFFORT, FORMAT_VERSION,
+    MAX_ATTRIBUTES, MAX_COORD, MAX_DECIMALS, MAX_EFFORT,
 };
 
 /// A mesh file read and turned into integers.
@@ -46,7 +48,8 @@ pub struct Loaded {
     pub quantization: Quantization,
     /// The format that was read.
     pub format: Format,
-    /// What the file had that subwave does not carry.
+    /// What the file had that its [`Mesh`] does not carry (neither positions, faces
+    /// nor an attribute channel): kept only by [`encode_file`]'s template.
     pub dropped: BTreeSet<String>,
 }
 
@@ -74,12 +77,30 @@ pub fn load(bytes: &[u8], bits: Option<u8>) -> Result<Loaded> {
     let mut mesh = raw.topology;
     mesh.positions = positions;
     mesh.floats = floats;
+    let mut dropped = raw.dropped;
+    for a in &raw.attributes {
+        match a.integerize() {
+            Ok(a) if mesh.attributes.len() < subwave_codec::MAX_ATTRIBUTES => {
+                mesh.attributes.push(a)
+            }
+            Ok(_) => {
+                dropped.insert(format!(
+                    "attribute '{}': more than {} channels",
+                    a.name,
+                    subwave_codec::MAX_ATTRIBUTES
+                ));
+            }
+            Err(e) => {
+                dropped.insert(format!("attribute '{}': {e}", a.name));
+            }
+        }
+    }
     mesh.validate()?;
     Ok(Loaded {
         mesh,
         quantization,
         format: raw.format,
-        dropped: raw.dropped,
+        dropped,
     })
 }
 
@@ -198,6 +219,7 @@ pub fn decode_into(bytes: &[u8], opts: &DecodeOptions, out: &mut Mesh) -> Result
     out.face_starts.extend_from_slice(&d.mesh.face_starts);
     out.floats.clear();
     out.floats.extend_from_slice(&d.mesh.floats);
+    out.attributes.clone_from(&d.mesh.attributes);
     Ok(d)
 }
 

@@ -57,8 +57,11 @@ enum Command {
         /// normals, colours, materials, groups, other properties), unless --canonical.
         #[arg(long, conflicts_with = "canonical")]
         keep_order: bool,
-        /// Positions and faces only, in canonical order: drops whatever else the file
-        /// holds (with a warning naming it) for a smaller container.
+        /// Canonical order: positions, faces and the attribute channels (texture
+        /// coordinates, normals, vertex colours, PLY vertex and face properties), every
+        /// value exact, written back by subwave's writers; drops what else the file
+        /// holds (materials, groups, comments, number styles; a warning names it). Not
+        /// always smaller: an OBJ's normals code best with its bytes kept.
         #[arg(long)]
         canonical: bool,
         #[command(flatten)]
@@ -669,14 +672,14 @@ fn compress(
         Order::Keep => true,
         Order::Canonical => false,
         // Nothing the file holds is left out by default.
-        Order::Auto => !loaded.dropped.is_empty(),
+        Order::Auto => !loaded.dropped.is_empty() || !loaded.mesh.attributes.is_empty(),
     };
     if !keep_order {
         warn_dropped(
             cli.quiet,
             input,
             &loaded,
-            "--canonical: positions and faces only",
+            "--canonical: positions, faces and attribute channels only",
         );
         // The file's bytes are needed no more: free them before coding.
         bytes = Vec::new();
@@ -761,6 +764,20 @@ fn decompress(
     let buf = match dec.file().filter(|_| original) {
         Some(file) => file.map_err(|e| fail(input, e))?,
         None => {
+            let lost: Vec<&str> = dec
+                .mesh
+                .attributes
+                .iter()
+                .filter(|a| !subwave::writes_attribute(fmt, a))
+                .map(|a| a.name.as_str())
+                .collect();
+            if !cli.quiet && !lost.is_empty() {
+                eprintln!(
+                    "subwave: warning: {output}: {} holds no such attribute channel, not written: {}",
+                    fmt.name(),
+                    lost.join(", ")
+                );
+            }
             let mut buf = Vec::new();
             subwave::write_mesh(&mut buf, &dec.mesh, &dec.quantization, fmt)
                 .map_err(|e| fail(output, e))?;
@@ -1030,8 +1047,12 @@ fn print_info(info: &subwave::Info, as_json: bool) {
                         "" => String::new(),
                         r => format!(": {r}"),
                     };
+                    let name = match a.name.as_str() {
+                        "" => String::new(),
+                        n => format!("'{n}' per {}: ", a.domain),
+                    };
                     format!(
-                        "{} {} B ({} x {} values, {}{rules})",
+                        "{} {} B ({name}{} x {} values, {}{rules})",
                         s.kind, s.bytes, a.entries, a.width, a.transform
                     )
                 }

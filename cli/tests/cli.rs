@@ -307,7 +307,7 @@ fn canonical_warns_what_it_drops_and_q_silences_it() {
     let p = tmp("attrs.obj");
     std::fs::write(
         &p,
-        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0\nf 1/1/1 2/1/1 3/1/1\n",
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0.5\ng side\nusemtl red\nf 1/1/1 2/1/1 3/1/1\n",
     )
     .unwrap();
     let o = run(&[
@@ -318,10 +318,33 @@ fn canonical_warns_what_it_drops_and_q_silences_it() {
     ]);
     assert!(o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
+    // UVs and normals are channels, kept; the group and the material are not.
     assert!(
-        err.contains("normals") && err.contains("texture coordinates"),
+        err.contains("materials") && err.contains("group") && !err.contains("normals"),
         "{err}"
     );
+    let back = tmp("attrs_back.obj");
+    let o = run(&[
+        "-f",
+        "decompress",
+        tmp("attrs.swv").to_str().unwrap(),
+        back.to_str().unwrap(),
+    ]);
+    assert!(o.status.success() && o.stderr.is_empty(), "{o:?}");
+    let text = std::fs::read_to_string(&back).unwrap();
+    assert!(
+        text.contains("vt 0.0 0.5\n") && text.contains("vn 0 0 1\n") && text.contains("/1/1 "),
+        "{text}"
+    );
+    // A format without such channels says what it does not write.
+    let o = run(&[
+        "-f",
+        "decompress",
+        tmp("attrs.swv").to_str().unwrap(),
+        tmp("attrs_back.off").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && err.contains("uv, normal"), "{err}");
     let o = run(&[
         "-q",
         "-f",

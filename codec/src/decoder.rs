@@ -6,7 +6,7 @@ use crate::mesh::{Mesh, MAX_COORD};
 use crate::quant::Quantization;
 use crate::sections::head::{Header, Transform};
 use crate::sections::vmap::ValueMap;
-use crate::sections::{attr, cidx, nrml};
+use crate::sections::{attr, chan, cidx, nrml};
 use crate::sections::{base, fbit, levl, ordr, tmpl};
 use crate::topology::Family;
 use crate::topology::{self, Level, Topo};
@@ -33,7 +33,10 @@ pub struct DecodeOptions {
 #[derive(Debug, Clone)]
 pub struct Decoded {
     /// The mesh, in the input's vertex and face order when the container has an ORDR
-    /// section and the finest level was decoded, in canonical order otherwise.
+    /// section and the finest level was decoded, in canonical order otherwise; with its
+    /// attribute channels (CHAN sections, SPEC.md 11.4) when the finest level was
+    /// decoded. A container that keeps a file's own bytes has its attributes in them:
+    /// [`Decoded::file`], read again, gives them as channels.
     pub mesh: Mesh,
     /// How integers map to values.
     pub quantization: Quantization,
@@ -121,6 +124,15 @@ pub(crate) fn layout(c: &Container<'_>, limits: &Limits, whole: bool) -> Result<
             .count();
         expected.extend((0..n).map(|_| (SectionKind::ATTRIBUTE, "attribute")));
     }
+    // Named attribute channels (SPEC.md 11.4): as many as stand there.
+    let at = expected.len() + 1;
+    let n = c
+        .sections
+        .iter()
+        .skip(at)
+        .take_while(|s| s.kind == SectionKind::CHANNEL)
+        .count();
+    expected.extend((0..n).map(|_| (SectionKind::CHANNEL, "attribute channel")));
     expected.push((SectionKind::END, "end marker"));
     for (i, &(kind, what)) in expected.iter().enumerate() {
         if !whole && i + 1 >= c.sections.len() {
@@ -271,6 +283,16 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
         }
         false => (None, Channels::default()),
     };
+    let chans = c.sections.iter().filter(|s| s.kind == SectionKind::CHANNEL);
+    if nested && chans.clone().next().is_some() {
+        return Err(Error::corrupt("CHAN", "a nested container has channels"));
+    }
+    if level == h.levels {
+        for s in chans {
+            let a = channel(s.payload, limits, &mesh)?;
+            mesh.attributes.push(a);
+        }
+    }
     Ok(Decoded {
         mesh,
         quantization: h.quantization,
@@ -353,6 +375,68 @@ fn attribute(payload: &[u8], limits: &Limits, order: Option<&[u8]>) -> Result<At
         mesh: d.mesh,
         q: d.quantization,
     })
+}
+
+/// A named attribute channel from its CHAN payload (SPEC.md 11.4), for `mesh` (the
+/// decoded mesh, in the order the channel was coded in): the nested container must keep
+/// its order and its mesh fit the channel's domain.
+fn channel(payload: &[u8], limits: &Limits, mesh: &Mesh) -> Result<crate::mesh::Attribute> {
+    use crate::mesh::Domain;
+    let (head, nested) = chan::decode(payload)?;
+    let bad = |what: &str| Error::corrupt("CHAN", format!("'{}': {what}", head.name));
+    let opts = DecodeOptions {
+        limits: limits.clone(),
+        ..DecodeOptions::default()
+    };
+    let d = decode_nested(nested, &opts).map_err(|e| bad(&format!("nested container: {e}")))?;
+    if !d.input_order && d.mesh.vertex_count() > 1 {
+        return Err(bad("the nested container has no order"));
+    }
+    let mut m = d.mesh;
+    // A corner channel's padding entries (zeros) go.
+    let keep = m.positions.len().saturating_sub(head.pad as usize);
+    let padding = &m.positions[keep..];
+    if head.pad > 0
+        && (head.domain != Domain::Corner
+            || padding.len() != head.pad as usize
+            || padding.iter().any(|p| *p != [0; 3])
+            || m.faces.iter().any(|&i| i as usize >= keep))
+    {
+        return Err(bad("padding entries that are no padding"));
+    }
+    m.positions.truncate(keep);
+    m.floats.truncate(keep);
+    let fits = match head.domain {
+        Domain::Vertex => m.positions.len() == mesh.vertex_count() && m.faces == mesh.faces,
+        Domain::Face => m.positions.len() == mesh.face_count() && m.faces.is_empty(),
+        Domain::Corner => m.face_starts == mesh.face_starts,
+    } && (m.face_starts == mesh.face_starts || m.faces.is_empty());
+    if !fits {
+        return Err(bad("its entries or faces do not fit the mesh"));
+    }
+    if m.positions
+        .iter()
+        .any(|p| p[head.width as usize..].iter().any(|&c| c != 0))
+    {
+        return Err(bad("values past the channel's width"));
+    }
+    let a = crate::mesh::Attribute {
+        name: head.name,
+        domain: head.domain,
+        value_type: head.value_type,
+        width: head.width,
+        values: m.positions,
+        floats: m.floats,
+        quantization: d.quantization,
+        indices: match head.domain {
+            Domain::Corner => m.faces,
+            _ => Vec::new(),
+        },
+    };
+    // An integer type's values in its range, on an integer grid.
+    a.validate(mesh)
+        .map_err(|e| Error::corrupt("CHAN", e.to_string()))?;
+    Ok(a)
 }
 
 /// Refuses a refinement larger than the header's finest mesh, before it is built.
@@ -714,6 +798,7 @@ fn unpermute(mesh: &Mesh, order: &[u32]) -> Mesh {
         face_starts: mesh.face_starts.clone(),
         faces: mesh.faces.iter().map(|&v| order[v as usize]).collect(),
         floats,
+        attributes: Vec::new(),
     }
 }
 

@@ -31,9 +31,13 @@ pub struct SectionInfo {
     pub attribute: Option<AttributeInfo>,
 }
 
-/// How an ATTR section codes its attribute.
+/// How an ATTR or CHAN section codes its attribute.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct AttributeInfo {
+    /// A CHAN section's channel name (SPEC.md 11.4); empty for ATTR.
+    pub name: String,
+    /// A CHAN section's domain: `vertex`, `face` or `corner`; empty for ATTR.
+    pub domain: String,
     /// Values per entry (2 for UVs, 3 for colours or normals).
     pub width: u8,
     /// Entries (the nested mesh's vertices).
@@ -92,8 +96,31 @@ fn attribute_info(payload: &[u8], limits: &Limits, order: Option<&[u8]>) -> Opti
     let c = Container::parse(&nested, limits).ok()?;
     let h = layout(&c, limits, true).ok()?;
     Some(AttributeInfo {
+        name: String::new(),
+        domain: String::new(),
         width,
         entries: h.vertices,
+        transform: h.transform.name().to_string(),
+        rules: fit_rules(&h),
+    })
+}
+
+/// A CHAN payload's [`AttributeInfo`] (its entries without padding); `None` when it does
+/// not parse.
+fn channel_info(payload: &[u8], limits: &Limits) -> Option<AttributeInfo> {
+    let (head, nested) = crate::sections::chan::decode(payload).ok()?;
+    let c = Container::parse(nested, limits).ok()?;
+    let h = layout(&c, limits, true).ok()?;
+    Some(AttributeInfo {
+        name: head.name,
+        domain: match head.domain {
+            crate::mesh::Domain::Vertex => "vertex",
+            crate::mesh::Domain::Face => "face",
+            crate::mesh::Domain::Corner => "corner",
+        }
+        .to_string(),
+        width: head.width,
+        entries: h.vertices.saturating_sub(head.pad as u64),
         transform: h.transform.name().to_string(),
         rules: fit_rules(&h),
     })
@@ -148,6 +175,9 @@ pub fn inspect(bytes: &[u8], limits: &Limits) -> Result<Info> {
                 let mut i = section_info(s.kind, s.total_len(), t, s.payload);
                 if s.kind == SectionKind::ATTRIBUTE {
                     i.attribute = attribute_info(s.payload, limits, order);
+                }
+                if s.kind == SectionKind::CHANNEL {
+                    i.attribute = channel_info(s.payload, limits);
                 }
                 i
             })

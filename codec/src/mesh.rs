@@ -2,6 +2,7 @@
 //! faces of any degree >= 3, stored flat.
 
 use crate::error::{Error, Result};
+use crate::quant::Quantization;
 
 /// Largest magnitude of an integer coordinate: 2^44 - 1 (SPEC.md 3.1). It leaves 19 bits of
 /// headroom in `i64` for the sums of weighted neighbours the transforms accumulate.
@@ -11,7 +12,7 @@ pub const MAX_COORD: i64 = (1 << 44) - 1;
 pub const COORD_BITS: u32 = 44;
 
 /// A polygon mesh with integer positions.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct Mesh {
     /// One integer position per vertex.
     pub positions: Vec<[i64; 3]>,
@@ -25,6 +26,199 @@ pub struct Mesh {
     /// hold the integers on the grid. Empty when every value is its integer times the
     /// grid step (decimal and grid quantisation, and floats that fit one grid).
     pub floats: Vec<[u64; 3]>,
+    /// Named attribute channels (SPEC.md 11.4): texture coordinates, normals, colours,
+    /// a PLY's other vertex and face properties. Each value is kept exactly, as
+    /// positions are (its own [`Quantization`]); the encoder codes them in the
+    /// decoded mesh's order.
+    pub attributes: Vec<Attribute>,
+}
+
+/// Most named attribute channels a mesh may carry (SPEC.md 11.4).
+pub const MAX_ATTRIBUTES: usize = 32;
+
+/// What an attribute's entries belong to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Domain {
+    /// One entry per vertex.
+    Vertex,
+    /// One entry per face.
+    Face,
+    /// A table of entries and, per face corner, the entry it uses
+    /// ([`Attribute::indices`]): an OBJ's `vt` or `vn` with the faces' `v/vt/vn`.
+    Corner,
+}
+
+/// The type an attribute's values are written as (a PLY property's type; `Text` for a
+/// value written as text, as an OBJ's are).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ValueType {
+    /// Text, as its quantisation writes it.
+    Text,
+    /// IEEE 754 binary32.
+    F32,
+    /// IEEE 754 binary64.
+    F64,
+    /// 8-bit signed integer.
+    I8,
+    /// 8-bit unsigned integer.
+    U8,
+    /// 16-bit signed integer.
+    I16,
+    /// 16-bit unsigned integer.
+    U16,
+    /// 32-bit signed integer.
+    I32,
+    /// 32-bit unsigned integer.
+    U32,
+}
+
+impl ValueType {
+    /// Every type, in the order of their codes (SPEC.md 11.4).
+    pub const ALL: [ValueType; 9] = [
+        ValueType::Text,
+        ValueType::F32,
+        ValueType::F64,
+        ValueType::I8,
+        ValueType::U8,
+        ValueType::I16,
+        ValueType::U16,
+        ValueType::I32,
+        ValueType::U32,
+    ];
+
+    /// The type's code in a CHAN section (SPEC.md 11.4).
+    pub fn code(self) -> u8 {
+        ValueType::ALL.iter().position(|&t| t == self).unwrap_or(0) as u8
+    }
+
+    /// The type of a code, if any.
+    pub fn from_code(c: u8) -> Option<ValueType> {
+        ValueType::ALL.get(c as usize).copied()
+    }
+
+    /// The range of an integer type; `None` for text and floats.
+    pub fn int_range(self) -> Option<(i64, i64)> {
+        Some(match self {
+            ValueType::I8 => (i8::MIN as i64, i8::MAX as i64),
+            ValueType::U8 => (0, u8::MAX as i64),
+            ValueType::I16 => (i16::MIN as i64, i16::MAX as i64),
+            ValueType::U16 => (0, u16::MAX as i64),
+            ValueType::I32 => (i32::MIN as i64, i32::MAX as i64),
+            ValueType::U32 => (0, u32::MAX as i64),
+            _ => return None,
+        })
+    }
+
+    /// Its name in a PLY header.
+    pub fn ply_name(self) -> &'static str {
+        match self {
+            ValueType::Text | ValueType::F32 => "float",
+            ValueType::F64 => "double",
+            ValueType::I8 => "char",
+            ValueType::U8 => "uchar",
+            ValueType::I16 => "short",
+            ValueType::U16 => "ushort",
+            ValueType::I32 => "int",
+            ValueType::U32 => "uint",
+        }
+    }
+}
+
+/// A named attribute channel: `width` values per entry, each kept exactly as integers
+/// on its own [`Quantization`] (and binary float bits where they are finer), as
+/// positions are.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Attribute {
+    /// Its name: `uv`, `normal` or `color` for an OBJ's `vt`, `vn` and vertex colours;
+    /// a PLY's property names, space-separated (`red green blue`).
+    pub name: String,
+    /// What its entries belong to.
+    pub domain: Domain,
+    /// The type its values are written as.
+    pub value_type: ValueType,
+    /// Values per entry, 1..=3.
+    pub width: u8,
+    /// Per entry, its values' integers (those past `width` are 0).
+    pub values: Vec<[i64; 3]>,
+    /// Per entry, its values' IEEE 754 bits where the values are binary floats finer
+    /// than their grid (as [`Mesh::floats`]); else empty.
+    pub floats: Vec<[u64; 3]>,
+    /// How the integers map to values.
+    pub quantization: Quantization,
+    /// [`Domain::Corner`]: per face corner (in the order of [`Mesh::faces`]), its
+    /// entry. Empty for the other domains.
+    pub indices: Vec<u32>,
+}
+
+impl Attribute {
+    /// Number of entries.
+    pub fn entry_count(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Entry `e`'s value `k` as `f64` (exact for binary32 and binary64 values and for
+    /// integers below 2^53).
+    pub fn value_f64(&self, e: usize, k: usize) -> f64 {
+        crate::io::f64_at(&self.values, &self.floats, e, k, &self.quantization)
+    }
+
+    /// Entry `e`'s value `k` as text, as an OBJ or ASCII PLY writes it (the shortest
+    /// text of a binary float; a decimal with its own decimals).
+    pub fn value_text(&self, e: usize, k: usize) -> String {
+        let mut s = String::new();
+        crate::io::text_at(&self.values, &self.floats, e, k, &self.quantization, &mut s);
+        s
+    }
+
+    /// Checks the channel against `mesh`: its width, its entries per domain, its
+    /// indices in range, its values within [`MAX_COORD`].
+    pub(crate) fn validate(&self, mesh: &Mesh) -> Result<()> {
+        let bad = |what: String| Err(Error::InvalidMesh(format!("attribute '{}': {what}", self.name)));
+        if !(1..=3).contains(&self.width) {
+            return bad(format!("{} values per entry (1 to 3)", self.width));
+        }
+        if self.name.len() > 255 {
+            return bad("a name longer than 255 bytes".into());
+        }
+        if !self.floats.is_empty() && self.floats.len() != self.values.len() {
+            return bad(format!("{} float values for {} entries", self.floats.len(), self.values.len()));
+        }
+        let want = match self.domain {
+            Domain::Vertex => Some((mesh.vertex_count(), "vertices")),
+            Domain::Face => Some((mesh.face_count(), "faces")),
+            Domain::Corner => None,
+        };
+        if let Some((n, what)) = want {
+            if self.values.len() != n {
+                return bad(format!("{} entries for {n} {what}", self.values.len()));
+            }
+            if !self.indices.is_empty() {
+                return bad("corner indices on a per-vertex or per-face attribute".into());
+            }
+        } else {
+            if self.indices.len() != mesh.corner_count() {
+                return bad(format!("{} corner indices for {} corners", self.indices.len(), mesh.corner_count()));
+            }
+            if let Some(&i) = self.indices.iter().find(|&&i| i as usize >= self.values.len()) {
+                return bad(format!("corner index {i} past its {} entries", self.values.len()));
+            }
+        }
+        if let Some((lo, hi)) = self.value_type.int_range() {
+            if self.quantization != (Quantization::Decimal { decimals: 0 }) {
+                return bad(format!(
+                    "{:?} values need integers (decimal quantisation with 0 decimals)",
+                    self.value_type
+                ));
+            }
+            if let Some(v) = self.values.iter().flatten().find(|&&v| v < lo || v > hi) {
+                return bad(format!("{v} is outside the {:?} range", self.value_type));
+            }
+        }
+        if self.values.iter().any(|p| p.iter().any(|c| c.abs() > MAX_COORD)) {
+            return bad(format!("a value outside the codec's range of +-(2^{COORD_BITS} - 1)"));
+        }
+        Ok(())
+    }
 }
 
 impl Mesh {
@@ -35,6 +229,23 @@ impl Mesh {
             face_starts: vec![0],
             faces: Vec::new(),
             floats: Vec::new(),
+            attributes: Vec::new(),
+        }
+    }
+
+    /// The attribute channel named `name`, if any.
+    pub fn attribute(&self, name: &str) -> Option<&Attribute> {
+        self.attributes.iter().find(|a| a.name == name)
+    }
+
+    /// The mesh without its attribute channels (positions and faces only).
+    pub fn without_attributes(&self) -> Mesh {
+        Mesh {
+            positions: self.positions.clone(),
+            face_starts: self.face_starts.clone(),
+            faces: self.faces.clone(),
+            floats: self.floats.clone(),
+            attributes: Vec::new(),
         }
     }
 
@@ -91,6 +302,13 @@ impl Mesh {
                 self.positions.len()
             )));
         }
+        if self.face_count() > 0 && self.positions.len() < 3 {
+            return Err(Error::InvalidMesh(format!(
+                "{} faces on {} vertices; faces need at least 3",
+                self.face_count(),
+                self.positions.len()
+            )));
+        }
         if self.positions.len() > u32::MAX as usize {
             return Err(Error::InvalidMesh("more than 2^32 - 1 vertices".into()));
         }
@@ -123,6 +341,15 @@ impl Mesh {
                 p,
                 COORD_BITS
             )));
+        }
+        if self.attributes.len() > MAX_ATTRIBUTES {
+            return Err(Error::InvalidMesh(format!(
+                "{} attribute channels; at most {MAX_ATTRIBUTES}",
+                self.attributes.len()
+            )));
+        }
+        for a in &self.attributes {
+            a.validate(self)?;
         }
         Ok(())
     }

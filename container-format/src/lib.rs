@@ -31,7 +31,7 @@ pub const MAGIC: [u8; 8] = [0x89, b'S', b'W', b'V', b'\r', b'\n', 0x1a, b'\n'];
 /// The format version this crate writes and the only one it reads: before the first
 /// release the format has one version at a time (SPEC.md 1), and a container of any other
 /// version is refused with an error that names it.
-pub const FORMAT_VERSION: u16 = 35;
+pub const FORMAT_VERSION: u16 = 36;
 
 /// Bytes before the first section: magic, version, reserved.
 pub const PREAMBLE_LEN: usize = 12;
@@ -145,11 +145,13 @@ impl SectionKind {
     /// One vertex attribute of the file coded as the positions of a mesh of its own: a
     /// nested container.
     pub const ATTRIBUTE: SectionKind = SectionKind(*b"ATTR");
+    /// One named attribute channel of the mesh (a nested container of its values).
+    pub const CHANNEL: SectionKind = SectionKind(*b"CHAN");
     /// Marks the end of a complete container.
     pub const END: SectionKind = SectionKind(*b"SEND");
 
     /// Every kind, with its one-byte code in the stream (SPEC.md 2.2).
-    const CODES: [(SectionKind, u8); 11] = [
+    const CODES: [(SectionKind, u8); 12] = [
         (SectionKind::HEADER, b'H'),
         (SectionKind::VALUE_MAP, b'V'),
         (SectionKind::BASE, b'B'),
@@ -160,6 +162,7 @@ impl SectionKind {
         (SectionKind::CORNER_INDICES, b'C'),
         (SectionKind::NORMALS, b'N'),
         (SectionKind::ATTRIBUTE, b'A'),
+        (SectionKind::CHANNEL, b'K'),
         (SectionKind::END, b'E'),
     ];
 

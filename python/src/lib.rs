@@ -11,8 +11,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
 use subwave::{
-    Decimal, DecodeOptions, EncodeOptions, FloatWidth, Format, Limits, Mesh, Quantization,
-    RawCoords,
+    Attribute, Decimal, DecodeOptions, Domain, EncodeOptions, FloatWidth, Format, Limits, Mesh,
+    Quantization, RawCoords, ValueType,
 };
 
 create_exception!(
@@ -182,6 +182,7 @@ fn integer_mesh(
             Vec::new()
         },
         floats,
+        attributes: Vec::new(),
     };
     mesh.validate()?;
     Ok((mesh, q))
@@ -191,7 +192,7 @@ fn integer_mesh(
 /// values; `keep_order`: the input's vertex and face order restored on decoding).
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (vertices, faces, offsets, bits=None, keep_order=false, threads=1, decimals=None, effort=None))]
+#[pyo3(signature = (vertices, faces, offsets, bits=None, keep_order=false, threads=1, decimals=None, effort=None, attributes=Vec::new()))]
 fn compress<'py>(
     py: Python<'py>,
     vertices: Vertices<'py>,
@@ -202,7 +203,9 @@ fn compress<'py>(
     threads: usize,
     decimals: Option<u8>,
     effort: Option<u8>,
+    attributes: Vec<(GivenChannel<'py>, u8)>,
 ) -> PyResult<Bound<'py, PyBytes>> {
+    let attributes = channels(attributes)?;
     if bits.is_some_and(|b| !(1..=30).contains(&b)) {
         return Err(pyo3::exceptions::PyValueError::new_err(
             "bits must be between 1 and 30",
@@ -216,7 +219,9 @@ fn compress<'py>(
     let offsets = offsets.as_slice()?.to_vec();
     let bytes = py
         .detach(|| {
-            let (mesh, q) = integer_mesh(&raw, faces, offsets, bits)?;
+            let (mut mesh, q) = integer_mesh(&raw, faces, offsets, bits)?;
+            mesh.attributes = attributes;
+            mesh.validate()?;
             let opts = EncodeOptions {
                 keep_order,
                 threads: threads.max(1),
@@ -236,17 +241,25 @@ type MeshParts<'py> = (
     Bound<'py, PyAny>,
     Bound<'py, PyAny>,
     String,
+    Vec<Channel<'py>>,
 );
 
-/// The values of `mesh` on `q` in the type they came in: int64 for integers, float32
-/// or float64 for binary floats (bit for bit), float64 for decimals (the nearest),
-/// float32 for Draco's grid; with the integers and the quantisation as JSON.
-fn parts<'py>(py: Python<'py>, mesh: &Mesh, q: &Quantization) -> PyResult<MeshParts<'py>> {
-    let n = mesh.vertex_count();
-    let values: Bound<'py, PyAny> = match (*q, mesh.floats.is_empty()) {
+/// Values `p` (with float bits `f`) on `q` in the type they came in, `width` per row:
+/// int64 for integers, float32 or float64 for binary floats (bit for bit), float64 for
+/// decimals (the nearest), float32 for Draco's grid.
+fn value_array<'py>(
+    py: Python<'py>,
+    p: &[[i64; 3]],
+    f: &[[u64; 3]],
+    q: &Quantization,
+    width: usize,
+) -> PyResult<Bound<'py, PyAny>> {
+    let n = p.len();
+    let cells = move || (0..n).flat_map(move |i| (0..width).map(move |k| (i, k)));
+    Ok(match (*q, f.is_empty()) {
         (Quantization::Decimal { decimals: 0 }, _) => {
-            let v: Vec<i64> = mesh.positions.iter().flatten().copied().collect();
-            v.into_pyarray(py).reshape([n, 3])?.into_any()
+            let v: Vec<i64> = cells().map(|(i, k)| p[i][k]).collect();
+            v.into_pyarray(py).reshape([n, width])?.into_any()
         }
         (
             Quantization::Float {
@@ -256,26 +269,53 @@ fn parts<'py>(py: Python<'py>, mesh: &Mesh, q: &Quantization) -> PyResult<MeshPa
             | Quantization::Grid { .. },
             _,
         ) => {
-            let v: Vec<f32> = (0..n)
-                .flat_map(|i| (0..3).map(move |k| (i, k)))
-                .map(|(i, k)| match mesh.floats.get(i) {
-                    Some(f) => f32::from_bits(f[k] as u32),
-                    None => q.value_f32(mesh.positions[i][k], k),
+            let v: Vec<f32> = cells()
+                .map(|(i, k)| match f.get(i) {
+                    Some(b) => f32::from_bits(b[k] as u32),
+                    None => q.value_f32(p[i][k], k),
                 })
                 .collect();
-            v.into_pyarray(py).reshape([n, 3])?.into_any()
+            v.into_pyarray(py).reshape([n, width])?.into_any()
         }
         _ => {
-            let v: Vec<f64> = (0..n)
-                .flat_map(|i| (0..3).map(move |k| (i, k)))
-                .map(|(i, k)| match mesh.floats.get(i) {
-                    Some(f) => f64::from_bits(f[k]),
-                    None => q.value_f64(mesh.positions[i][k], k),
+            let v: Vec<f64> = cells()
+                .map(|(i, k)| match f.get(i) {
+                    Some(b) => f64::from_bits(b[k]),
+                    None => q.value_f64(p[i][k], k),
                 })
                 .collect();
-            v.into_pyarray(py).reshape([n, 3])?.into_any()
+            v.into_pyarray(py).reshape([n, width])?.into_any()
         }
-    };
+    })
+}
+
+/// An attribute channel as the package's `Attribute` is built from it: name, domain,
+/// type, values `(entries, width)`, corner indices (a corner channel's), quantisation.
+type Channel<'py> = (
+    String,
+    &'static str,
+    &'static str,
+    Bound<'py, PyAny>,
+    Option<Bound<'py, PyAny>>,
+    String,
+);
+
+/// The names of [`ValueType`]s in Python, in the order of their codes.
+const TYPE_NAMES: [&str; 9] = ["text", "f32", "f64", "i8", "u8", "i16", "u16", "i32", "u32"];
+
+fn domain_name(d: Domain) -> &'static str {
+    match d {
+        Domain::Vertex => "vertex",
+        Domain::Face => "face",
+        Domain::Corner => "corner",
+    }
+}
+
+/// The values of `mesh` on `q` in the type they came in ([`value_array`]), with the
+/// integers and the quantisation as JSON, and the attribute channels.
+fn parts<'py>(py: Python<'py>, mesh: &Mesh, q: &Quantization) -> PyResult<MeshParts<'py>> {
+    let n = mesh.vertex_count();
+    let values = value_array(py, &mesh.positions, &mesh.floats, q, 3)?;
     let ints: Vec<i64> = mesh.positions.iter().flatten().copied().collect();
     let ints = ints.into_pyarray(py).reshape([n, 3])?.into_any();
     let faces = mesh.faces.clone().into_pyarray(py).into_any();
@@ -285,13 +325,86 @@ fn parts<'py>(py: Python<'py>, mesh: &Mesh, q: &Quantization) -> PyResult<MeshPa
         mesh.face_starts.clone()
     };
     let offsets = offsets.into_pyarray(py).into_any();
+    let mut channels = Vec::with_capacity(mesh.attributes.len());
+    for a in &mesh.attributes {
+        let values = value_array(py, &a.values, &a.floats, &a.quantization, a.width as usize)?;
+        let indices = match a.domain {
+            Domain::Corner => Some(a.indices.clone().into_pyarray(py).into_any()),
+            _ => None,
+        };
+        channels.push((
+            a.name.clone(),
+            domain_name(a.domain),
+            TYPE_NAMES[a.value_type.code() as usize],
+            values,
+            indices,
+            subwave::json::quantization(&a.quantization).to_string(),
+        ));
+    }
     Ok((
         values,
         ints,
         faces,
         offsets,
         subwave::json::quantization(q).to_string(),
+        channels,
     ))
+}
+
+/// An attribute channel given from Python: name, domain, type, values (padded to
+/// three columns), corner indices.
+type GivenChannel<'py> = (
+    String,
+    String,
+    String,
+    Vertices<'py>,
+    Option<PyReadonlyArray1<'py, u32>>,
+);
+
+/// The channels given from Python, their values exact as they came (integers as
+/// integers, floats bit for bit), each `width` values per entry.
+fn channels(given: Vec<(GivenChannel<'_>, u8)>) -> PyResult<Vec<Attribute>> {
+    let bad = |m: String| pyo3::exceptions::PyValueError::new_err(m);
+    given
+        .into_iter()
+        .map(|((name, domain, ty, values, indices), width)| {
+            let domain = match domain.as_str() {
+                "vertex" => Domain::Vertex,
+                "face" => Domain::Face,
+                "corner" => Domain::Corner,
+                d => {
+                    return Err(bad(format!(
+                        "attribute '{name}': domain '{d}' (vertex, face or corner)"
+                    )))
+                }
+            };
+            let value_type = TYPE_NAMES
+                .iter()
+                .position(|t| *t == ty)
+                .and_then(|c| ValueType::from_code(c as u8))
+                .ok_or_else(|| {
+                    bad(format!(
+                        "attribute '{name}': type '{ty}' (one of {})",
+                        TYPE_NAMES.join(", ")
+                    ))
+                })?;
+            let raw = values.raw()?;
+            let (values, quantization, floats) = subwave::integerize(&raw, None).map_err(py_err)?;
+            Ok(Attribute {
+                name,
+                domain,
+                value_type,
+                width,
+                values,
+                floats,
+                quantization,
+                indices: match indices {
+                    Some(i) => i.as_slice()?.to_vec(),
+                    None => Vec::new(),
+                },
+            })
+        })
+        .collect()
 }
 
 /// Decompresses a container: the mesh's parts, then its levels, family and whether the
@@ -347,13 +460,16 @@ fn read<'py>(py: Python<'py>, path: &str) -> PyResult<(MeshParts<'py>, String, V
 /// Writes a mesh file, its format from the extension (`.obj`, `.ply`, `.off`, `.stl`):
 /// the values exactly (PLY and STL in ASCII when binary floats cannot hold them).
 #[pyfunction]
+#[pyo3(signature = (path, vertices, faces, offsets, attributes=Vec::new()))]
 fn write<'py>(
     py: Python<'py>,
     path: &str,
     vertices: Vertices<'py>,
     faces: PyReadonlyArray1<'py, u32>,
     offsets: PyReadonlyArray1<'py, u32>,
+    attributes: Vec<(GivenChannel<'py>, u8)>,
 ) -> PyResult<()> {
+    let attributes = channels(attributes)?;
     let raw = vertices.raw()?;
     let faces = faces.as_slice()?.to_vec();
     let offsets = offsets.as_slice()?.to_vec();
@@ -363,7 +479,9 @@ fn write<'py>(
                 "{path}: the extension names no mesh format (.obj, .ply, .off, .stl)"
             ))
         })?;
-        let (mesh, q) = integer_mesh(&raw, faces, offsets, None)?;
+        let (mut mesh, q) = integer_mesh(&raw, faces, offsets, None)?;
+        mesh.attributes = attributes;
+        mesh.validate()?;
         let format = format.exact_for(&q);
         let mut out = Vec::new();
         subwave::write_mesh(&mut out, &mesh, &q, format)?;

@@ -35,6 +35,7 @@ from ._subwave import (
 
 __all__ = [
     "Mesh",
+    "Attribute",
     "compress",
     "decompress",
     "read",
@@ -51,6 +52,100 @@ __all__ = [
 ]
 
 
+_TYPES = ("text", "f32", "f64", "i8", "u8", "i16", "u16", "i32", "u32")
+_DTYPE_TYPES = {
+    np.dtype(np.int8): "i8",
+    np.dtype(np.uint8): "u8",
+    np.dtype(np.int16): "i16",
+    np.dtype(np.uint16): "u16",
+    np.dtype(np.int32): "i32",
+    np.dtype(np.uint32): "u32",
+    np.dtype(np.float32): "f32",
+    np.dtype(np.float64): "f64",
+}
+
+
+class Attribute:
+    """A named attribute channel: texture coordinates, normals, colours, any per-vertex,
+    per-face or per-corner values, kept exactly (integers as integers, floats bit for
+    bit, decimals read from text on their own grid).
+
+    Attributes:
+        values: ``(entries, width)`` array, ``width`` 1 to 3, in the type the values
+            came in (as ``Mesh.vertices``).
+        domain: ``"vertex"`` (an entry per vertex), ``"face"`` (per face) or
+            ``"corner"`` (a table of entries, ``indices`` naming one per face corner:
+            an OBJ's ``vt`` with its faces' ``v/vt``).
+        indices: for ``"corner"``, the entry of each face corner (in the order of
+            ``Mesh.flat_faces``); else ``None``.
+        type: how the values are written to a file: ``"text"``, ``"f32"``, ``"f64"``,
+            ``"i8"``, ``"u8"``, ``"i16"``, ``"u16"``, ``"i32"``, ``"u32"`` (a PLY
+            property's type); ``None`` chooses from the array's dtype.
+        quantization: how the coded integers map to values (``subwave info``'s JSON),
+            for values decoded or read.
+    """
+
+    def __init__(
+        self,
+        values,
+        domain: str = "vertex",
+        indices=None,
+        type: Optional[str] = None,
+        quantization: Optional[Dict[str, Any]] = None,
+    ) -> None:
+        v = np.asarray(values)
+        if v.ndim == 1:
+            v = v.reshape(-1, 1)
+        if v.ndim != 2 or not 1 <= v.shape[1] <= 3:
+            raise ValueError(f"attribute values must have shape (n, 1..3), not {v.shape}")
+        if domain not in ("vertex", "face", "corner"):
+            raise ValueError(f"domain must be vertex, face or corner, not {domain!r}")
+        if (indices is None) != (domain != "corner"):
+            raise ValueError("indices are given for a corner attribute, and only for one")
+        if type is None:
+            type = _DTYPE_TYPES.get(v.dtype, "text")
+        if type not in _TYPES:
+            raise ValueError(f"type must be one of {', '.join(_TYPES)}, not {type!r}")
+        self.values = v
+        self.domain = domain
+        self.indices = None if indices is None else np.asarray(indices)
+        self.type = type
+        self.quantization = quantization
+
+    def __repr__(self) -> str:
+        return (
+            f"subwave.Attribute({self.values.shape[0]} x {self.values.shape[1]} "
+            f"{self.values.dtype}, domain={self.domain!r}, type={self.type!r})"
+        )
+
+    def _given(self, name: str):
+        """As the extension takes it: values padded to three columns."""
+        v = _vertices(
+            np.concatenate(
+                [self.values, np.zeros((len(self.values), 3 - self.values.shape[1]), self.values.dtype)],
+                axis=1,
+            ),
+            what=f"attribute {name!r} values",
+        )
+        idx = None
+        if self.indices is not None:
+            idx = np.asarray(self.indices)
+            if idx.size and (idx.min() < 0 or idx.max() > np.iinfo(np.uint32).max):
+                raise InvalidMeshError(f"attribute {name!r}: indices must be between 0 and 2^32 - 1")
+            idx = np.ascontiguousarray(idx.reshape(-1), dtype=np.uint32)
+        return ((name, self.domain, self.type, v, idx), int(self.values.shape[1]))
+
+
+def _given_attributes(attributes) -> list:
+    """A dict of :class:`Attribute` (or per-vertex arrays) as the extension takes it."""
+    out = []
+    for name, a in (attributes or {}).items():
+        if not isinstance(a, Attribute):
+            a = Attribute(a)
+        out.append(a._given(str(name)))
+    return out
+
+
 class Mesh:
     """A mesh: positions and polygon faces.
 
@@ -63,8 +158,9 @@ class Mesh:
             ``(sum of k,)`` array of corner indices; see ``face_offsets``.
         face_offsets: ``(m + 1,)`` array: face ``i`` is ``flat[face_offsets[i]:
             face_offsets[i + 1]]``.
-        attributes: named per-vertex or per-corner arrays (none are carried yet: an
-            empty dict).
+        attributes: named :class:`Attribute` channels (texture coordinates ``uv``,
+            normals ``normal``, colours ``color`` from an OBJ; a PLY's vertex and face
+            properties, named by them, e.g. ``"red green blue"``).
         levels: refinement levels found (0 for a flat mesh or one read from a file).
         family: ``"cc"``, ``"sqrt2"``, ``"polar"`` or ``"none"``.
         order: ``"input"`` when the vertices and faces are in the order they were given
@@ -81,7 +177,7 @@ class Mesh:
         faces: np.ndarray,
         face_offsets: Optional[np.ndarray] = None,
         *,
-        attributes: Optional[Dict[str, np.ndarray]] = None,
+        attributes: Optional[Dict[str, Attribute]] = None,
         levels: int = 0,
         family: str = "none",
         order: str = "input",
@@ -167,30 +263,35 @@ def _shaped_faces(flat: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     return flat
 
 
-def _vertices(vertices) -> np.ndarray:
+def _vertices(vertices, what: str = "vertices") -> np.ndarray:
     """Positions as the extension takes them: (n, 3) int64, float32 or float64."""
     v = np.asarray(vertices)
     if v.ndim != 2 or v.shape[1] != 3:
-        raise ValueError(f"vertices must have shape (n, 3), not {v.shape}")
+        raise ValueError(f"{what} must have shape (n, 3), not {v.shape}")
     if v.dtype in (np.float32, np.float64):
         return np.ascontiguousarray(v)
     if np.issubdtype(v.dtype, np.integer):
         if v.dtype == np.uint64 and v.size and v.max() > np.iinfo(np.int64).max:
-            raise InvalidMeshError("integer positions beyond int64")
+            raise InvalidMeshError(f"integer {what} beyond int64")
         return np.ascontiguousarray(v, dtype=np.int64)
     if np.issubdtype(v.dtype, np.floating):  # float16: exactly a float32
         return np.ascontiguousarray(v, dtype=np.float32)
-    raise TypeError(f"vertices must be integers or floats, not {v.dtype}")
+    raise TypeError(f"{what} must be integers or floats, not {v.dtype}")
 
 
 def _mesh(parts, **extra) -> Mesh:
-    values, integers, flat, offsets, quant = parts
+    values, integers, flat, offsets, quant, channels = parts
+    attributes = {
+        name: Attribute(v, domain, indices, ty, json.loads(q))
+        for name, domain, ty, v, indices, q in channels
+    }
     return Mesh(
         values,
         flat,
         offsets,
         integers=integers,
         quantization=json.loads(quant),
+        attributes=attributes,
         **extra,
     )
 
@@ -228,8 +329,9 @@ def compress(
         effort: how hard the encoder searches, 1 (fastest) to 9 (every candidate,
             transform and mode: the smallest container); ``None`` is the default (6).
             Any effort decodes the same way.
-        attributes: reserved for attribute channels; only ``None`` or ``{}`` is accepted
-            for now (subwave carries positions and faces).
+        attributes: named :class:`Attribute` channels (or ``(n, 1..3)`` arrays, one
+            row per vertex), each value kept exactly as given (integers as integers,
+            floats bit for bit), in the order the vertices and faces come back in.
         threads: threads the encoder may use to try transforms at once; the container
             is the same for any count.
 
@@ -238,11 +340,7 @@ def compress(
     """
     if effort is not None and not 1 <= int(effort) <= 9:
         raise ValueError(f"effort must be between 1 and 9 (given: {effort})")
-    if attributes:
-        raise ValueError(
-            f"attributes are not carried yet (given: {', '.join(attributes)}); "
-            "subwave codes positions and faces"
-        )
+    given = _given_attributes(attributes)
     flat, offsets = _flat_faces(faces, face_offsets)
     return _subwave.compress(
         _vertices(vertices),
@@ -253,6 +351,7 @@ def compress(
         max(1, int(threads)),
         decimals,
         None if effort is None else int(effort),
+        given,
     )
 
 
@@ -308,6 +407,7 @@ def write(path: Union[str, os.PathLike], mesh: Mesh, **compress_args: Any) -> No
         if q.get("kind") == "decimal" and "bits" not in compress_args:
             # Values read from text: on their own decimal grid.
             compress_args.setdefault("decimals", q["decimals"])
+        compress_args.setdefault("attributes", mesh.attributes)
         data = compress(mesh.vertices, flat, face_offsets=offsets, **compress_args)
         with open(path, "wb") as f:
             f.write(data)
@@ -315,7 +415,7 @@ def write(path: Union[str, os.PathLike], mesh: Mesh, **compress_args: Any) -> No
     if compress_args:
         raise ValueError("compress arguments apply to .swv files only")
     flat, offsets = _flat_faces(flat, offsets)
-    _subwave.write(path, _vertices(mesh.vertices), flat, offsets)
+    _subwave.write(path, _vertices(mesh.vertices), flat, offsets, _given_attributes(mesh.attributes))
 
 
 def info(data: Union[bytes, bytearray, memoryview]) -> Dict[str, Any]:

@@ -15,11 +15,26 @@ class CorruptError(Error): ...
 class UnsupportedError(Error): ...
 class FileError(Error): ...
 
+class Attribute:
+    values: np.ndarray
+    domain: str
+    indices: Optional[np.ndarray]
+    type: str
+    quantization: Optional[Dict[str, Any]]
+    def __init__(
+        self,
+        values: np.ndarray,
+        domain: str = ...,
+        indices: Optional[np.ndarray] = ...,
+        type: Optional[str] = ...,
+        quantization: Optional[Dict[str, Any]] = ...,
+    ) -> None: ...
+
 class Mesh:
     vertices: np.ndarray
     faces: np.ndarray
     face_offsets: np.ndarray
-    attributes: Dict[str, np.ndarray]
+    attributes: Dict[str, Attribute]
     levels: int
     family: str
     order: str
@@ -33,7 +48,7 @@ class Mesh:
         faces: np.ndarray,
         face_offsets: Optional[np.ndarray] = ...,
         *,
-        attributes: Optional[Dict[str, np.ndarray]] = ...,
+        attributes: Optional[Dict[str, Attribute]] = ...,
         levels: int = ...,
         family: str = ...,
         order: str = ...,
@@ -55,7 +70,7 @@ def compress(
     keep_order: bool = ...,
     decimals: Optional[int] = ...,
     effort: Optional[int] = ...,
-    attributes: Optional[Dict[str, np.ndarray]] = ...,
+    attributes: Optional[Dict[str, Union[Attribute, np.ndarray]]] = ...,
     threads: int = ...,
 ) -> bytes: ...
 def decompress(

@@ -192,8 +192,10 @@ def test_bad_input_raises_subwave_errors(tmp_path):
         subwave.compress(mesh.vertices, np.array([0, 1, 2, 3]), face_offsets=[0, 2, 4])
     with pytest.raises(ValueError):
         subwave.compress(mesh.vertices[:, :2], mesh.faces)
-    with pytest.raises(ValueError, match="attributes"):
+    with pytest.raises(subwave.InvalidMeshError, match="uv"):
         subwave.compress(mesh.vertices, mesh.faces, attributes={"uv": np.zeros((3, 2))})
+    with pytest.raises(ValueError, match="domain"):
+        subwave.Attribute(np.zeros((3, 2)), domain="edge")
     with pytest.raises(subwave.FileError):
         subwave.read(tmp_path / "missing.obj")
     (tmp_path / "hello.obj").write_text("Hello, world\n")
@@ -292,3 +294,47 @@ def test_decoder_threads_give_the_same_mesh():
         assert faces_of(other) == faces_of(one)
     with pytest.raises(ValueError):
         subwave.decompress(data, threads=0)
+
+
+def test_attribute_channels_come_back_exactly_in_canonical_order():
+    # A textured OBJ's uv and normal channels, read, coded in canonical order and
+    # decoded: every value, at every face corner, is the one read.
+    mesh = subwave.read(CORPUS / "textured_cc3.obj")
+    assert set(mesh.attributes) == {"uv", "normal"}
+    uv = mesh.attributes["uv"]
+    assert uv.domain == "corner" and uv.values.shape[1] == 2
+    rng = np.random.default_rng(7)
+    weight = rng.integers(0, 255, size=len(mesh.vertices)).astype(np.uint8)
+    colour = rng.random((len(mesh.vertices), 3), dtype=np.float32)
+    mesh.attributes["weight"] = subwave.Attribute(weight)
+    mesh.attributes["colour"] = subwave.Attribute(colour)
+    data = subwave.compress(
+        mesh.vertices, mesh.flat_faces, face_offsets=mesh.face_offsets,
+        decimals=mesh.quantization["decimals"], attributes=mesh.attributes,
+    )
+    back = subwave.decompress(data)
+    assert back.order == "canonical"
+    assert list(back.attributes) == ["uv", "normal", "weight", "colour"]
+    assert back.attributes["weight"].type == "u8"
+    assert back.attributes["colour"].values.dtype == np.float32
+
+    def corners(m):
+        # Per face: its corners' positions and channel values, from its smallest corner.
+        flat, off = m.flat_faces, m.face_offsets
+        out = []
+        for f in range(len(off) - 1):
+            rows = []
+            for c in range(off[f], off[f + 1]):
+                v = flat[c]
+                row = tuple(m.vertices[v].tolist())
+                for name in ("uv", "normal"):
+                    a = m.attributes[name]
+                    row += tuple(a.values[a.indices[c]].tolist())
+                row += (int(m.attributes["weight"].values[v, 0]),)
+                row += tuple(m.attributes["colour"].values[v].view(np.uint32).tolist())
+                rows.append(row)
+            k = rows.index(min(rows))
+            out.append(tuple(rows[k:] + rows[:k]))
+        return sorted(out)
+
+    assert corners(back) == corners(mesh)

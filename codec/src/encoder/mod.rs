@@ -20,7 +20,7 @@ use crate::sections::cidx;
 use crate::sections::head::{Header, Source, Transform};
 use crate::sections::nrml;
 use crate::sections::vmap::ValueMap;
-use crate::sections::{base, fbit, levl, ordr, tmpl};
+use crate::sections::{base, chan, fbit, levl, ordr, tmpl};
 use crate::topology::{self, Canonical, Family, Topo};
 use crate::transform::level::{LevelTransform, Scheme};
 use crate::transform::polar::DiscTransform;
@@ -335,14 +335,136 @@ pub(crate) fn canonical_positions(mesh: &Mesh, canon: &Canonical) -> [Vec<i64>; 
 /// Encodes an integer mesh whose values map to the file's through `q`: as a
 /// Catmull-Clark, sqrt(2) or polar hierarchy when one is found, else flat; with the
 /// value map of `opts.value_map` (SPEC.md 3.1) when it makes the container smaller.
+///
+/// The mesh's attribute channels ([`Mesh::attributes`]) follow it in CHAN sections
+/// (SPEC.md 11.4), each in the decoded mesh's order.
 pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Encoded> {
-    encode_inner(mesh, q, opts, None)
+    if mesh.attributes.is_empty() {
+        return encode_inner(mesh, q, opts, None);
+    }
+    mesh.validate()?;
+    let enc = encode_inner(&mesh.without_attributes(), q, opts, None)?;
+    with_channels(enc, mesh, opts)
+}
+
+/// `enc`, the container of `mesh`'s positions and faces, with a CHAN section per
+/// attribute channel of `mesh` (SPEC.md 11.4): each channel put in the order the
+/// container decodes to (the input's with an ORDR section, else canonical) and coded as
+/// a nested container with its order kept.
+fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<Encoded> {
+    let dec = crate::decoder::decode(&enc.bytes, &crate::DecodeOptions::default())?;
+    let out = &dec.mesh;
+    let identity = dec.input_order;
+    let vertex_of = |i: usize| if identity { i } else { enc.order[i] as usize };
+    // Each decoded face's input face and the rotation between them.
+    let faces = match identity {
+        true => (0..out.face_count()).map(|f| (f, 0)).collect(),
+        false => match_faces(mesh, out, &enc.order)?,
+    };
+    let mut chans = Vec::with_capacity(mesh.attributes.len());
+    for a in &mesh.attributes {
+        let mut m = Mesh::new();
+        let pick = |e: usize, m: &mut Mesh| {
+            m.positions.push(a.values[e]);
+            if let Some(f) = a.floats.get(e) {
+                m.floats.push(*f);
+            }
+        };
+        match a.domain {
+            crate::mesh::Domain::Vertex => {
+                (0..out.vertex_count()).for_each(|i| pick(vertex_of(i), &mut m));
+                m.face_starts = out.face_starts.clone();
+                m.faces = out.faces.clone();
+            }
+            crate::mesh::Domain::Face => faces.iter().for_each(|&(g, _)| pick(g, &mut m)),
+            crate::mesh::Domain::Corner => {
+                m.positions = a.values.clone();
+                m.floats = a.floats.clone();
+                // A mesh with faces has at least 3 vertices.
+                while m.positions.len() < 3 {
+                    m.positions.push([0; 3]);
+                    if !m.floats.is_empty() {
+                        m.floats.push([0; 3]);
+                    }
+                }
+                m.faces.reserve(a.indices.len());
+                for &(g, r) in &faces {
+                    let s = mesh.face_starts[g] as usize;
+                    let d = mesh.face_starts[g + 1] as usize - s;
+                    m.faces.extend((0..d).map(|j| a.indices[s + (j + r) % d]));
+                }
+                m.face_starts = out.face_starts.clone();
+            }
+        }
+        let mut o = opts.clone();
+        o.keep_order = true;
+        o.progress = Progress::default();
+        let nested = encode_inner(&m, &a.quantization, &o, None)?;
+        let head = chan::Head {
+            name: a.name.clone(),
+            domain: a.domain,
+            value_type: a.value_type,
+            width: a.width,
+            pad: (m.positions.len() - a.values.len()) as u8,
+        };
+        chans.push(chan::encode(&head, &nested.bytes));
+    }
+    // The container again, the channels before its end marker.
+    let c = subwave_container::Container::parse(&enc.bytes, &crate::Limits::default())?;
+    let mut w = ContainerWriter::new();
+    for s in c.sections.iter().filter(|s| s.kind != SectionKind::END) {
+        w.section(s.kind, s.payload);
+    }
+    let end = enc.sections.pop();
+    let transform = enc.header.transform;
+    for p in &chans {
+        w.section(SectionKind::CHANNEL, p);
+        let bytes = p.len() + subwave_container::section_overhead(p.len());
+        enc.sections
+            .push(section_info(SectionKind::CHANNEL, bytes, transform, p));
+    }
+    enc.sections.extend(end);
+    enc.bytes = w.finish();
+    Ok(enc)
+}
+
+/// For each face of `out` (the decoded mesh, whose vertex `i` is `mesh`'s `order[i]`),
+/// the face of `mesh` it is and the rotation `r` with corner `j` of the decoded face
+/// corner `(j + r) mod d` of `mesh`'s.
+fn match_faces(mesh: &Mesh, out: &Mesh, order: &[u32]) -> Result<Vec<(usize, usize)>> {
+    // Faces keyed by their smallest vertex and the vertices after it.
+    let key = |f: &[u32]| -> (usize, Vec<u32>) {
+        let d = f.len();
+        let s = (0..d).min_by_key(|&j| (f[j], f[(j + 1) % d])).unwrap_or(0);
+        (s, (0..d).map(|j| f[(s + j) % d]).collect())
+    };
+    let mut by_key: HashMap<Vec<u32>, Vec<(usize, usize)>> = HashMap::new();
+    for g in (0..mesh.face_count()).rev() {
+        let (s, k) = key(mesh.face(g));
+        by_key.entry(k).or_default().push((g, s));
+    }
+    let mut mapped = Vec::new();
+    let mut faces = Vec::with_capacity(out.face_count());
+    for f in out.iter_faces() {
+        mapped.clear();
+        mapped.extend(f.iter().map(|&v| order[v as usize]));
+        let (s, k) = key(&mapped);
+        let (g, sg) = by_key
+            .get_mut(&k)
+            .and_then(Vec::pop)
+            .ok_or_else(|| Error::InvalidMesh("a decoded face is none of the input's".into()))?;
+        let d = f.len();
+        // Decoded corner s is input corner sg.
+        faces.push((g, (sg + d - s) % d));
+    }
+    Ok(faces)
 }
 
 /// Encodes a mesh read from `file`, a file of `format` whose mesh (in the file's vertex
 /// and face order) is `mesh` on `q`, with the file's own bytes around the coded values
 /// (SPEC.md 11): decoding then gives the file back byte for byte
-/// ([`crate::Decoded::file`]). Needs `opts.keep_order`.
+/// ([`crate::Decoded::file`]). Needs `opts.keep_order`. The mesh's attribute channels
+/// are left out: the file's own bytes carry them.
 pub fn encode_file(
     mesh: &Mesh,
     q: &Quantization,
@@ -356,6 +478,16 @@ pub fn encode_file(
         ));
     }
     mesh.validate()?;
+    // The file's bytes carry its attributes: the channels read from it are not coded
+    // again.
+    let stripped;
+    let mesh = match mesh.attributes.is_empty() {
+        true => mesh,
+        false => {
+            stripped = mesh.without_attributes();
+            &stripped
+        }
+    };
     let (mut t, mut ch) = io::template_of(file, format, mesh, q, true)
         .unwrap_or_else(|| (io::template::verbatim(file, mesh, q), Channels::default()));
     let attr = match ch.attributes.iter().map(|a| attribute(a, opts)).collect() {
@@ -423,6 +555,7 @@ fn encode_inner(
         face_starts: mesh.face_starts.clone(),
         faces: mesh.faces.clone(),
         floats: mesh.floats.clone(),
+        attributes: Vec::new(),
     };
     let mapped = encode_with(&ranked, q, opts, Some(&map), tmpl)?;
     if opts.value_map == Some(true) {
@@ -752,6 +885,7 @@ mod tests {
             face_starts: t.starts.clone(),
             faces: t.idx.clone(),
             floats: Vec::new(),
+            attributes: Vec::new(),
         };
         let q = Quantization::Decimal { decimals: 0 };
         let header = flat_header(&mesh, &q, &EncodeOptions::default());

@@ -15,7 +15,7 @@ use std::collections::BTreeSet;
 use std::io::Write;
 
 use crate::error::{Error, Result};
-use crate::mesh::Mesh;
+use crate::mesh::{Attribute, Domain, Mesh, ValueType};
 use crate::quant::{FloatWidth, Quantization, RawCoords};
 
 /// Mesh file formats.
@@ -150,6 +150,44 @@ pub struct RawMesh {
     /// Why the text's decimals cannot be kept exactly, if they cannot (too many digits
     /// or too large): such a file can only be coded with `--bits`.
     pub inexact: Option<String>,
+    /// Its attribute channels (texture coordinates, normals, colours, other PLY
+    /// properties), before their numbers become integers.
+    pub attributes: Vec<RawAttribute>,
+}
+
+/// A named attribute channel as read ([`crate::Attribute`] before its numbers become
+/// integers).
+#[derive(Debug, Clone)]
+pub struct RawAttribute {
+    /// Its name ([`crate::Attribute::name`]).
+    pub name: String,
+    /// What its entries belong to.
+    pub domain: Domain,
+    /// The type its values were written as.
+    pub value_type: ValueType,
+    /// Values per entry, 1..=3.
+    pub width: u8,
+    /// The entries (values past `width` are 0), exactly as written.
+    pub values: RawCoords,
+    /// [`Domain::Corner`]: per face corner, its entry.
+    pub indices: Vec<u32>,
+}
+
+impl RawAttribute {
+    /// The channel with its values as integers, exactly ([`crate::integerize`]).
+    pub fn integerize(&self) -> Result<Attribute> {
+        let (values, quantization, floats) = crate::quant::integerize(&self.values, None)?;
+        Ok(Attribute {
+            name: self.name.clone(),
+            domain: self.domain,
+            value_type: self.value_type,
+            width: self.width,
+            values,
+            floats,
+            quantization,
+            indices: self.indices.clone(),
+        })
+    }
 }
 
 /// Reads a mesh file from bytes. The format is sniffed from the content. A file with
@@ -242,7 +280,19 @@ pub(crate) fn text_values(rows: &[[&str; 3]]) -> Option<crate::quant::Integers> 
     crate::quant::integerize(&text.finish().0, None).ok()
 }
 
-/// Writes `mesh` in `format`, mapping integers to values with `q`.
+/// Whether [`write_mesh`] writes attribute channel `a` in `format`: an OBJ its
+/// `color`, `uv` and `normal` channels (`v` line colours, `vt`, `vn`), a PLY every
+/// per-vertex and per-face channel (as properties), OFF and STL none.
+pub fn writes_attribute(format: Format, a: &Attribute) -> bool {
+    match format {
+        Format::Obj => obj::writes(a),
+        f if f.is_ply() => a.domain != Domain::Corner,
+        _ => false,
+    }
+}
+
+/// Writes `mesh` in `format`, mapping integers to values with `q`, with the attribute
+/// channels the format holds ([`writes_attribute`]).
 pub fn write_mesh<W: Write>(out: W, mesh: &Mesh, q: &Quantization, format: Format) -> Result<()> {
     let mut out = std::io::BufWriter::with_capacity(1 << 16, out);
     match format {
@@ -280,7 +330,30 @@ pub(crate) fn coords_line(
 /// Appends vertex `v`'s coordinate `k` as text: the shortest text of its float when the
 /// mesh keeps one, else as its quantisation writes it ([`Quantization::write_text`]).
 pub(crate) fn format_coord(mesh: &Mesh, v: usize, k: usize, q: &Quantization, out: &mut String) {
-    match (mesh.floats.get(v), q) {
+    text_at(&mesh.positions, &mesh.floats, v, k, q, out)
+}
+
+/// Vertex `v`'s coordinate `k` as `f64` (its float when the mesh keeps one).
+pub(crate) fn value_f64(mesh: &Mesh, v: usize, k: usize, q: &Quantization) -> f64 {
+    f64_at(&mesh.positions, &mesh.floats, v, k, q)
+}
+
+/// Vertex `v`'s coordinate `k` as `f32` (exact for binary32 values and grids).
+pub(crate) fn value_f32(mesh: &Mesh, v: usize, k: usize, q: &Quantization) -> f32 {
+    f32_at(&mesh.positions, &mesh.floats, v, k, q)
+}
+
+/// [`format_coord`] of entry `v` of the integers `p` with the float bits `f` (empty
+/// when there are none): shared by positions and attribute values.
+pub(crate) fn text_at(
+    p: &[[i64; 3]],
+    f: &[[u64; 3]],
+    v: usize,
+    k: usize,
+    q: &Quantization,
+    out: &mut String,
+) {
+    match (f.get(v), q) {
         (Some(f), Quantization::Float { width, .. }) => {
             use std::fmt::Write as _;
             let _ = match width {
@@ -288,13 +361,13 @@ pub(crate) fn format_coord(mesh: &Mesh, v: usize, k: usize, q: &Quantization, ou
                 FloatWidth::F64 => write!(out, "{}", f64::from_bits(f[k])),
             };
         }
-        _ => q.write_text(mesh.positions[v][k], k, out),
+        _ => q.write_text(p[v][k], k, out),
     }
 }
 
-/// Vertex `v`'s coordinate `k` as `f64` (its float when the mesh keeps one).
-pub(crate) fn value_f64(mesh: &Mesh, v: usize, k: usize, q: &Quantization) -> f64 {
-    match (mesh.floats.get(v), q) {
+/// [`value_f64`] of entry `v` of `p` with the float bits `f`.
+pub(crate) fn f64_at(p: &[[i64; 3]], f: &[[u64; 3]], v: usize, k: usize, q: &Quantization) -> f64 {
+    match (f.get(v), q) {
         (
             Some(f),
             Quantization::Float {
@@ -303,13 +376,13 @@ pub(crate) fn value_f64(mesh: &Mesh, v: usize, k: usize, q: &Quantization) -> f6
             },
         ) => f32::from_bits(f[k] as u32) as f64,
         (Some(f), _) => f64::from_bits(f[k]),
-        (None, _) => q.value_f64(mesh.positions[v][k], k),
+        (None, _) => q.value_f64(p[v][k], k),
     }
 }
 
-/// Vertex `v`'s coordinate `k` as `f32` (exact for binary32 values and grids).
-pub(crate) fn value_f32(mesh: &Mesh, v: usize, k: usize, q: &Quantization) -> f32 {
-    match (mesh.floats.get(v), q) {
+/// [`value_f32`] of entry `v` of `p` with the float bits `f`.
+pub(crate) fn f32_at(p: &[[i64; 3]], f: &[[u64; 3]], v: usize, k: usize, q: &Quantization) -> f32 {
+    match (f.get(v), q) {
         (
             Some(f),
             Quantization::Float {
@@ -317,8 +390,8 @@ pub(crate) fn value_f32(mesh: &Mesh, v: usize, k: usize, q: &Quantization) -> f3
                 ..
             },
         ) => f32::from_bits(f[k] as u32),
-        (Some(_), _) => value_f64(mesh, v, k, q) as f32,
-        (None, _) => q.value_f32(mesh.positions[v][k], k),
+        (Some(_), _) => f64_at(p, f, v, k, q) as f32,
+        (None, _) => q.value_f32(p[v][k], k),
     }
 }
 

@@ -3,10 +3,10 @@
 use std::collections::BTreeSet;
 use std::io::Write;
 
-use super::template::{Attribute, Builder, Form};
-use super::{coords_line, syntax, Format, RawMesh};
+use super::template::{Attribute as FileAttribute, Builder, Form};
+use super::{coords_line, syntax, Format, RawAttribute, RawMesh};
 use crate::error::Result;
-use crate::mesh::Mesh;
+use crate::mesh::{Attribute, Domain, Mesh, ValueType};
 use crate::quant::{Quantization, TextCoords};
 use crate::sections::nrml::Component;
 
@@ -56,6 +56,11 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     let mut face: Vec<u32> = Vec::new();
     let mut joined = String::new();
     let mut lines = text.lines().enumerate();
+    // Vertex colours, `vt` and `vn` tables, and the corners' `vt` and `vn` numbers.
+    let (mut colours, mut colour_lines) = (TextCoords::default(), 0usize);
+    let mut uv = Table::new("texture coordinates", "vt");
+    let mut nrm = Table::new("normals", "vn");
+    let mut refs: Vec<(Option<i64>, Option<i64>)> = Vec::new();
     while let Some((n, raw)) = lines.next() {
         let lineno = n + 1;
         let mut line: &str = raw;
@@ -80,10 +85,17 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                     })?;
                 }
                 coords.push(p).map_err(|e| syntax("OBJ", lineno, e))?;
-                match tok.count() {
+                let rest: Vec<&str> = tok.collect();
+                match rest.len() {
                     0 => {}
                     1 => {
                         dropped.insert("homogeneous w coordinates".to_string());
+                    }
+                    3 if colour_lines + 1 == coords.len() => {
+                        colours
+                            .push([rest[0], rest[1], rest[2]])
+                            .map_err(|e| syntax("OBJ", lineno, e))?;
+                        colour_lines += 1;
                     }
                     _ => {
                         dropped.insert("vertex colors".to_string());
@@ -91,20 +103,18 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                 }
             }
             "f" | "fo" => {
-                read_face(tok, lineno, coords.len(), &mut face, &mut dropped)?;
+                read_face(tok, lineno, coords.len(), &mut face, &mut refs)?;
                 if face.len() >= 3 {
                     topo.push_face(&face);
+                    uv.corners(&refs, |r| r.0, lineno)?;
+                    nrm.corners(&refs, |r| r.1, lineno)?;
                 } else {
                     // A face of one or two corners is a point or a line, not a polygon.
                     dropped.insert("faces of fewer than 3 corners".to_string());
                 }
             }
-            "vt" => {
-                dropped.insert("texture coordinates".to_string());
-            }
-            "vn" => {
-                dropped.insert("normals".to_string());
-            }
+            "vt" => uv.push(tok, lineno)?,
+            "vn" => nrm.push(tok, lineno)?,
             "vp" => {
                 dropped.insert("parameter-space vertices".to_string());
             }
@@ -136,6 +146,24 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             }
         }
     }
+    let mut attributes = Vec::new();
+    if colour_lines > 0 && colour_lines == coords.len() {
+        attributes.push(RawAttribute {
+            name: "color".into(),
+            domain: Domain::Vertex,
+            value_type: ValueType::Text,
+            width: 3,
+            values: colours.finish().0,
+            indices: Vec::new(),
+        });
+    } else if colour_lines > 0 {
+        dropped.insert("vertex colors".to_string());
+    }
+    for (t, name) in [(uv, "uv"), (nrm, "normal")] {
+        if let Some(a) = t.finish(name, topo.corner_count(), &mut dropped)? {
+            attributes.push(a);
+        }
+    }
     let (coords, inexact) = coords.finish();
     Ok(RawMesh {
         coords,
@@ -143,7 +171,146 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         format: Format::Obj,
         dropped,
         inexact,
+        attributes,
     })
+}
+
+/// A `vt` or `vn` table as read and the faces' numbers into it: a corner channel
+/// (SPEC.md 11.4) when every line has the same number of values and every corner a
+/// number.
+struct Table {
+    /// What it holds, for messages.
+    what: &'static str,
+    /// Its keyword.
+    keyword: &'static str,
+    rows: TextCoords,
+    /// Values per line (the first line's); `None` once lines disagree.
+    width: Option<usize>,
+    /// Lines read.
+    lines: usize,
+    /// Per corner so far, its entry; `None` once a corner has none.
+    indices: Option<Vec<u32>>,
+    /// Corners with a number.
+    numbered: usize,
+    /// The largest number a corner gave, with its line (numbers may point forward).
+    largest: (u64, usize),
+}
+
+impl Table {
+    fn new(what: &'static str, keyword: &'static str) -> Self {
+        Table {
+            what,
+            keyword,
+            rows: TextCoords::default(),
+            width: Some(0),
+            lines: 0,
+            indices: Some(Vec::new()),
+            numbered: 0,
+            largest: (0, 0),
+        }
+    }
+
+    /// A `vt` or `vn` line's values.
+    fn push<'a>(&mut self, tok: impl Iterator<Item = &'a str>, lineno: usize) -> Result<()> {
+        let mut t = ["0"; 3];
+        let mut n = 0;
+        for v in tok {
+            if n < 3 {
+                t[n] = v;
+            }
+            n += 1;
+        }
+        self.lines += 1;
+        let first = self.lines == 1;
+        match self.width {
+            Some(_) if first && (1..=3).contains(&n) => self.width = Some(n),
+            Some(_) if first => self.width = None,
+            Some(w) if w == n => {}
+            _ => self.width = None,
+        }
+        if self.width.is_some() {
+            self.rows.push(t).map_err(|e| syntax("OBJ", lineno, e))?;
+        }
+        Ok(())
+    }
+
+    /// A face's corners' numbers into this table (`pick` of each corner's pair), 0-based
+    /// as far as they can be resolved now.
+    fn corners(
+        &mut self,
+        refs: &[(Option<i64>, Option<i64>)],
+        pick: impl Fn(&(Option<i64>, Option<i64>)) -> Option<i64>,
+        lineno: usize,
+    ) -> Result<()> {
+        for r in refs {
+            let Some(i) = pick(r) else {
+                self.indices = None;
+                continue;
+            };
+            self.numbered += 1;
+            let idx = match i {
+                i if i > 0 => i - 1,
+                i if i < 0 => self.lines as i64 + i,
+                _ => -1,
+            };
+            if idx < 0 || idx >= u32::MAX as i64 {
+                return Err(syntax(
+                    "OBJ",
+                    lineno,
+                    format!("{} reference {i} is out of range", self.keyword),
+                ));
+            }
+            if idx as u64 + 1 > self.largest.0 {
+                self.largest = (idx as u64 + 1, lineno);
+            }
+            if let Some(v) = &mut self.indices {
+                v.push(idx as u32);
+            }
+        }
+        Ok(())
+    }
+
+    /// The channel named `name`, if the table is one; what it is not noted in
+    /// `dropped`. A number past the table is an error.
+    fn finish(
+        self,
+        name: &str,
+        corners: usize,
+        dropped: &mut BTreeSet<String>,
+    ) -> Result<Option<RawAttribute>> {
+        if self.largest.0 > self.lines as u64 {
+            return Err(syntax(
+                "OBJ",
+                self.largest.1,
+                format!(
+                    "{} reference {} is past the file's {} '{}' lines",
+                    self.keyword, self.largest.0, self.lines, self.keyword
+                ),
+            ));
+        }
+        if self.lines == 0 && self.numbered == 0 {
+            return Ok(None);
+        }
+        let why = match (self.width, &self.indices) {
+            (None, _) => "of differing lengths",
+            (_, None) => "on some corners only",
+            (_, Some(v)) if v.len() != corners || corners == 0 => "that no face uses",
+            _ => "",
+        };
+        if !why.is_empty() {
+            dropped.insert(format!("{} {why}", self.what));
+            return Ok(None);
+        }
+        let (values, _) = self.rows.finish();
+        Ok(Some(RawAttribute {
+            name: name.to_string(),
+            domain: Domain::Corner,
+            value_type: ValueType::Text,
+            width: self.width.unwrap_or(1) as u8,
+            values,
+            indices: self.indices.unwrap_or_default(),
+        }))
+    }
 }
 
 /// A statement continued by trailing backslashes, joined into `joined`.
@@ -171,27 +338,31 @@ fn join_continued<'a>(
 }
 
 /// An `f` statement's corners (`v`, `v/vt`, `v/vt/vn`, `v//vn`; negative numbers count
-/// back from the `nv` vertices so far) into `face`, noting texture coordinates and
-/// normals as dropped. The caller checks that there are at least 3.
+/// back from the `nv` vertices so far) into `face`, and each corner's `vt` and `vn`
+/// numbers as written into `refs`. The caller checks that there are at least 3.
 fn read_face<'a>(
     tok: impl Iterator<Item = &'a str>,
     lineno: usize,
     nv: usize,
     face: &mut Vec<u32>,
-    dropped: &mut BTreeSet<String>,
+    refs: &mut Vec<(Option<i64>, Option<i64>)>,
 ) -> Result<()> {
     face.clear();
+    refs.clear();
+    let number = |t: &str, s: &str, what: &str| -> Result<Option<i64>> {
+        if s.is_empty() {
+            return Ok(None);
+        }
+        s.parse()
+            .map(Some)
+            .map_err(|_| syntax("OBJ", lineno, format!("'{t}' has no {what} number")))
+    };
     for t in tok {
         let mut parts = t.split('/');
         let vi = parts.next().unwrap_or("");
-        if let Some(vt) = parts.next() {
-            if !vt.is_empty() {
-                dropped.insert("texture coordinates".to_string());
-            }
-        }
-        if parts.next().is_some_and(|vn| !vn.is_empty()) {
-            dropped.insert("normals".to_string());
-        }
+        let vt = number(t, parts.next().unwrap_or(""), "texture coordinate")?;
+        let vn = number(t, parts.next().unwrap_or(""), "normal")?;
+        refs.push((vt, vn));
         let i: i64 = vi
             .parse()
             .map_err(|_| syntax("OBJ", lineno, format!("'{t}' is not a vertex reference")))?;
@@ -218,18 +389,78 @@ fn line_of(bytes: &[u8], offset: usize) -> usize {
     bytes[..offset].iter().filter(|&&b| b == b'\n').count() + 1
 }
 
+/// The channels an OBJ writes: vertex colours (`color`, three values per vertex) on the
+/// `v` lines, texture coordinates (`uv`) as `vt` lines and normals (`normal`) as `vn`
+/// lines, each per corner or per vertex.
+pub(crate) fn writes(a: &Attribute) -> bool {
+    match a.name.as_str() {
+        "color" => a.domain == Domain::Vertex && a.width == 3,
+        "uv" | "normal" => a.domain != Domain::Face,
+        _ => false,
+    }
+}
+
 pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Result<()> {
+    use std::fmt::Write as _;
+    let find = |name: &str| mesh.attributes.iter().find(|a| a.name == name && writes(a));
+    let (colour, uv, normal) = (find("color"), find("uv"), find("normal"));
     let mut line = String::with_capacity(128);
+    let table = |a: &Attribute, keyword: &str, out: &mut W, line: &mut String| -> Result<()> {
+        for e in 0..a.entry_count() {
+            line.clear();
+            line.push_str(keyword);
+            for k in 0..a.width as usize {
+                line.push(' ');
+                super::text_at(&a.values, &a.floats, e, k, &a.quantization, line);
+            }
+            line.push('\n');
+            out.write_all(line.as_bytes())?;
+        }
+        Ok(())
+    };
     for v in 0..mesh.vertex_count() {
         coords_line("v", mesh, v, q, &mut line);
+        if let Some(c) = colour {
+            line.pop();
+            for k in 0..3 {
+                line.push(' ');
+                super::text_at(&c.values, &c.floats, v, k, &c.quantization, &mut line);
+            }
+            line.push('\n');
+        }
         out.write_all(line.as_bytes())?;
     }
-    for face in mesh.iter_faces() {
+    if let Some(a) = uv {
+        table(a, "vt", out, &mut line)?;
+    }
+    if let Some(a) = normal {
+        table(a, "vn", out, &mut line)?;
+    }
+    // A corner's entry in a channel, counted from 1.
+    let entry = |a: &Attribute, c: usize, v: u32| -> u64 {
+        match a.domain {
+            Domain::Corner => a.indices[c] as u64 + 1,
+            _ => v as u64 + 1,
+        }
+    };
+    for f in 0..mesh.face_count() {
+        let s = mesh.face_starts[f] as usize;
         line.clear();
         line.push('f');
-        for &i in face {
-            use std::fmt::Write as _;
+        for (j, &i) in mesh.face(f).iter().enumerate() {
             let _ = write!(line, " {}", i as u64 + 1);
+            match (uv, normal) {
+                (None, None) => {}
+                (Some(t), None) => {
+                    let _ = write!(line, "/{}", entry(t, s + j, i));
+                }
+                (None, Some(n)) => {
+                    let _ = write!(line, "//{}", entry(n, s + j, i));
+                }
+                (Some(t), Some(n)) => {
+                    let _ = write!(line, "/{}/{}", entry(t, s + j, i), entry(n, s + j, i));
+                }
+            }
         }
         line.push('\n');
         out.write_all(line.as_bytes())?;
@@ -261,7 +492,7 @@ fn statement(line: &[u8]) -> Vec<&[u8]> {
 
 /// An attribute of `width` values from each entry's tokens (the rest 0), on the faces
 /// `faces` (each a list of entry numbers), if its numbers are finite.
-fn attribute_of(entries: &[Vec<&[u8]>], width: usize, faces: &Mesh) -> Option<Attribute> {
+fn attribute_of(entries: &[Vec<&[u8]>], width: usize, faces: &Mesh) -> Option<FileAttribute> {
     let mut rows = Vec::with_capacity(entries.len());
     for e in entries {
         let mut t = ["0"; 3];
@@ -270,7 +501,7 @@ fn attribute_of(entries: &[Vec<&[u8]>], width: usize, faces: &Mesh) -> Option<At
         }
         rows.push(t);
     }
-    Some(Attribute::on_faces(
+    Some(FileAttribute::on_faces(
         width,
         super::text_values(&rows)?,
         faces,

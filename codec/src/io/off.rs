@@ -130,6 +130,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     }
     let (coords, inexact) = coords.finish();
     Ok(RawMesh {
+        attributes: Vec::new(),
         coords,
         topology: topo,
         format: Format::Off,

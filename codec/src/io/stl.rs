@@ -82,6 +82,7 @@ fn read_binary(bytes: &[u8]) -> Result<RawMesh> {
         topo.push_face(&face);
     }
     Ok(RawMesh {
+        attributes: Vec::new(),
         coords: RawCoords::F32(coords),
         topology: topo,
         format: Format::StlBinary,
@@ -154,6 +155,7 @@ fn read_ascii(bytes: &[u8]) -> Result<RawMesh> {
     }
     let (coords, inexact) = coords.finish();
     Ok(RawMesh {
+        attributes: Vec::new(),
         coords,
         topology: topo,
         format: Format::StlAscii,

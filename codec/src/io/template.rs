@@ -48,6 +48,7 @@ impl Attribute {
                 face_starts: faces.face_starts.clone(),
                 faces: faces.faces.clone(),
                 floats,
+                attributes: Vec::new(),
             },
             q,
         }

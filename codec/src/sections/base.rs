@@ -45,6 +45,7 @@ pub fn permute(mesh: &Mesh, order: &[u32]) -> Mesh {
         face_starts: mesh.face_starts.clone(),
         faces: mesh.faces.iter().map(|&v| inv[v as usize]).collect(),
         floats: Vec::new(),
+        attributes: Vec::new(),
     }
 }
 

@@ -3,6 +3,7 @@
 
 pub(crate) mod attr;
 pub mod base;
+pub(crate) mod chan;
 pub mod cidx;
 pub mod fbit;
 pub mod head;

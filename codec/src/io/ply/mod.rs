@@ -4,11 +4,11 @@
 use std::collections::BTreeSet;
 use std::io::Write;
 
-use super::{value_f32, value_f64, write_counted_text, Format, RawMesh};
+use super::{value_f32, value_f64, write_counted_text, Format, RawAttribute, RawMesh};
 
 mod walk;
 use crate::error::{Error, Result};
-use crate::mesh::Mesh;
+use crate::mesh::{Attribute, Domain, Mesh, ValueType};
 use crate::quant::{Decimal, Quantization, RawCoords, TextCoords};
 pub(super) use walk::template;
 
@@ -25,6 +25,28 @@ enum Scalar {
 }
 
 impl Scalar {
+    fn value_type(self) -> ValueType {
+        match self {
+            Scalar::I8 => ValueType::I8,
+            Scalar::U8 => ValueType::U8,
+            Scalar::I16 => ValueType::I16,
+            Scalar::U16 => ValueType::U16,
+            Scalar::I32 => ValueType::I32,
+            Scalar::U32 => ValueType::U32,
+            Scalar::F32 => ValueType::F32,
+            Scalar::F64 => ValueType::F64,
+        }
+    }
+
+    /// Zero of this type, as [`Body::num`] reads one in a binary body.
+    fn zero(self) -> Num {
+        match self {
+            Scalar::F32 => Num::F32(0.0),
+            Scalar::F64 => Num::F64(0.0),
+            _ => Num::Int(0),
+        }
+    }
+
     fn parse(s: &str) -> Option<Scalar> {
         Some(match s {
             "char" | "int8" => Scalar::I8,
@@ -50,6 +72,121 @@ impl Scalar {
 
     fn is_float(self) -> bool {
         matches!(self, Scalar::F32 | Scalar::F64)
+    }
+}
+
+/// An element's runs of up to three consecutive scalar properties of one type (besides
+/// x, y, z with `skip_axes`): (first property, length, type). Each is an attribute
+/// channel (SPEC.md 11.3, 11.4).
+fn runs(props: &[Prop], skip_axes: bool) -> Vec<(usize, usize, Scalar)> {
+    let mut runs: Vec<(usize, usize, Scalar)> = Vec::new();
+    for (i, p) in props.iter().enumerate() {
+        let Prop::Scalar(name, ty) = p else { continue };
+        if skip_axes && ["x", "y", "z"].contains(&name.as_str()) {
+            continue;
+        }
+        match runs.last_mut() {
+            Some((first, len, t)) if *t == *ty && *first + *len == i && *len < 3 => *len += 1,
+            _ => runs.push((i, 1, *ty)),
+        }
+    }
+    runs
+}
+
+/// The attribute channels of a vertex or face element as they are read: per run of
+/// properties ([`runs`]), its values as text (ASCII) or numbers.
+struct Columns<'a> {
+    runs: Vec<(usize, usize, Scalar)>,
+    /// Per property, its run and place in it.
+    place: Vec<Option<(usize, usize)>>,
+    tokens: Vec<Vec<[&'a str; 3]>>,
+    nums: Vec<Vec<[Num; 3]>>,
+}
+
+impl<'a> Columns<'a> {
+    fn new(el: &Element, is_vertex: bool) -> Self {
+        let runs = runs(&el.props, is_vertex);
+        let mut place = vec![None; el.props.len()];
+        for (r, &(first, len, _)) in runs.iter().enumerate() {
+            for k in 0..len {
+                place[first + k] = Some((r, k));
+            }
+        }
+        let n = runs.len();
+        Columns {
+            runs,
+            place,
+            tokens: vec![Vec::new(); n],
+            nums: vec![Vec::new(); n],
+        }
+    }
+
+    /// Room for the next record's values (those past a run's length are 0).
+    fn next_record(&mut self, mode: Mode) {
+        for (r, &(_, _, ty)) in self.runs.iter().enumerate() {
+            match mode {
+                Mode::Ascii => self.tokens[r].push(["0"; 3]),
+                _ => self.nums[r].push([ty.zero(); 3]),
+            }
+        }
+    }
+
+    /// Reads property `i`'s value into the current record, if it is one of the runs'.
+    fn read(&mut self, i: usize, ty: Scalar, body: &mut Body<'a>) -> Result<bool> {
+        let Some((r, k)) = self.place.get(i).copied().flatten() else {
+            return Ok(false);
+        };
+        match body.mode {
+            Mode::Ascii => {
+                if let Some(row) = self.tokens[r].last_mut() {
+                    row[k] = body.token()?;
+                }
+            }
+            _ => {
+                let v = body.num(ty)?;
+                if let Some(row) = self.nums[r].last_mut() {
+                    row[k] = v;
+                }
+            }
+        }
+        Ok(true)
+    }
+
+    /// The channels, named by their properties.
+    fn finish(
+        self,
+        el: &Element,
+        domain: Domain,
+        mode: Mode,
+        out: &mut Vec<RawAttribute>,
+    ) -> Result<()> {
+        for (r, &(first, len, ty)) in self.runs.iter().enumerate() {
+            let names: Vec<&str> = el.props[first..first + len]
+                .iter()
+                .map(|p| match p {
+                    Prop::Scalar(n, _) | Prop::List(n, _, _) => n.as_str(),
+                })
+                .collect();
+            let values = match mode {
+                Mode::Ascii => {
+                    let mut t = TextCoords::default();
+                    for row in &self.tokens[r] {
+                        t.push(*row).map_err(err)?;
+                    }
+                    t.finish().0
+                }
+                _ => to_coords(&self.nums[r])?,
+            };
+            out.push(RawAttribute {
+                name: names.join(" "),
+                domain,
+                value_type: ty.value_type(),
+                width: len as u8,
+                values,
+                indices: Vec::new(),
+            });
+        }
+        Ok(())
     }
 }
 
@@ -291,7 +428,6 @@ fn check_element(
     }
     let is_vertex = el.name == "vertex";
     let is_face = el.name == "face";
-    let axis_of = |name: &str| ["x", "y", "z"].iter().position(|a| *a == name);
     if is_vertex {
         if have_vertices {
             return Err(err("two vertex elements"));
@@ -318,7 +454,8 @@ fn check_element(
         let name = match p {
             Prop::Scalar(n, _) | Prop::List(n, _, _) => n,
         };
-        let used = (is_vertex && axis_of(name).is_some() && matches!(p, Prop::Scalar(..)))
+        // Scalar properties of both are attribute channels.
+        let used = ((is_vertex || is_face) && matches!(p, Prop::Scalar(..)))
             || (is_face && (name == "vertex_indices" || name == "vertex_index"));
         if (is_vertex || is_face) && !used {
             dropped.insert(format!("{} property '{name}'", el.name));
@@ -340,10 +477,13 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     let mut have_vertices = false;
     let mut topo = Mesh::new();
     let mut face = Vec::new();
+    let mut attributes = Vec::new();
     for el in &elements {
         check_element(el, mode, body.remaining(), have_vertices, &mut dropped)?;
         let is_vertex = el.name == "vertex";
         let is_face = el.name == "face";
+        let mut columns = Columns::new(el, is_vertex);
+        let channels = (is_vertex || is_face) && !columns.runs.is_empty();
         let axis_of = |name: &str| ["x", "y", "z"].iter().position(|a| *a == name);
         if is_vertex {
             have_vertices = true;
@@ -355,8 +495,12 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             let mut v = [Num::Int(0); 3];
             let mut toks = [""; 3];
             let mut took_list = false;
-            for p in &el.props {
+            if channels {
+                columns.next_record(mode);
+            }
+            for (i, p) in el.props.iter().enumerate() {
                 match p {
+                    Prop::Scalar(_, ty) if channels && columns.read(i, *ty, &mut body)? => {}
                     Prop::Scalar(name, ty) => {
                         match (is_vertex && mode == Mode::Ascii, axis_of(name)) {
                             (true, Some(a)) => toks[a] = body.token()?,
@@ -394,6 +538,14 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                 }
             }
         }
+        if channels {
+            let domain = if is_vertex {
+                Domain::Vertex
+            } else {
+                Domain::Face
+            };
+            columns.finish(el, domain, mode, &mut attributes)?;
+        }
     }
     // A file without a vertex element is an empty mesh (its header says so); a face
     // element then refers to vertices that are not there, which check_faces reports.
@@ -412,6 +564,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             Mode::Be => Format::PlyBinaryBigEndian,
         },
         dropped,
+        attributes,
     })
 }
 
@@ -496,6 +649,55 @@ fn to_coords(nums: &[[Num; 3]]) -> Result<RawCoords> {
     })
 }
 
+/// A channel's property names in a PLY header: its name's words when there are as
+/// many as values per entry, else the name (spaces as `_`) with `_0`, `_1`, ... after it
+/// for more than one value.
+fn property_names(a: &Attribute) -> Vec<String> {
+    let words: Vec<&str> = a.name.split_ascii_whitespace().collect();
+    if words.len() == a.width as usize {
+        return words.iter().map(|w| w.to_string()).collect();
+    }
+    let base = a.name.replace(|c: char| c.is_ascii_whitespace(), "_");
+    match a.width {
+        1 => vec![base],
+        w => (0..w).map(|k| format!("{base}_{k}")).collect(),
+    }
+}
+
+/// A channel's PLY type: its own, or for text values the float type that holds them.
+fn property_type(a: &Attribute) -> &'static str {
+    match a.value_type {
+        ValueType::Text if !a.quantization.prefers_f32() => "double",
+        t => t.ply_name(),
+    }
+}
+
+/// Appends entry `e`'s values of channel `a`: binary little-endian in its type, or as
+/// text (each after a space).
+fn put_values(a: &Attribute, e: usize, binary: bool, buf: &mut Vec<u8>, text: &mut String) {
+    let (p, f, q) = (&a.values, &a.floats, &a.quantization);
+    for k in 0..a.width as usize {
+        if !binary {
+            text.push(' ');
+            super::text_at(p, f, e, k, q, text);
+            continue;
+        }
+        let n = p[e][k];
+        match (a.value_type, property_type(a)) {
+            (ValueType::I8, _) => buf.push(n as i8 as u8),
+            (ValueType::U8, _) => buf.push(n as u8),
+            (ValueType::I16 | ValueType::U16, _) => {
+                buf.extend_from_slice(&(n as u16).to_le_bytes())
+            }
+            (ValueType::I32 | ValueType::U32, _) => {
+                buf.extend_from_slice(&(n as u32).to_le_bytes())
+            }
+            (_, "float") => buf.extend_from_slice(&super::f32_at(p, f, e, k, q).to_le_bytes()),
+            _ => buf.extend_from_slice(&super::f64_at(p, f, e, k, q).to_le_bytes()),
+        }
+    }
+}
+
 pub(crate) fn write<W: Write>(
     out: &mut W,
     mesh: &Mesh,
@@ -513,6 +715,10 @@ pub(crate) fn write<W: Write>(
     } else {
         "uint"
     };
+    let of = |d: Domain| -> Vec<&Attribute> {
+        mesh.attributes.iter().filter(|a| a.domain == d).collect()
+    };
+    let (vchan, fchan) = (of(Domain::Vertex), of(Domain::Face));
     write!(
         out,
         "ply\nformat {} 1.0\ncomment written by subwave\nelement vertex {}\n",
@@ -531,14 +737,29 @@ pub(crate) fn write<W: Write>(
     for a in ["x", "y", "z"] {
         writeln!(out, "property {fty} {a}")?;
     }
+    for a in &vchan {
+        for n in property_names(a) {
+            writeln!(out, "property {} {n}", property_type(a))?;
+        }
+    }
     write!(
         out,
-        "element face {}\nproperty list {cty} {ity} vertex_indices\nend_header\n",
+        "element face {}\nproperty list {cty} {ity} vertex_indices\n",
         mesh.face_count()
     )?;
-    if binary {
-        let mut buf = Vec::with_capacity(1 << 16);
-        for v in 0..mesh.vertex_count() {
+    for a in &fchan {
+        for n in property_names(a) {
+            writeln!(out, "property {} {n}", property_type(a))?;
+        }
+    }
+    writeln!(out, "end_header")?;
+    if !binary && vchan.is_empty() && fchan.is_empty() {
+        return write_counted_text(out, mesh, q);
+    }
+    let mut buf = Vec::with_capacity(1 << 16);
+    let mut line = String::with_capacity(128);
+    for v in 0..mesh.vertex_count() {
+        if binary {
             for k in 0..3 {
                 if f32_out {
                     buf.extend_from_slice(&value_f32(mesh, v, k, q).to_le_bytes());
@@ -546,28 +767,52 @@ pub(crate) fn write<W: Write>(
                     buf.extend_from_slice(&value_f64(mesh, v, k, q).to_le_bytes());
                 }
             }
-            if buf.len() > 60_000 {
-                out.write_all(&buf)?;
-                buf.clear();
-            }
+        } else {
+            super::coords_line("", mesh, v, q, &mut line);
+            line.pop();
         }
-        for face in mesh.iter_faces() {
-            if cty == "uchar" {
-                buf.push(face.len() as u8);
-            } else {
-                buf.extend_from_slice(&(face.len() as u32).to_le_bytes());
+        for a in &vchan {
+            put_values(a, v, binary, &mut buf, &mut line);
+        }
+        if !binary {
+            line.push('\n');
+            buf.extend_from_slice(line.as_bytes());
+        }
+        if buf.len() > 60_000 {
+            out.write_all(&buf)?;
+            buf.clear();
+        }
+    }
+    for (f, face) in mesh.iter_faces().enumerate() {
+        line.clear();
+        if !binary {
+            use std::fmt::Write as _;
+            let _ = write!(line, "{}", face.len());
+            for &i in face {
+                let _ = write!(line, " {i}");
             }
+        } else if cty == "uchar" {
+            buf.push(face.len() as u8);
+        } else {
+            buf.extend_from_slice(&(face.len() as u32).to_le_bytes());
+        }
+        if binary {
             for &i in face {
                 buf.extend_from_slice(&i.to_le_bytes());
             }
-            if buf.len() > 60_000 {
-                out.write_all(&buf)?;
-                buf.clear();
-            }
         }
-        out.write_all(&buf)?;
-    } else {
-        write_counted_text(out, mesh, q)?;
+        for a in &fchan {
+            put_values(a, f, binary, &mut buf, &mut line);
+        }
+        if !binary {
+            line.push('\n');
+            buf.extend_from_slice(line.as_bytes());
+        }
+        if buf.len() > 60_000 {
+            out.write_all(&buf)?;
+            buf.clear();
+        }
     }
+    out.write_all(&buf)?;
     Ok(())
 }

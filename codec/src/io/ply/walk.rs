@@ -1,26 +1,11 @@
 //! A PLY file's template (SPEC.md 11): the walk over its header and body that marks
 //! the coded values, and the vertex element's attributes (11.3).
 
-use super::{line_len, parse_header, read_list, to_coords, Body, Element, Mode, Num, Prop, Scalar};
+use super::{
+    line_len, parse_header, read_list, runs, to_coords, Body, Element, Mode, Num, Prop, Scalar,
+};
 use crate::io::template::{Attribute, Builder, Form};
 use crate::quant::integerize;
-
-/// The vertex element's runs of up to three consecutive scalar properties of one type
-/// besides x, y, z: (first property, length, type).
-fn runs(props: &[Prop]) -> Vec<(usize, usize, Scalar)> {
-    let mut runs: Vec<(usize, usize, Scalar)> = Vec::new();
-    for (i, p) in props.iter().enumerate() {
-        let Prop::Scalar(name, ty) = p else { continue };
-        if ["x", "y", "z"].contains(&name.as_str()) {
-            continue;
-        }
-        match runs.last_mut() {
-            Some((first, len, t)) if *t == *ty && *first + *len == i && *len < 3 => *len += 1,
-            _ => runs.push((i, 1, *ty)),
-        }
-    }
-    runs
-}
 
 /// The vertex element's attributes (SPEC.md 11.3), made in `b`: its scalar properties
 /// but x, y, z, in runs of up to three of one type, each on the file's faces. Per
@@ -34,7 +19,7 @@ fn attributes(
 ) -> Option<Vec<Option<(usize, usize)>>> {
     let vertex = elements.iter().position(|e| e.name == "vertex")?;
     let props = &elements[vertex].props;
-    let runs = runs(props);
+    let runs = runs(props, true);
     if runs.is_empty() {
         return None;
     }

@@ -1,0 +1,112 @@
+//! The CHAN section (SPEC.md 11.4): one named attribute channel of the mesh
+//! ([`crate::mesh::Attribute`]), in the decoded mesh's vertex and face order, its values
+//! coded as the positions of a mesh of their own (a nested container, as ATTR's): on the
+//! mesh's faces for per-vertex values, on the corners' entries for a corner channel,
+//! without faces for per-face values.
+
+use crate::error::{Error, Result};
+use crate::mesh::{Domain, ValueType};
+
+const SECTION: &str = "CHAN";
+
+/// What a CHAN payload says about its channel before the nested container.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Head {
+    pub name: String,
+    pub domain: Domain,
+    pub value_type: ValueType,
+    pub width: u8,
+    /// Entries past the channel's at the end of the nested mesh (0..=2): a corner
+    /// channel of fewer than 3 entries is padded to 3, as a mesh with faces needs.
+    pub pad: u8,
+}
+
+fn domain_code(d: Domain) -> u8 {
+    match d {
+        Domain::Vertex => 0,
+        Domain::Face => 1,
+        Domain::Corner => 2,
+    }
+}
+
+/// The CHAN payload of channel `head` whose values the encoder coded as the container
+/// `nested`.
+pub(crate) fn encode(head: &Head, nested: &[u8]) -> Vec<u8> {
+    let name = head.name.as_bytes();
+    let mut out = Vec::with_capacity(4 + name.len() + nested.len());
+    out.push(name.len() as u8);
+    out.extend_from_slice(name);
+    out.extend_from_slice(&[
+        domain_code(head.domain),
+        head.value_type.code(),
+        head.width,
+        head.pad,
+    ]);
+    out.extend_from_slice(nested);
+    out
+}
+
+/// A CHAN payload's head and nested container.
+pub(crate) fn decode(payload: &[u8]) -> Result<(Head, &[u8])> {
+    let bad = |what: String| Error::corrupt(SECTION, what);
+    let (&n, rest) = payload
+        .split_first()
+        .ok_or_else(|| bad("empty payload".into()))?;
+    let n = n as usize;
+    if rest.len() < n + 4 {
+        return Err(bad("payload shorter than its name and fields".into()));
+    }
+    let name = std::str::from_utf8(&rest[..n])
+        .map_err(|_| bad("a name that is not UTF-8".into()))?
+        .to_string();
+    let [d, t, width, pad] = [rest[n], rest[n + 1], rest[n + 2], rest[n + 3]];
+    let domain = match d {
+        0 => Domain::Vertex,
+        1 => Domain::Face,
+        2 => Domain::Corner,
+        _ => return Err(bad(format!("domain {d}"))),
+    };
+    let value_type = ValueType::from_code(t).ok_or_else(|| bad(format!("value type {t}")))?;
+    if !(1..=3).contains(&width) {
+        return Err(bad(format!("width {width}")));
+    }
+    if pad > 2 {
+        return Err(bad(format!("{pad} padding entries")));
+    }
+    Ok((
+        Head {
+            name,
+            domain,
+            value_type,
+            width,
+            pad,
+        },
+        &rest[n + 4..],
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn heads_round_trip_and_bad_fields_are_refused() {
+        let h = Head {
+            name: "red green blue".into(),
+            domain: Domain::Corner,
+            value_type: ValueType::U8,
+            width: 3,
+            pad: 1,
+        };
+        let p = encode(&h, b"nested");
+        let (back, nested) = decode(&p).unwrap();
+        assert_eq!((back, nested), (h, &b"nested"[..]));
+        for (i, v) in [(15, 3), (16, 9), (17, 0), (17, 4), (18, 3)] {
+            let mut q = p.clone();
+            q[i] = v;
+            assert!(decode(&q).is_err(), "byte {i} = {v}");
+        }
+        assert!(decode(&p[..10]).is_err());
+        assert!(decode(&[]).is_err());
+    }
+}
