@@ -82,7 +82,35 @@ fn with_channels(mut mesh: Mesh) -> Mesh {
         quantization: Quantization::Decimal { decimals: 3 },
         indices,
     };
-    mesh.attributes = vec![weight, colour, material, uv];
+    // Flat shading: a normal per face (Newell's, at 4 decimals), one entry for all its
+    // corners: predicted from the geometry (coding 1).
+    let mut table = Vec::new();
+    let mut indices = Vec::new();
+    for f in 0..mesh.face_count() {
+        let face = mesh.face(f);
+        let mut n = [0f64; 3];
+        for (j, &v) in face.iter().enumerate() {
+            let p = mesh.positions[v as usize].map(|c| c as f64);
+            let q = mesh.positions[face[(j + 1) % face.len()] as usize].map(|c| c as f64);
+            n[0] += (p[1] - q[1]) * (p[2] + q[2]);
+            n[1] += (p[2] - q[2]) * (p[0] + q[0]);
+            n[2] += (p[0] - q[0]) * (p[1] + q[1]);
+        }
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt().max(1e-30);
+        indices.extend(face.iter().map(|_| table.len() as u32));
+        table.push(n.map(|c| (c / len * 1e4).round() as i64));
+    }
+    let normal = Attribute {
+        name: "normal".into(),
+        domain: Domain::Corner,
+        value_type: ValueType::Text,
+        width: 3,
+        values: table,
+        floats: Vec::new(),
+        quantization: Quantization::Decimal { decimals: 4 },
+        indices,
+    };
+    mesh.attributes = vec![weight, colour, material, uv, normal];
     mesh
 }
 
@@ -139,10 +167,22 @@ fn channels_of_every_domain_come_back_exactly_in_either_order() {
         let kinds: Vec<_> = enc.sections.iter().map(|s| s.kind.as_str()).collect();
         assert_eq!(
             kinds.iter().filter(|&&k| k == "CHAN").count(),
-            4,
+            5,
             "{kinds:?}"
         );
-        assert_eq!(dec.mesh.attributes.len(), 4);
+        assert_eq!(dec.mesh.attributes.len(), 5);
+        // The normals are predicted from the geometry.
+        let info = subwave::inspect(&enc.bytes, &subwave::Limits::default()).unwrap();
+        let codings: Vec<_> = info
+            .sections
+            .iter()
+            .filter_map(|s| s.attribute.as_ref())
+            .map(|a| (a.name.as_str(), a.transform.as_str()))
+            .collect();
+        assert!(
+            codings.contains(&("normal", "predicted normals")),
+            "{codings:?}"
+        );
         for (a, b) in mesh.attributes.iter().zip(&dec.mesh.attributes) {
             assert_eq!(
                 (&a.name, a.domain, a.value_type, a.width, a.quantization),
@@ -321,7 +361,7 @@ fn textured_obj_keeps_its_uvs_and_normals_in_canonical_order() {
 
 #[test]
 fn every_bit_flip_or_cut_of_a_channel_is_an_error_or_a_valid_mesh() {
-    // Each CHAN payload of a small mesh's four channels, every bit flipped and every
+    // Each CHAN payload of a small mesh's five channels, every bit flipped and every
     // cut, checksums made valid: the nested containers and the channel heads meet
     // hostile values. The result is an error or a mesh whose channels fit it.
     use subwave_container::{Container, ContainerWriter, SectionKind};

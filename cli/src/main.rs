@@ -60,8 +60,7 @@ enum Command {
         /// Canonical order: positions, faces and the attribute channels (texture
         /// coordinates, normals, vertex colours, PLY vertex and face properties), every
         /// value exact, written back by subwave's writers; drops what else the file
-        /// holds (materials, groups, comments, number styles; a warning names it). Not
-        /// always smaller: an OBJ's normals code best with its bytes kept.
+        /// holds (materials, groups, comments, number styles; a warning names it).
         #[arg(long)]
         canonical: bool,
         #[command(flatten)]

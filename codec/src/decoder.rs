@@ -384,6 +384,9 @@ fn channel(payload: &[u8], limits: &Limits, mesh: &Mesh) -> Result<crate::mesh::
     use crate::mesh::Domain;
     let (head, nested) = chan::decode(payload)?;
     let bad = |what: &str| Error::corrupt("CHAN", format!("'{}': {what}", head.name));
+    if head.coding == chan::NORMALS {
+        return predicted_normals(head, nested, mesh);
+    }
     let opts = DecodeOptions {
         limits: limits.clone(),
         ..DecodeOptions::default()
@@ -434,6 +437,49 @@ fn channel(payload: &[u8], limits: &Limits, mesh: &Mesh) -> Result<crate::mesh::
         },
     };
     // An integer type's values in its range, on an integer grid.
+    a.validate(mesh)
+        .map_err(|e| Error::corrupt("CHAN", e.to_string()))?;
+    Ok(a)
+}
+
+/// A CHAN section's channel in coding 1 (SPEC.md 11.4): unit normals per corner, their
+/// entries' numbers from a CIDX stream, their values predicted from `mesh`'s geometry in
+/// an NRML stream.
+fn predicted_normals(head: chan::Head, body: &[u8], mesh: &Mesh) -> Result<crate::mesh::Attribute> {
+    let bad = |what: &str| Error::corrupt("CHAN", format!("'{}': {what}", head.name));
+    let n = chan::decode_normals(body)?;
+    let corners = mesh.corner_count();
+    if n.entries > corners as u64 {
+        return Err(bad("more entries than corners"));
+    }
+    let idx = cidx::decode(n.cidx, mesh)?;
+    let every = |c: &cidx::IndexChannel| c.corners.len() == corners;
+    if idx.channels.len() != 2 || !idx.channels[0].corners.is_empty() || !every(&idx.channels[1]) {
+        return Err(bad("the index stream is not one number per corner"));
+    }
+    let numbers = &idx.channels[1].values;
+    if numbers.iter().any(|&e| e == 0 || e as u64 > n.entries) {
+        return Err(bad("a corner's entry past the entries"));
+    }
+    let comps = nrml::decode(n.nrml, mesh, &idx, n.entries as usize * 3)?;
+    if comps
+        .iter()
+        .any(|c| c.decimals != n.decimals as u32 || c.negative_zero)
+    {
+        return Err(bad("a component of other decimals"));
+    }
+    let a = crate::mesh::Attribute {
+        name: head.name,
+        domain: head.domain,
+        value_type: head.value_type,
+        width: head.width,
+        values: comps.chunks(3).map(|c| [c[0].m, c[1].m, c[2].m]).collect(),
+        floats: Vec::new(),
+        quantization: Quantization::Decimal {
+            decimals: n.decimals,
+        },
+        indices: numbers.iter().map(|&e| e - 1).collect(),
+    };
     a.validate(mesh)
         .map_err(|e| Error::corrupt("CHAN", e.to_string()))?;
     Ok(a)

@@ -108,21 +108,33 @@ fn attribute_info(payload: &[u8], limits: &Limits, order: Option<&[u8]>) -> Opti
 /// A CHAN payload's [`AttributeInfo`] (its entries without padding); `None` when it does
 /// not parse.
 fn channel_info(payload: &[u8], limits: &Limits) -> Option<AttributeInfo> {
-    let (head, nested) = crate::sections::chan::decode(payload).ok()?;
-    let c = Container::parse(nested, limits).ok()?;
-    let h = layout(&c, limits, true).ok()?;
+    use crate::sections::chan;
+    let (head, rest) = chan::decode(payload).ok()?;
+    let domain = match head.domain {
+        crate::mesh::Domain::Vertex => "vertex",
+        crate::mesh::Domain::Face => "face",
+        crate::mesh::Domain::Corner => "corner",
+    }
+    .to_string();
+    let (entries, transform, rules) = match head.coding {
+        chan::NORMALS => {
+            let n = chan::decode_normals(rest).ok()?;
+            (n.entries, "predicted normals".to_string(), String::new())
+        }
+        _ => {
+            let c = Container::parse(rest, limits).ok()?;
+            let h = layout(&c, limits, true).ok()?;
+            let e = h.vertices.saturating_sub(head.pad as u64);
+            (e, h.transform.name().to_string(), fit_rules(&h))
+        }
+    };
     Some(AttributeInfo {
         name: head.name,
-        domain: match head.domain {
-            crate::mesh::Domain::Vertex => "vertex",
-            crate::mesh::Domain::Face => "face",
-            crate::mesh::Domain::Corner => "corner",
-        }
-        .to_string(),
+        domain,
         width: head.width,
-        entries: h.vertices.saturating_sub(head.pad as u64),
-        transform: h.transform.name().to_string(),
-        rules: fit_rules(&h),
+        entries,
+        transform,
+        rules,
     })
 }
 

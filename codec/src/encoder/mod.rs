@@ -378,36 +378,95 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
             }
             crate::mesh::Domain::Face => faces.iter().for_each(|&(g, _)| pick(g, &mut m)),
             crate::mesh::Domain::Corner => {
-                m.positions = a.values.clone();
-                m.floats = a.floats.clone();
-                // A mesh with faces has at least 3 vertices.
-                while m.positions.len() < 3 {
-                    m.positions.push([0; 3]);
-                    if !m.floats.is_empty() {
-                        m.floats.push([0; 3]);
-                    }
-                }
+                // In canonical order the table's order is the encoder's to choose:
+                // entries numbered as the decoded corners first use them (then those no
+                // corner uses).
+                let number = match identity {
+                    true => (0..a.values.len() as u32).collect(),
+                    false => first_use(a, mesh, &faces),
+                };
+                let mut order = vec![0; a.values.len()];
+                number
+                    .iter()
+                    .enumerate()
+                    .for_each(|(e, &n)| order[n as usize] = e);
+                order.iter().for_each(|&e| pick(e, &mut m));
                 m.faces.reserve(a.indices.len());
                 for &(g, r) in &faces {
                     let s = mesh.face_starts[g] as usize;
                     let d = mesh.face_starts[g + 1] as usize - s;
-                    m.faces.extend((0..d).map(|j| a.indices[s + (j + r) % d]));
+                    m.faces
+                        .extend((0..d).map(|j| number[a.indices[s + (j + r) % d] as usize]));
                 }
                 m.face_starts = out.face_starts.clone();
+            }
+        }
+        let mut head = chan::Head {
+            name: a.name.clone(),
+            domain: a.domain,
+            value_type: a.value_type,
+            width: a.width,
+            pad: 0,
+            coding: chan::NESTED,
+        };
+        // Unit normals per corner: predicted from the geometry where that is smaller.
+        let normals = predicted_normals(a, out, &m)?;
+        if a.domain == crate::mesh::Domain::Corner {
+            // A mesh with faces has at least 3 vertices.
+            while m.positions.len() < 3 {
+                m.positions.push([0; 3]);
+                if !m.floats.is_empty() {
+                    m.floats.push([0; 3]);
+                }
+                head.pad += 1;
             }
         }
         let mut o = opts.clone();
         o.keep_order = true;
         o.progress = Progress::default();
-        let nested = encode_inner(&m, &a.quantization, &o, None)?;
-        let head = chan::Head {
-            name: a.name.clone(),
-            domain: a.domain,
-            value_type: a.value_type,
-            width: a.width,
-            pad: (m.positions.len() - a.values.len()) as u8,
-        };
-        chans.push(chan::encode(&head, &nested.bytes));
+        let mut nested = encode_inner(&m, &a.quantization, &o, None)?;
+        if a.domain == crate::mesh::Domain::Corner && !identity {
+            // Also the entries renumbered in the nested mesh's own canonical order, so
+            // that its ORDR has only the faces' order to say; the smaller is kept.
+            let mut c = o.clone();
+            c.keep_order = false;
+            let pre = encode_inner(&m, &a.quantization, &c, None)?;
+            if pre.order.len() == m.positions.len() {
+                let mut number = vec![0u32; m.positions.len()];
+                pre.order
+                    .iter()
+                    .enumerate()
+                    .for_each(|(i, &v)| number[v as usize] = i as u32);
+                // Padding stays last.
+                let keep = m.positions.len() - head.pad as usize;
+                if pre.order[keep..]
+                    .iter()
+                    .enumerate()
+                    .all(|(i, &v)| v as usize == keep + i)
+                {
+                    let mut n = Mesh::new();
+                    for &v in &pre.order {
+                        n.positions.push(m.positions[v as usize]);
+                        if let Some(f) = m.floats.get(v as usize) {
+                            n.floats.push(*f);
+                        }
+                    }
+                    n.faces = m.faces.iter().map(|&v| number[v as usize]).collect();
+                    n.face_starts = m.face_starts.clone();
+                    let renumbered = encode_inner(&n, &a.quantization, &o, None)?;
+                    if renumbered.bytes.len() < nested.bytes.len() {
+                        nested = renumbered;
+                    }
+                }
+            }
+        }
+        let mut payload = chan::encode(&head, &nested.bytes);
+        if let Some(body) = normals.filter(|b| b.len() < nested.bytes.len()) {
+            head.pad = 0;
+            head.coding = chan::NORMALS;
+            payload = chan::encode(&head, &body);
+        }
+        chans.push(payload);
     }
     // The container again, the channels before its end marker.
     let c = subwave_container::Container::parse(&enc.bytes, &crate::Limits::default())?;
@@ -426,6 +485,78 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
     enc.sections.extend(end);
     enc.bytes = w.finish();
     Ok(enc)
+}
+
+/// Per entry of corner channel `a` of `mesh`, its number when entries are numbered as
+/// the decoded faces' corners (`faces`: each decoded face's input face and rotation)
+/// first use them, then those no corner uses.
+fn first_use(a: &crate::mesh::Attribute, mesh: &Mesh, faces: &[(usize, usize)]) -> Vec<u32> {
+    let mut number = vec![u32::MAX; a.values.len()];
+    let mut next = 0;
+    for &(g, r) in faces {
+        let s = mesh.face_starts[g] as usize;
+        let d = mesh.face_starts[g + 1] as usize - s;
+        for j in 0..d {
+            let e = a.indices[s + (j + r) % d] as usize;
+            if number[e] == u32::MAX {
+                number[e] = next;
+                next += 1;
+            }
+        }
+    }
+    for n in number.iter_mut().filter(|n| **n == u32::MAX) {
+        *n = next;
+        next += 1;
+    }
+    number
+}
+
+/// Coding 1 of a CHAN section (SPEC.md 11.4) for corner channel `a` as `m` holds it
+/// (its entries as positions, each decoded corner's entry as `m`'s faces) on `out`, the
+/// decoded mesh: when `a` is three decimals per entry written as text, with no more
+/// entries than corners; else `None`.
+fn predicted_normals(a: &crate::mesh::Attribute, out: &Mesh, m: &Mesh) -> Result<Option<Vec<u8>>> {
+    use crate::sections::cidx::{CornerIndices, IndexChannel};
+    use crate::sections::nrml::{self, Component, MAX_DECIMALS};
+    let Quantization::Decimal { decimals } = a.quantization else {
+        return Ok(None);
+    };
+    if a.domain != crate::mesh::Domain::Corner
+        || a.width != 3
+        || a.value_type != crate::mesh::ValueType::Text
+        || decimals as u32 > MAX_DECIMALS
+        || a.values.len() > out.corner_count()
+    {
+        return Ok(None);
+    }
+    let idx = CornerIndices {
+        channels: vec![
+            IndexChannel::default(),
+            IndexChannel {
+                corners: (0..m.faces.len() as u32).collect(),
+                values: m.faces.iter().map(|&e| e + 1).collect(),
+            },
+        ],
+    };
+    let comps: Vec<Component> = m
+        .positions
+        .iter()
+        .take(a.values.len())
+        .flatten()
+        .map(|&v| Component {
+            m: v,
+            decimals: decimals as u32,
+            negative_zero: false,
+        })
+        .collect();
+    let cidx = cidx::encode(out, &idx)?;
+    let nrml = nrml::encode(out, &idx, &comps)?;
+    Ok(Some(chan::encode_normals(&chan::Normals {
+        decimals,
+        entries: a.values.len() as u64,
+        cidx: &cidx,
+        nrml: &nrml,
+    })))
 }
 
 /// For each face of `out` (the decoded mesh, whose vertex `i` is `mesh`'s `order[i]`),

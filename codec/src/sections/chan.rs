@@ -4,6 +4,8 @@
 //! mesh's faces for per-vertex values, on the corners' entries for a corner channel,
 //! without faces for per-face values.
 
+use subwave_container::{ByteReader, ByteWriter};
+
 use crate::error::{Error, Result};
 use crate::mesh::{Domain, ValueType};
 
@@ -19,6 +21,53 @@ pub(crate) struct Head {
     /// Entries past the channel's at the end of the nested mesh (0..=2): a corner
     /// channel of fewer than 3 entries is padded to 3, as a mesh with faces needs.
     pub pad: u8,
+    /// How the rest codes the channel: [`NESTED`] or [`NORMALS`].
+    pub coding: u8,
+}
+
+/// Coding 0: the values as the positions of a nested container's mesh.
+pub(crate) const NESTED: u8 = 0;
+/// Coding 1: unit normals per corner, their entries' numbers in a CIDX stream and
+/// their values predicted from the decoded geometry in an NRML stream.
+pub(crate) const NORMALS: u8 = 1;
+
+/// Coding 1's body: the values' decimals, the entries, and the two streams.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Normals<'a> {
+    pub decimals: u8,
+    pub entries: u64,
+    pub cidx: &'a [u8],
+    pub nrml: &'a [u8],
+}
+
+/// Coding 1's body bytes.
+pub(crate) fn encode_normals(n: &Normals<'_>) -> Vec<u8> {
+    let mut w = ByteWriter::new();
+    w.u8(n.decimals);
+    w.varint(n.entries);
+    w.varint(n.cidx.len() as u64);
+    w.out.extend_from_slice(n.cidx);
+    w.out.extend_from_slice(n.nrml);
+    w.out
+}
+
+/// Coding 1's body from its bytes.
+pub(crate) fn decode_normals(body: &[u8]) -> Result<Normals<'_>> {
+    let mut r = ByteReader::new(body, 0);
+    let decimals = r.u8("decimals")?;
+    let entries = r.varint("entries")?;
+    let n = r.varint_max("index stream length", r.remaining() as u64)? as usize;
+    let cidx = r.bytes(n, "index stream")?;
+    let nrml = &body[body.len() - r.remaining()..];
+    if decimals as u32 > crate::sections::nrml::MAX_DECIMALS {
+        return Err(Error::corrupt(SECTION, format!("{decimals} decimals")));
+    }
+    Ok(Normals {
+        decimals,
+        entries,
+        cidx,
+        nrml,
+    })
 }
 
 fn domain_code(d: Domain) -> u8 {
@@ -41,6 +90,7 @@ pub(crate) fn encode(head: &Head, nested: &[u8]) -> Vec<u8> {
         head.value_type.code(),
         head.width,
         head.pad,
+        head.coding,
     ]);
     out.extend_from_slice(nested);
     out
@@ -53,13 +103,13 @@ pub(crate) fn decode(payload: &[u8]) -> Result<(Head, &[u8])> {
         .split_first()
         .ok_or_else(|| bad("empty payload".into()))?;
     let n = n as usize;
-    if rest.len() < n + 4 {
+    if rest.len() < n + 5 {
         return Err(bad("payload shorter than its name and fields".into()));
     }
     let name = std::str::from_utf8(&rest[..n])
         .map_err(|_| bad("a name that is not UTF-8".into()))?
         .to_string();
-    let [d, t, width, pad] = [rest[n], rest[n + 1], rest[n + 2], rest[n + 3]];
+    let [d, t, width, pad, coding] = [rest[n], rest[n + 1], rest[n + 2], rest[n + 3], rest[n + 4]];
     let domain = match d {
         0 => Domain::Vertex,
         1 => Domain::Face,
@@ -73,6 +123,9 @@ pub(crate) fn decode(payload: &[u8]) -> Result<(Head, &[u8])> {
     if pad > 2 {
         return Err(bad(format!("{pad} padding entries")));
     }
+    if coding > NORMALS || (coding == NORMALS && (pad != 0 || width != 3 || domain != Domain::Corner)) {
+        return Err(bad(format!("coding {coding} of a {domain:?} channel")));
+    }
     Ok((
         Head {
             name,
@@ -80,8 +133,9 @@ pub(crate) fn decode(payload: &[u8]) -> Result<(Head, &[u8])> {
             value_type,
             width,
             pad,
+            coding,
         },
-        &rest[n + 4..],
+        &rest[n + 5..],
     ))
 }
 
@@ -97,16 +151,25 @@ mod tests {
             value_type: ValueType::U8,
             width: 3,
             pad: 1,
+            coding: 0,
         };
         let p = encode(&h, b"nested");
         let (back, nested) = decode(&p).unwrap();
         assert_eq!((back, nested), (h, &b"nested"[..]));
-        for (i, v) in [(15, 3), (16, 9), (17, 0), (17, 4), (18, 3)] {
+        for (i, v) in [(15, 3), (16, 9), (17, 0), (17, 4), (18, 3), (19, 2), (19, 1)] {
             let mut q = p.clone();
             q[i] = v;
             assert!(decode(&q).is_err(), "byte {i} = {v}");
         }
         assert!(decode(&p[..10]).is_err());
+        let n = Normals {
+            decimals: 4,
+            entries: 300,
+            cidx: b"abc",
+            nrml: b"defg",
+        };
+        assert_eq!(decode_normals(&encode_normals(&n)).unwrap(), n);
+        assert!(decode_normals(&encode_normals(&n)[..4]).is_err());
         assert!(decode(&[]).is_err());
     }
 }
