@@ -19,13 +19,15 @@ armadillo_cc5, bunny_cc4 and jacksboro_grid257 of ../shared/corpus).
     python3 benches/compare.py --whole-files [DIR]
 
 the whole-file table (issue 30) over the OBJ and PLY files of DIR (default
-../shared/corpus/blender): the file's size; subwave's default container (positions and
-faces: the rest of the file is dropped) and its `--keep-order` container (the same bytes
-back, checked); `xz -9e` and `zstd -19` of the file; and, as the lossy reference, Draco
+../shared/corpus/blender): the file's size; subwave's `--canonical` container
+(positions, faces and attribute channels in canonical order; `mtllib` lines, comments
+and number styles dropped) and its `--keep-order` container, the default for such files (the same
+bytes back, checked); `xz -9e` and `zstd -19` of the file; and, as the lossy reference, Draco
 cl10 (DracoPy) of the mesh as trimesh loads it (vertices split at UV and normal seams)
 with 16-bit positions, 12-bit UVs and 10-bit normals, colours as they are (needs
 `pip install DracoPy trimesh scipy pillow numpy`; a file it cannot take shows `-`, the
-reason on stderr). Medians of keep-order / xz per format.
+reason on stderr). Medians of keep-order / xz, canonical / xz and keep-order /
+canonical per format.
 """
 import argparse, csv, json, os, statistics, subprocess, sys, tempfile
 
@@ -107,8 +109,9 @@ def draco_whole(path, raw):
 
 
 def whole_files(args):
-    """The whole-file table: subwave --canonical (positions and faces) and --keep-order
-    (the default for these files), xz, zstd, Draco."""
+    """The whole-file table: subwave --canonical (positions, faces and attribute
+    channels, in canonical order) and --keep-order (the default for these files: the
+    file's own bytes), xz, zstd, Draco."""
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     folder = args[0] if args else os.path.join(root, "..", "shared", "corpus", "blender")
     exe = subwave_bin()
@@ -129,16 +132,17 @@ def whole_files(args):
             xz = len(subprocess.run(["xz", "-9e", "-c"], input=raw, capture_output=True, check=True).stdout)
             zst = len(subprocess.run(["zstd", "-19", "-c", "-q"], input=raw, capture_output=True, check=True).stdout)
             rows.append((name, len(raw), out["canonical"], out["keep"], exact, xz, zst, draco_whole(path, raw)))
-    print("| file | bytes | subwave --canonical (positions, faces) | subwave --keep-order (default) | same bytes back | xz -9e | zstd -19 | Draco cl10 (q16/12/10, lossy) | keep-order / xz |")
-    print("|---|---:|---:|---:|---|---:|---:|---:|---:|")
+    print("| file | bytes | subwave --canonical (channels) | subwave --keep-order (default) | same bytes back | xz -9e | zstd -19 | Draco cl10 (q16/12/10, lossy) | keep-order / xz | keep-order / canonical |")
+    print("|---|---:|---:|---:|---|---:|---:|---:|---:|---:|")
     for r in rows:
         d = "-" if r[7] is None else str(r[7])
-        print(f"| {r[0]} | {r[1]} | {r[2]} | {r[3]} | {'yes' if r[4] else 'NO'} | {r[5]} | {r[6]} | {d} | {r[3] / r[5]:.3f} |")
+        print(f"| {r[0]} | {r[1]} | {r[2]} | {r[3]} | {'yes' if r[4] else 'NO'} | {r[5]} | {r[6]} | {d} | {r[3] / r[5]:.3f} | {r[3] / r[2]:.3f} |")
     for ext in (".obj", ".ply"):
         sel = [r for r in rows if r[0].endswith(ext)]
         if sel:
             print(f"\n{ext[1:].upper()}: {len(sel)} files, {sum(r[4] for r in sel)} byte-exact; median keep-order / xz -9e "
-                  f"{statistics.median(r[3] / r[5] for r in sel):.3f}, --canonical / xz -9e {statistics.median(r[2] / r[5] for r in sel):.3f}")
+                  f"{statistics.median(r[3] / r[5] for r in sel):.3f}, --canonical / xz -9e {statistics.median(r[2] / r[5] for r in sel):.3f}, "
+                  f"keep-order / canonical {statistics.median(r[3] / r[2] for r in sel):.3f}")
     return 0 if all(r[4] for r in rows) else 1
 
 

@@ -29,6 +29,7 @@ fn with_channels(mut mesh: Mesh) -> Mesh {
         floats: Vec::new(),
         quantization: Quantization::Decimal { decimals: 2 },
         indices: Vec::new(),
+        labels: Vec::new(),
     };
     let colour = Attribute {
         name: "red green blue".into(),
@@ -41,18 +42,21 @@ fn with_channels(mut mesh: Mesh) -> Mesh {
         floats: Vec::new(),
         quantization: Quantization::Decimal { decimals: 0 },
         indices: Vec::new(),
+        labels: Vec::new(),
     };
     let material = Attribute {
         name: "material".into(),
         domain: Domain::Face,
-        value_type: ValueType::U8,
+        value_type: ValueType::Text,
         width: 1,
+        // Names, the first face none.
         values: (0..mesh.face_count())
-            .map(|f| [(f % 3) as i64, 0, 0])
+            .map(|f| [(f % 4) as i64 - 1, 0, 0])
             .collect(),
         floats: Vec::new(),
         quantization: Quantization::Decimal { decimals: 0 },
         indices: Vec::new(),
+        labels: vec!["wood".into(), "stone".into(), "glass pane".into()],
     };
     let mut table: Vec<[i64; 3]> = mesh
         .positions
@@ -81,6 +85,7 @@ fn with_channels(mut mesh: Mesh) -> Mesh {
         floats: Vec::new(),
         quantization: Quantization::Decimal { decimals: 3 },
         indices,
+        labels: Vec::new(),
     };
     // Flat shading: a normal per face (Newell's, at 4 decimals), one entry for all its
     // corners: predicted from the geometry (coding 1).
@@ -109,6 +114,7 @@ fn with_channels(mut mesh: Mesh) -> Mesh {
         floats: Vec::new(),
         quantization: Quantization::Decimal { decimals: 4 },
         indices,
+        labels: Vec::new(),
     };
     mesh.attributes = vec![weight, colour, material, uv, normal];
     mesh
@@ -189,6 +195,7 @@ fn channels_of_every_domain_come_back_exactly_in_either_order() {
                 (&b.name, b.domain, b.value_type, b.width, b.quantization)
             );
         }
+        assert_eq!(dec.mesh.attributes[2].labels, mesh.attributes[2].labels);
         if keep_order {
             assert_eq!(dec.mesh, mesh);
             continue;
@@ -243,6 +250,7 @@ fn a_channel_that_does_not_fit_the_mesh_is_refused() {
 fn same_up_to_order(name: &str, input: &Mesh, dec: &Mesh, order: &[u32]) {
     assert_eq!(dec.attributes.len(), input.attributes.len(), "{name}");
     for (a, b) in input.attributes.iter().zip(&dec.attributes) {
+        assert_eq!(a.labels, b.labels, "{name}: {}", a.name);
         assert_eq!(
             (
                 &a.name,
@@ -289,6 +297,18 @@ fn same_values(name: &str, a: &Mesh, b: &Mesh) {
     assert_eq!(a.faces, b.faces, "{name}");
     assert_eq!(a.attributes.len(), b.attributes.len(), "{name}");
     for (x, y) in a.attributes.iter().zip(&b.attributes) {
+        if !x.labels.is_empty() {
+            // Names are written per face: the same name at every face (the numbering
+            // and names no face has are the file's matter).
+            let names = |a: &subwave::Attribute| -> Vec<Option<String>> {
+                a.values
+                    .iter()
+                    .map(|v| a.labels.get(v[0] as usize).filter(|_| v[0] >= 0).cloned())
+                    .collect()
+            };
+            assert_eq!(names(x), names(y), "{name}: {}", x.name);
+            continue;
+        }
         assert_eq!(
             (&x.name, x.domain, x.width),
             (&y.name, y.domain, y.width),
@@ -352,11 +372,12 @@ fn blender_files_keep_every_channel_in_canonical_order() {
 }
 
 #[test]
-fn textured_obj_keeps_its_uvs_and_normals_in_canonical_order() {
+fn textured_obj_keeps_its_uvs_normals_and_names_in_canonical_order() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/textured_cc3.obj");
     let bytes = std::fs::read(path).unwrap();
     let (channels, _) = canonical_round_trip(path, &bytes);
-    assert_eq!(channels, 2);
+    // object, smoothing, material, uv, normal.
+    assert_eq!(channels, 5);
 }
 
 #[test]

@@ -58,9 +58,10 @@ enum Command {
         #[arg(long, conflicts_with = "canonical")]
         keep_order: bool,
         /// Canonical order: positions, faces and the attribute channels (texture
-        /// coordinates, normals, vertex colours, PLY vertex and face properties), every
+        /// coordinates, normals, vertex colours, an OBJ's objects, groups, smoothing
+        /// groups and materials, PLY vertex and face properties), every
         /// value exact, written back by subwave's writers; drops what else the file
-        /// holds (materials, groups, comments, number styles; a warning names it).
+        /// holds (`mtllib` lines, comments, number styles; a warning names it).
         #[arg(long)]
         canonical: bool,
         #[command(flatten)]

@@ -307,7 +307,7 @@ fn canonical_warns_what_it_drops_and_q_silences_it() {
     let p = tmp("attrs.obj");
     std::fs::write(
         &p,
-        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0.5\ng side\nusemtl red\nf 1/1/1 2/1/1 3/1/1\n",
+        b"mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0.5\ng side\nusemtl red\nf 1/1/1 2/1/1 3/1/1\n",
     )
     .unwrap();
     let o = run(&[
@@ -318,9 +318,10 @@ fn canonical_warns_what_it_drops_and_q_silences_it() {
     ]);
     assert!(o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
-    // UVs and normals are channels, kept; the group and the material are not.
+    // UVs, normals, the group and the material are channels, kept; the material
+    // library is not.
     assert!(
-        err.contains("materials") && err.contains("group") && !err.contains("normals"),
+        err.contains("mtllib") && !err.contains("group") && !err.contains("normals"),
         "{err}"
     );
     let back = tmp("attrs_back.obj");
@@ -333,7 +334,10 @@ fn canonical_warns_what_it_drops_and_q_silences_it() {
     assert!(o.status.success() && o.stderr.is_empty(), "{o:?}");
     let text = std::fs::read_to_string(&back).unwrap();
     assert!(
-        text.contains("vt 0.0 0.5\n") && text.contains("vn 0 0 1\n") && text.contains("/1/1 "),
+        text.contains("vt 0.0 0.5\n")
+            && text.contains("vn 0 0 1\n")
+            && text.contains("/1/1 ")
+            && text.contains("g side\nusemtl red\nf "),
         "{text}"
     );
     // A format without such channels says what it does not write.
@@ -344,7 +348,10 @@ fn canonical_warns_what_it_drops_and_q_silences_it() {
         tmp("attrs_back.off").to_str().unwrap(),
     ]);
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success() && err.contains("uv, normal"), "{err}");
+    assert!(
+        o.status.success() && err.contains("group, material, uv, normal"),
+        "{err}"
+    );
     let o = run(&[
         "-q",
         "-f",

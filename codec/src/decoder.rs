@@ -424,6 +424,7 @@ fn channel(payload: &[u8], limits: &Limits, mesh: &Mesh) -> Result<crate::mesh::
         return Err(bad("values past the channel's width"));
     }
     let a = crate::mesh::Attribute {
+        labels: head.labels,
         name: head.name,
         domain: head.domain,
         value_type: head.value_type,
@@ -469,6 +470,7 @@ fn predicted_normals(head: chan::Head, body: &[u8], mesh: &Mesh) -> Result<crate
         return Err(bad("a component of other decimals"));
     }
     let a = crate::mesh::Attribute {
+        labels: head.labels,
         name: head.name,
         domain: head.domain,
         value_type: head.value_type,

@@ -148,6 +148,10 @@ pub struct Attribute {
     /// [`Domain::Corner`]: per face corner (in the order of [`Mesh::faces`]), its
     /// entry. Empty for the other domains.
     pub indices: Vec<u32>,
+    /// A channel of names (an OBJ's materials, groups, objects, smoothing groups): the
+    /// names its values (one per entry, integers) stand for, value `i` for
+    /// `labels[i]` and -1 for none. Empty for a channel of numbers.
+    pub labels: Vec<String>,
 }
 
 impl Attribute {
@@ -201,6 +205,15 @@ impl Attribute {
             }
             if let Some(&i) = self.indices.iter().find(|&&i| i as usize >= self.values.len()) {
                 return bad(format!("corner index {i} past its {} entries", self.values.len()));
+            }
+        }
+        if !self.labels.is_empty() {
+            let n = self.labels.len() as i64;
+            if self.width != 1 || self.quantization != (Quantization::Decimal { decimals: 0 }) {
+                return bad("names need one integer per entry".into());
+            }
+            if let Some(v) = self.values.iter().find(|v| !(-1..n).contains(&v[0])) {
+                return bad(format!("value {} names none of its {n} names", v[0]));
             }
         }
         if let Some((lo, hi)) = self.value_type.int_range() {

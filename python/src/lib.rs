@@ -290,7 +290,8 @@ fn value_array<'py>(
 }
 
 /// An attribute channel as the package's `Attribute` is built from it: name, domain,
-/// type, values `(entries, width)`, corner indices (a corner channel's), quantisation.
+/// type, values `(entries, width)`, corner indices (a corner channel's), quantisation,
+/// names (a channel of names').
 type Channel<'py> = (
     String,
     &'static str,
@@ -298,6 +299,7 @@ type Channel<'py> = (
     Bound<'py, PyAny>,
     Option<Bound<'py, PyAny>>,
     String,
+    Vec<String>,
 );
 
 /// The names of [`ValueType`]s in Python, in the order of their codes.
@@ -339,6 +341,7 @@ fn parts<'py>(py: Python<'py>, mesh: &Mesh, q: &Quantization) -> PyResult<MeshPa
             values,
             indices,
             subwave::json::quantization(&a.quantization).to_string(),
+            a.labels.clone(),
         ));
     }
     Ok((
@@ -352,13 +355,14 @@ fn parts<'py>(py: Python<'py>, mesh: &Mesh, q: &Quantization) -> PyResult<MeshPa
 }
 
 /// An attribute channel given from Python: name, domain, type, values (padded to
-/// three columns), corner indices.
+/// three columns), corner indices, names.
 type GivenChannel<'py> = (
     String,
     String,
     String,
     Vertices<'py>,
     Option<PyReadonlyArray1<'py, u32>>,
+    Vec<String>,
 );
 
 /// The channels given from Python, their values exact as they came (integers as
@@ -367,7 +371,7 @@ fn channels(given: Vec<(GivenChannel<'_>, u8)>) -> PyResult<Vec<Attribute>> {
     let bad = |m: String| pyo3::exceptions::PyValueError::new_err(m);
     given
         .into_iter()
-        .map(|((name, domain, ty, values, indices), width)| {
+        .map(|((name, domain, ty, values, indices, labels), width)| {
             let domain = match domain.as_str() {
                 "vertex" => Domain::Vertex,
                 "face" => Domain::Face,
@@ -402,6 +406,7 @@ fn channels(given: Vec<(GivenChannel<'_>, u8)>) -> PyResult<Vec<Attribute>> {
                     Some(i) => i.as_slice()?.to_vec(),
                     None => Vec::new(),
                 },
+                labels,
             })
         })
         .collect()

@@ -83,6 +83,9 @@ class Attribute:
             property's type); ``None`` chooses from the array's dtype.
         quantization: how the coded integers map to values (``subwave info``'s JSON),
             for values decoded or read.
+        labels: for a channel of names (an OBJ's ``object``, ``group``, ``smoothing``
+            and ``material`` per face), the names its integer values stand for (value
+            ``i`` is ``labels[i]``, -1 none); else empty.
     """
 
     def __init__(
@@ -92,6 +95,7 @@ class Attribute:
         indices=None,
         type: Optional[str] = None,
         quantization: Optional[Dict[str, Any]] = None,
+        labels: Optional[list] = None,
     ) -> None:
         v = np.asarray(values)
         if v.ndim == 1:
@@ -111,6 +115,7 @@ class Attribute:
         self.indices = None if indices is None else np.asarray(indices)
         self.type = type
         self.quantization = quantization
+        self.labels = [str(x) for x in (labels or [])]
 
     def __repr__(self) -> str:
         return (
@@ -133,7 +138,7 @@ class Attribute:
             if idx.size and (idx.min() < 0 or idx.max() > np.iinfo(np.uint32).max):
                 raise InvalidMeshError(f"attribute {name!r}: indices must be between 0 and 2^32 - 1")
             idx = np.ascontiguousarray(idx.reshape(-1), dtype=np.uint32)
-        return ((name, self.domain, self.type, v, idx), int(self.values.shape[1]))
+        return ((name, self.domain, self.type, v, idx, self.labels), int(self.values.shape[1]))
 
 
 def _given_attributes(attributes) -> list:
@@ -282,8 +287,8 @@ def _vertices(vertices, what: str = "vertices") -> np.ndarray:
 def _mesh(parts, **extra) -> Mesh:
     values, integers, flat, offsets, quant, channels = parts
     attributes = {
-        name: Attribute(v, domain, indices, ty, json.loads(q))
-        for name, domain, ty, v, indices, q in channels
+        name: Attribute(v, domain, indices, ty, json.loads(q), labels)
+        for name, domain, ty, v, indices, q, labels in channels
     }
     return Mesh(
         values,

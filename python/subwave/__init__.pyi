@@ -21,6 +21,7 @@ class Attribute:
     indices: Optional[np.ndarray]
     type: str
     quantization: Optional[Dict[str, Any]]
+    labels: List[str]
     def __init__(
         self,
         values: np.ndarray,
@@ -28,6 +29,7 @@ class Attribute:
         indices: Optional[np.ndarray] = ...,
         type: Optional[str] = ...,
         quantization: Optional[Dict[str, Any]] = ...,
+        labels: Optional[List[str]] = ...,
     ) -> None: ...
 
 class Mesh:

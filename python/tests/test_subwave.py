@@ -300,7 +300,8 @@ def test_attribute_channels_come_back_exactly_in_canonical_order():
     # A textured OBJ's uv and normal channels, read, coded in canonical order and
     # decoded: every value, at every face corner, is the one read.
     mesh = subwave.read(CORPUS / "textured_cc3.obj")
-    assert set(mesh.attributes) == {"uv", "normal"}
+    assert set(mesh.attributes) == {"object", "smoothing", "material", "uv", "normal"}
+    assert mesh.attributes["material"].labels == [f"Side{i}" for i in range(6)]
     uv = mesh.attributes["uv"]
     assert uv.domain == "corner" and uv.values.shape[1] == 2
     rng = np.random.default_rng(7)
@@ -314,7 +315,11 @@ def test_attribute_channels_come_back_exactly_in_canonical_order():
     )
     back = subwave.decompress(data)
     assert back.order == "canonical"
-    assert list(back.attributes) == ["uv", "normal", "weight", "colour"]
+    assert list(back.attributes) == [
+        "object", "smoothing", "material", "uv", "normal", "weight", "colour"
+    ]
+    mat = back.attributes["material"]
+    assert mat.domain == "face" and mat.labels == mesh.attributes["material"].labels
     assert back.attributes["weight"].type == "u8"
     assert back.attributes["colour"].values.dtype == np.float32
 
@@ -332,6 +337,8 @@ def test_attribute_channels_come_back_exactly_in_canonical_order():
                     row += tuple(a.values[a.indices[c]].tolist())
                 row += (int(m.attributes["weight"].values[v, 0]),)
                 row += tuple(m.attributes["colour"].values[v].view(np.uint32).tolist())
+                mat = m.attributes["material"]
+                row += (mat.labels[int(mat.values[f, 0])],)
                 rows.append(row)
             k = rows.index(min(rows))
             out.append(tuple(rows[k:] + rows[:k]))

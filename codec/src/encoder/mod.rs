@@ -408,6 +408,7 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
             width: a.width,
             pad: 0,
             coding: chan::NESTED,
+            labels: a.labels.clone(),
         };
         // Unit normals per corner: predicted from the geometry where that is smaller.
         let normals = predicted_normals(a, out, &m)?;

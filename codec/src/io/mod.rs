@@ -171,6 +171,8 @@ pub struct RawAttribute {
     pub values: RawCoords,
     /// [`Domain::Corner`]: per face corner, its entry.
     pub indices: Vec<u32>,
+    /// The names a channel of names stands for ([`crate::Attribute::labels`]).
+    pub labels: Vec<String>,
 }
 
 impl RawAttribute {
@@ -186,6 +188,7 @@ impl RawAttribute {
             floats,
             quantization,
             indices: self.indices.clone(),
+            labels: self.labels.clone(),
         })
     }
 }

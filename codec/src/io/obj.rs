@@ -7,7 +7,7 @@ use super::template::{Attribute as FileAttribute, Builder, Form};
 use super::{coords_line, syntax, Format, RawAttribute, RawMesh};
 use crate::error::Result;
 use crate::mesh::{Attribute, Domain, Mesh, ValueType};
-use crate::quant::{Quantization, TextCoords};
+use crate::quant::{Decimal, Quantization, RawCoords, TextCoords};
 use crate::sections::nrml::Component;
 
 /// The OBJ statements (Wavefront's specification and common extensions) besides those
@@ -61,6 +61,8 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     let mut uv = Table::new("texture coordinates", "vt");
     let mut nrm = Table::new("normals", "vn");
     let mut refs: Vec<(Option<i64>, Option<i64>)> = Vec::new();
+    // Objects, groups, smoothing groups and materials: channels of names per face.
+    let mut names = NAMED.map(|(kw, _)| Names::new(kw));
     while let Some((n, raw)) = lines.next() {
         let lineno = n + 1;
         let mut line: &str = raw;
@@ -108,6 +110,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                     topo.push_face(&face);
                     uv.corners(&refs, |r| r.0, lineno)?;
                     nrm.corners(&refs, |r| r.1, lineno)?;
+                    names.iter_mut().for_each(Names::face);
                 } else {
                     // A face of one or two corners is a point or a line, not a polygon.
                     dropped.insert("faces of fewer than 3 corners".to_string());
@@ -124,14 +127,13 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             "p" => {
                 dropped.insert("point elements".to_string());
             }
-            "o" | "g" => {
-                dropped.insert("object and group names".to_string());
+            "o" | "g" | "s" | "usemtl" => {
+                if let Some(n) = names.iter_mut().find(|n| n.keyword == kw) {
+                    n.set(tok);
+                }
             }
-            "s" => {
-                dropped.insert("smoothing groups".to_string());
-            }
-            "mtllib" | "usemtl" => {
-                dropped.insert("materials".to_string());
+            "mtllib" => {
+                dropped.insert("material libraries (mtllib)".to_string());
             }
             other if OTHER_KEYWORDS.contains(&other) => {
                 dropped.insert(format!("'{other}' statements"));
@@ -155,9 +157,15 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             width: 3,
             values: colours.finish().0,
             indices: Vec::new(),
+            labels: Vec::new(),
         });
     } else if colour_lines > 0 {
         dropped.insert("vertex colors".to_string());
+    }
+    for (n, (_, name)) in names.into_iter().zip(NAMED) {
+        if let Some(a) = n.finish(name) {
+            attributes.push(a);
+        }
     }
     for (t, name) in [(uv, "uv"), (nrm, "normal")] {
         if let Some(a) = t.finish(name, topo.corner_count(), &mut dropped)? {
@@ -173,6 +181,89 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         inexact,
         attributes,
     })
+}
+
+/// The statements that name the faces after them, and their channels' names, in the
+/// order the writer writes them before a face.
+const NAMED: [(&str, &str); 4] = [
+    ("o", "object"),
+    ("g", "group"),
+    ("s", "smoothing"),
+    ("usemtl", "material"),
+];
+
+/// A statement's names as read: each face's name (its tokens, space-separated; none
+/// before the first statement or after one without tokens).
+struct Names {
+    keyword: &'static str,
+    labels: Vec<String>,
+    index: std::collections::HashMap<String, i64>,
+    current: i64,
+    faces: Vec<i64>,
+    seen: bool,
+}
+
+impl Names {
+    fn new(keyword: &'static str) -> Self {
+        Names {
+            keyword,
+            labels: Vec::new(),
+            index: std::collections::HashMap::new(),
+            current: -1,
+            faces: Vec::new(),
+            seen: false,
+        }
+    }
+
+    fn set<'a>(&mut self, tok: impl Iterator<Item = &'a str>) {
+        self.seen = true;
+        let label = tok.collect::<Vec<_>>().join(" ");
+        self.current = match label.is_empty() {
+            true => -1,
+            false => {
+                let next = self.labels.len() as i64;
+                *self.index.entry(label.clone()).or_insert_with(|| {
+                    self.labels.push(label);
+                    next
+                })
+            }
+        };
+    }
+
+    fn face(&mut self) {
+        self.faces.push(self.current);
+    }
+
+    /// The channel `name` of the faces' names, if the statement stood in the file.
+    fn finish(self, name: &str) -> Option<RawAttribute> {
+        let zero = Decimal {
+            mantissa: 0,
+            decimals: 0,
+        };
+        self.seen.then(|| RawAttribute {
+            name: name.to_string(),
+            domain: Domain::Face,
+            value_type: ValueType::Text,
+            width: 1,
+            values: RawCoords::Decimal(
+                self.faces
+                    .iter()
+                    .map(|&m| {
+                        [
+                            Decimal {
+                                mantissa: m,
+                                decimals: 0,
+                            },
+                            zero,
+                            zero,
+                        ]
+                    })
+                    .collect(),
+            ),
+            indices: Vec::new(),
+            labels: self.labels,
+        })
+    }
 }
 
 /// A `vt` or `vn` table as read and the faces' numbers into it: a corner channel
@@ -309,6 +400,7 @@ impl Table {
             width: self.width.unwrap_or(1) as u8,
             values,
             indices: self.indices.unwrap_or_default(),
+            labels: Vec::new(),
         }))
     }
 }
@@ -396,6 +488,11 @@ pub(crate) fn writes(a: &Attribute) -> bool {
     match a.name.as_str() {
         "color" => a.domain == Domain::Vertex && a.width == 3,
         "uv" | "normal" => a.domain != Domain::Face,
+        n if NAMED.iter().any(|(_, c)| *c == n) => {
+            a.domain == Domain::Face
+                && a.width == 1
+                && (!a.labels.is_empty() || a.values.iter().all(|v| v[0] == -1))
+        }
         _ => false,
     }
 }
@@ -443,8 +540,28 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
             _ => v as u64 + 1,
         }
     };
+    // The statements that name faces, written where a face's name changes.
+    let named: Vec<(&str, &Attribute)> = NAMED
+        .iter()
+        .filter_map(|&(kw, name)| find(name).map(|a| (kw, a)))
+        .collect();
+    let mut names = vec![-1i64; named.len()];
     for f in 0..mesh.face_count() {
         let s = mesh.face_starts[f] as usize;
+        for (k, &(kw, a)) in named.iter().enumerate() {
+            let v = a.values[f][0];
+            if v != names[k] {
+                names[k] = v;
+                line.clear();
+                line.push_str(kw);
+                if let Some(l) = a.labels.get(v as usize).filter(|_| v >= 0) {
+                    line.push(' ');
+                    line.push_str(l);
+                }
+                line.push('\n');
+                out.write_all(line.as_bytes())?;
+            }
+        }
         line.clear();
         line.push('f');
         for (j, &i) in mesh.face(f).iter().enumerate() {

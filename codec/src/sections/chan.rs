@@ -23,6 +23,8 @@ pub(crate) struct Head {
     pub pad: u8,
     /// How the rest codes the channel: [`NESTED`] or [`NORMALS`].
     pub coding: u8,
+    /// The names a channel of names stands for.
+    pub labels: Vec<String>,
 }
 
 /// Coding 0: the values as the positions of a nested container's mesh.
@@ -92,6 +94,13 @@ pub(crate) fn encode(head: &Head, nested: &[u8]) -> Vec<u8> {
         head.pad,
         head.coding,
     ]);
+    let mut w = ByteWriter::new();
+    w.varint(head.labels.len() as u64);
+    for l in &head.labels {
+        w.varint(l.len() as u64);
+        w.out.extend_from_slice(l.as_bytes());
+    }
+    out.extend_from_slice(&w.out);
     out.extend_from_slice(nested);
     out
 }
@@ -126,6 +135,17 @@ pub(crate) fn decode(payload: &[u8]) -> Result<(Head, &[u8])> {
     if coding > NORMALS || (coding == NORMALS && (pad != 0 || width != 3 || domain != Domain::Corner)) {
         return Err(bad(format!("coding {coding} of a {domain:?} channel")));
     }
+    let body = &rest[n + 5..];
+    let mut r = ByteReader::new(body, 0);
+    // Each name takes at least its length byte.
+    let count = r.varint_max("names", r.remaining() as u64)?;
+    let mut labels = Vec::with_capacity(count as usize);
+    for _ in 0..count {
+        let len = r.varint_max("name length", r.remaining() as u64)? as usize;
+        let l = std::str::from_utf8(r.bytes(len, "name")?)
+            .map_err(|_| bad("a name that is not UTF-8".into()))?;
+        labels.push(l.to_string());
+    }
     Ok((
         Head {
             name,
@@ -134,8 +154,9 @@ pub(crate) fn decode(payload: &[u8]) -> Result<(Head, &[u8])> {
             width,
             pad,
             coding,
+            labels,
         },
-        &rest[n + 5..],
+        &body[body.len() - r.remaining()..],
     ))
 }
 
@@ -152,6 +173,7 @@ mod tests {
             width: 3,
             pad: 1,
             coding: 0,
+            labels: vec!["a".into(), "bc".into()],
         };
         let p = encode(&h, b"nested");
         let (back, nested) = decode(&p).unwrap();
@@ -162,6 +184,7 @@ mod tests {
             assert!(decode(&q).is_err(), "byte {i} = {v}");
         }
         assert!(decode(&p[..10]).is_err());
+        assert!(decode(&p[..p.len() - 7]).is_err(), "a name cut");
         let n = Normals {
             decimals: 4,
             entries: 300,

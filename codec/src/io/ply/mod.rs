@@ -184,6 +184,7 @@ impl<'a> Columns<'a> {
                 width: len as u8,
                 values,
                 indices: Vec::new(),
+                labels: Vec::new(),
             });
         }
         Ok(())
