@@ -149,6 +149,9 @@ pub fn roundtrip_mesh(data: &[u8]) {
     for f in &faces {
         mesh.push_face(f);
     }
+    if b.u8() & 1 == 1 {
+        arbitrary_channels(&mut b, &mut mesh);
+    }
     let all: Vec<Wavelet> = Wavelet::ALL.into_iter().chain(Wavelet::SQRT2).collect();
     let w = b.below(all.len() + 2);
     let opts = EncodeOptions {
@@ -174,6 +177,63 @@ pub fn roundtrip_mesh(data: &[u8]) {
     } else {
         crate::compare_up_to_order(&mesh, &dec.mesh, &enc.order).expect("round trip differs");
     }
+}
+
+/// Attribute channels of every domain on `mesh` (SPEC.md 11.4): per-vertex values,
+/// a per-corner table of three-decimal triples (as normals are) with arbitrary corner
+/// entries, per-face names with faces of none.
+fn arbitrary_channels(b: &mut Bytes<'_>, mesh: &mut Mesh) {
+    use subwave_codec::{Attribute, Domain, ValueType};
+    let small = |b: &mut Bytes<'_>| b.below(2001) as i64 - 1000;
+    let width = 1 + b.below(3) as u8;
+    let values = (0..mesh.vertex_count())
+        .map(|_| {
+            let mut v = [0i64; 3];
+            v[..width as usize].iter_mut().for_each(|x| *x = small(b));
+            v
+        })
+        .collect();
+    let vertex = Attribute {
+        name: "v".into(),
+        domain: Domain::Vertex,
+        value_type: ValueType::Text,
+        width,
+        values,
+        floats: Vec::new(),
+        quantization: Quantization::Decimal { decimals: 1 },
+        indices: Vec::new(),
+        labels: Vec::new(),
+    };
+    let entries = 1 + b.below(mesh.corner_count().max(1));
+    let corner = Attribute {
+        name: "normal".into(),
+        domain: Domain::Corner,
+        value_type: ValueType::Text,
+        width: 3,
+        values: (0..entries)
+            .map(|_| [small(b), small(b), small(b)])
+            .collect(),
+        floats: Vec::new(),
+        quantization: Quantization::Decimal { decimals: 4 },
+        indices: (0..mesh.corner_count())
+            .map(|_| b.below(entries) as u32)
+            .collect(),
+        labels: Vec::new(),
+    };
+    let face = Attribute {
+        name: "material".into(),
+        domain: Domain::Face,
+        value_type: ValueType::Text,
+        width: 1,
+        values: (0..mesh.face_count())
+            .map(|_| [b.below(3) as i64 - 1, 0, 0])
+            .collect(),
+        floats: Vec::new(),
+        quantization: Quantization::Decimal { decimals: 0 },
+        indices: Vec::new(),
+        labels: vec!["a".into(), "b c".into()],
+    };
+    mesh.attributes = vec![vertex, corner, face];
 }
 
 /// Every transform's synthesis undoes its analysis exactly on any refinable topology
@@ -296,10 +356,23 @@ pub fn whole_file(data: &[u8]) {
         return;
     };
     let dec = crate::decode_slice(&enc.bytes).expect("own output decodes");
-    assert_eq!(dec.mesh, m.mesh, "the mesh in the file's order");
+    // The channels are in the file's bytes.
+    assert_eq!(
+        dec.mesh,
+        m.mesh.without_attributes(),
+        "the mesh in the file's order"
+    );
     let file = dec
         .file()
         .expect("a file template")
         .expect("the template expands");
     assert!(file == data, "the file's bytes come back");
+    // In canonical order: every value of every channel (SPEC.md 11.4).
+    let opts = EncodeOptions {
+        keep_order: false,
+        ..opts
+    };
+    let enc = crate::encode(&m.mesh, &m.quantization, &opts).expect("a mesh that coded once");
+    let dec = crate::decode_slice(&enc.bytes).expect("own output decodes");
+    crate::compare_up_to_order(&m.mesh, &dec.mesh, &enc.order).expect("channels back");
 }

@@ -26,6 +26,8 @@ pub struct ReadmeDoctests;
 
 use std::collections::BTreeSet;
 
+use subwave_codec::Domain as ChannelDomain;
+
 pub mod json;
 
 pub use subwave_codec::io::{
@@ -128,8 +130,9 @@ pub fn default_output_format(source: Source) -> Format {
 
 /// Checks that `decoded` is `original` with its vertices renumbered by `order`
 /// (`order[i]` = the original index of decoded vertex `i`): every position equal, and
-/// the same faces (each with the same cyclic order and orientation) in any face order.
-/// Returns a description of the first difference.
+/// the same faces (each with the same cyclic order and orientation) in any face order,
+/// and every attribute channel's values at each vertex, face and face corner equal (a
+/// channel of names by its names). Returns a description of the first difference.
 pub fn compare_up_to_order(
     original: &Mesh,
     decoded: &Mesh,
@@ -178,6 +181,9 @@ pub fn compare_up_to_order(
             ));
         }
     }
+    if !original.attributes.is_empty() || !decoded.attributes.is_empty() {
+        return compare_channels(original, decoded, order);
+    }
     // The smallest rotation: a face with a repeated corner has several starting at its
     // smallest vertex.
     let canon = |face: &[u32]| -> Vec<u32> {
@@ -206,6 +212,115 @@ pub fn compare_up_to_order(
         ));
     }
     Ok(())
+}
+
+/// [`compare_up_to_order`]'s faces and channels, for meshes with channels: each face as
+/// its corners (the original vertex, then every channel's values there) from its
+/// smallest rotation, and its per-face values, compared as sorted lists.
+fn compare_channels(
+    original: &Mesh,
+    decoded: &Mesh,
+    order: &[u32],
+) -> std::result::Result<(), String> {
+    if original.attributes.len() != decoded.attributes.len() {
+        return Err(format!(
+            "{} attribute channels decoded, {} expected",
+            decoded.attributes.len(),
+            original.attributes.len()
+        ));
+    }
+    for (a, b) in original.attributes.iter().zip(&decoded.attributes) {
+        if (&a.name, a.domain, a.width, a.value_type) != (&b.name, b.domain, b.width, b.value_type)
+        {
+            return Err(format!("channel '{}' decoded as '{}'", a.name, b.name));
+        }
+    }
+    // An entry as numbers: its values and float bits, or its name.
+    fn entry(a: &subwave_codec::Attribute, e: usize, out: &mut Vec<String>) {
+        if !a.labels.is_empty() {
+            let v = a.values[e][0];
+            out.push(format!("{:?}", a.labels.get(v as usize).filter(|_| v >= 0)));
+            return;
+        }
+        for k in 0..a.width as usize {
+            out.push(format!("{:x}", a.value_f64(e, k).to_bits()));
+        }
+    }
+    // Per-vertex values at every vertex (those no face uses too).
+    for (a, b) in original.attributes.iter().zip(&decoded.attributes) {
+        if a.domain != ChannelDomain::Vertex {
+            continue;
+        }
+        for (i, &o) in order.iter().enumerate() {
+            let (mut x, mut y) = (Vec::new(), Vec::new());
+            entry(a, o as usize, &mut x);
+            entry(b, i, &mut y);
+            if x != y {
+                return Err(format!(
+                    "'{}' of vertex {} decoded as {y:?}, expected {x:?}",
+                    a.name,
+                    o + 1
+                ));
+            }
+        }
+    }
+    let faces = |m: &Mesh, vertex: &dyn Fn(u32) -> u32| -> Vec<Vec<Vec<String>>> {
+        let mut all: Vec<Vec<Vec<String>>> = (0..m.face_count())
+            .map(|f| {
+                let s = m.face_starts[f] as usize;
+                let face = m.face(f);
+                let corners: Vec<Vec<String>> = face
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &v)| {
+                        let mut c = vec![vertex(v).to_string()];
+                        for a in &m.attributes {
+                            match a.domain {
+                                ChannelDomain::Vertex => entry(a, v as usize, &mut c),
+                                ChannelDomain::Corner => {
+                                    entry(a, a.indices[s + j] as usize, &mut c)
+                                }
+                                ChannelDomain::Face => {}
+                            }
+                        }
+                        c
+                    })
+                    .collect();
+                let d = corners.len();
+                let mut best = (0..d)
+                    .map(|r| {
+                        corners[r..]
+                            .iter()
+                            .chain(&corners[..r])
+                            .cloned()
+                            .collect::<Vec<_>>()
+                    })
+                    .min()
+                    .unwrap_or_default();
+                let mut own = Vec::new();
+                for a in m
+                    .attributes
+                    .iter()
+                    .filter(|a| a.domain == ChannelDomain::Face)
+                {
+                    entry(a, f, &mut own);
+                }
+                best.push(own);
+                best
+            })
+            .collect();
+        all.sort_unstable();
+        all
+    };
+    let a = faces(original, &|v| v);
+    let b = faces(decoded, &|v| order[v as usize]);
+    match (0..a.len()).find(|&i| a[i] != b[i]) {
+        Some(i) => Err(format!(
+            "faces or their channels differ: expected {:?}, decoded {:?}",
+            a[i], b[i]
+        )),
+        None => Ok(()),
+    }
 }
 
 /// Decodes into `out`, reusing its buffers (whatever they held is replaced).

@@ -564,11 +564,17 @@ fn predicted_normals(a: &crate::mesh::Attribute, out: &Mesh, m: &Mesh) -> Result
 /// the face of `mesh` it is and the rotation `r` with corner `j` of the decoded face
 /// corner `(j + r) mod d` of `mesh`'s.
 fn match_faces(mesh: &Mesh, out: &Mesh, order: &[u32]) -> Result<Vec<(usize, usize)>> {
-    // Faces keyed by their smallest vertex and the vertices after it.
+    // Faces keyed by their smallest rotation (of those starting at the smallest
+    // vertex), and where it starts.
     let key = |f: &[u32]| -> (usize, Vec<u32>) {
         let d = f.len();
-        let s = (0..d).min_by_key(|&j| (f[j], f[(j + 1) % d])).unwrap_or(0);
-        (s, (0..d).map(|j| f[(s + j) % d]).collect())
+        let low = f.iter().copied().min().unwrap_or(0);
+        let rot = |s: usize| (0..d).map(move |j| f[(s + j) % d]);
+        let s = (0..d)
+            .filter(|&j| f[j] == low)
+            .min_by(|&x, &y| rot(x).cmp(rot(y)))
+            .unwrap_or(0);
+        (s, rot(s).collect())
     };
     let mut by_key: HashMap<Vec<u32>, Vec<(usize, usize)>> = HashMap::new();
     for g in (0..mesh.face_count()).rev() {
