@@ -1047,9 +1047,10 @@ fn print_info(info: &subwave::Info, as_json: bool) {
                         "" => String::new(),
                         r => format!(": {r}"),
                     };
-                    let name = match a.name.as_str() {
-                        "" => String::new(),
-                        n => format!("'{n}' per {}: ", a.domain),
+                    let name = match (a.name.as_str(), a.domain.as_str()) {
+                        ("", _) => String::new(),
+                        (n, "") => format!("'{n}': "),
+                        (n, d) => format!("'{n}' per {d}: "),
                     };
                     format!(
                         "{} {} B ({name}{} x {} values, {}{rules})",

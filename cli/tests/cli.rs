@@ -284,9 +284,20 @@ fn by_default_a_file_with_attributes_comes_back_whole() {
         .collect();
     assert!(!attrs.is_empty(), "{v}");
     assert_eq!(attrs[0]["attribute"]["width"], 2, "{v}");
+    assert_eq!(attrs[0]["attribute"]["name"], "uv", "{v}");
     assert!(attrs[0]["attribute"]["transform"].is_string(), "{v}");
     let text = String::from_utf8_lossy(&run(&["info", swv.to_str().unwrap()]).stdout).to_string();
-    assert!(text.contains("x 2 values"), "{text}");
+    assert!(
+        text.contains("('uv': ") && text.contains("x 2 values"),
+        "{text}"
+    );
+    // In canonical order the channels are named with their domain.
+    let canon = compressed(&input, "textured_canonical.swv", &["--canonical"]);
+    let text = String::from_utf8_lossy(&run(&["info", canon.to_str().unwrap()]).stdout).to_string();
+    assert!(
+        text.contains("('uv' per corner: ") && text.contains("('material' per face: "),
+        "{text}"
+    );
     // A file of positions and faces alone stays in canonical order (no ORDR).
     let plain = compressed(&corpus("cube_cc4.obj"), "plain_default.swv", &[]);
     let v = json(&run(&["info", plain.to_str().unwrap(), "--json"]));

@@ -360,7 +360,7 @@ fn file_sections(
 /// container's ORDR payload: the nested container must keep its order and nothing of a
 /// file of its own.
 fn attribute(payload: &[u8], limits: &Limits, order: Option<&[u8]>) -> Result<Attribute> {
-    let (width, nested) = attr::decode(payload, limits, order)?;
+    let (width, name, nested) = attr::decode(payload, limits, order)?;
     let opts = DecodeOptions {
         limits: limits.clone(),
         ..DecodeOptions::default()
@@ -371,6 +371,7 @@ fn attribute(payload: &[u8], limits: &Limits, order: Option<&[u8]>) -> Result<At
         return Err(Error::corrupt("ATTR", "the nested container has no order"));
     }
     Ok(Attribute {
+        name,
         width,
         mesh: d.mesh,
         q: d.quantization,

@@ -34,7 +34,8 @@ pub struct SectionInfo {
 /// How an ATTR or CHAN section codes its attribute.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct AttributeInfo {
-    /// A CHAN section's channel name (SPEC.md 11.4); empty for ATTR.
+    /// The attribute's name (an ATTR section's, SPEC.md 11.3, may be empty; a CHAN
+    /// section's channel name, 11.4).
     pub name: String,
     /// A CHAN section's domain: `vertex`, `face` or `corner`; empty for ATTR.
     pub domain: String,
@@ -92,11 +93,11 @@ pub(crate) fn section_info(
 /// An ATTR payload's [`AttributeInfo`] (`order`: the main container's ORDR payload, for
 /// a nested container that shares it); `None` when it does not parse.
 fn attribute_info(payload: &[u8], limits: &Limits, order: Option<&[u8]>) -> Option<AttributeInfo> {
-    let (width, nested) = crate::sections::attr::decode(payload, limits, order).ok()?;
+    let (width, name, nested) = crate::sections::attr::decode(payload, limits, order).ok()?;
     let c = Container::parse(&nested, limits).ok()?;
     let h = layout(&c, limits, true).ok()?;
     Some(AttributeInfo {
-        name: String::new(),
+        name,
         domain: String::new(),
         width,
         entries: h.vertices,

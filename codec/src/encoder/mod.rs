@@ -658,7 +658,11 @@ fn attribute(a: &Attribute, opts: &EncodeOptions) -> Result<Vec<u8>> {
     let mut o = opts.clone();
     o.keep_order = true;
     o.progress = Progress::default();
-    Ok(attr::encode(a.width, &encode(&a.mesh, &a.q, &o)?.bytes))
+    Ok(attr::encode(
+        a.width,
+        &a.name,
+        &encode(&a.mesh, &a.q, &o)?.bytes,
+    ))
 }
 
 /// The sections that keep a file's own bytes (SPEC.md 11): TMPL, CIDX when the

@@ -686,11 +686,12 @@ fn scan(bytes: &[u8], b: &mut Builder<'_>) -> Scan {
         normals,
     };
     if vt_ok && !vt.is_empty() {
-        out.uv = attribute_of(&vt, 2, &uv_faces).and_then(|a| b.attribute(a));
+        out.uv = attribute_of(&vt, 2, &uv_faces).and_then(|a| b.attribute(a.named("uv")));
         b.corners_from(out.uv);
     }
     if colours_ok && !colours.is_empty() && colours.len() == b.mesh().vertex_count() {
-        out.colour = attribute_of(&colours, 3, b.mesh()).and_then(|a| b.attribute(a));
+        out.colour =
+            attribute_of(&colours, 3, b.mesh()).and_then(|a| b.attribute(a.named("color")));
     }
     out
 }

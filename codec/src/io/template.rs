@@ -28,6 +28,9 @@ pub(crate) struct Channels {
 /// mesh's vertex i, its faces the attribute's.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Attribute {
+    /// Its name, as a channel of the file would have it (`uv`, `color`, a PLY's
+    /// property names), for `info`.
+    pub name: String,
     /// Values per entry, 1..=3.
     pub width: u8,
     /// The entries as positions, and the faces they form.
@@ -42,6 +45,7 @@ impl Attribute {
     pub(crate) fn on_faces(width: usize, values: crate::quant::Integers, faces: &Mesh) -> Self {
         let (positions, q, floats) = values;
         Attribute {
+            name: String::new(),
             width: width as u8,
             mesh: Mesh {
                 positions,
@@ -51,6 +55,14 @@ impl Attribute {
                 attributes: Vec::new(),
             },
             q,
+        }
+    }
+
+    /// The attribute named `name`.
+    pub(crate) fn named(self, name: &str) -> Self {
+        Attribute {
+            name: name.to_string(),
+            ..self
         }
     }
 }

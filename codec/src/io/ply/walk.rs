@@ -76,11 +76,18 @@ fn attributes(
     }
     let mesh = b.mesh();
     let mut numbers = Vec::with_capacity(runs.len());
-    for (r, &(_, len, ty)) in runs.iter().enumerate() {
+    for (r, &(first, len, ty)) in runs.iter().enumerate() {
+        let name = props[first..first + len]
+            .iter()
+            .map(|p| match p {
+                Prop::Scalar(n, _) | Prop::List(n, _, _) => n.as_str(),
+            })
+            .collect::<Vec<_>>()
+            .join(" ");
         let raw = match (mode, ty) {
             (Mode::Ascii, _) => {
                 let g = crate::io::text_values(&tokens[r])
-                    .and_then(|v| b.attribute(Attribute::on_faces(len, v, mesh)));
+                    .and_then(|v| b.attribute(Attribute::on_faces(len, v, mesh).named(&name)));
                 numbers.push(g);
                 continue;
             }
@@ -88,7 +95,7 @@ fn attributes(
         };
         let g = integerize(&raw, None)
             .ok()
-            .and_then(|v| b.attribute(Attribute::on_faces(len, v, mesh)));
+            .and_then(|v| b.attribute(Attribute::on_faces(len, v, mesh).named(&name)));
         numbers.push(g);
     }
     Some(
