@@ -113,26 +113,23 @@ pub(crate) fn layout(c: &Container<'_>, limits: &Limits, whole: bool) -> Result<
     if h.has_normals {
         expected.push((SectionKind::NORMALS, "normal components"));
     }
-    // Attribute sections (SPEC.md 11.3) after a template: as many as stand there.
-    if h.has_template {
+    // As many sections of `kind` as stand next.
+    let run = |expected: &mut Vec<(SectionKind, &'static str)>, kind, what| {
         let at = expected.len() + 1;
         let n = c
             .sections
             .iter()
             .skip(at)
-            .take_while(|s| s.kind == SectionKind::ATTRIBUTE)
+            .take_while(|s| s.kind == kind)
             .count();
-        expected.extend((0..n).map(|_| (SectionKind::ATTRIBUTE, "attribute")));
+        expected.extend((0..n).map(|_| (kind, what)));
+    };
+    // Attribute sections (SPEC.md 11.3) after a template, then named attribute channels
+    // (11.4).
+    if h.has_template {
+        run(&mut expected, SectionKind::ATTRIBUTE, "attribute");
     }
-    // Named attribute channels (SPEC.md 11.4): as many as stand there.
-    let at = expected.len() + 1;
-    let n = c
-        .sections
-        .iter()
-        .skip(at)
-        .take_while(|s| s.kind == SectionKind::CHANNEL)
-        .count();
-    expected.extend((0..n).map(|_| (SectionKind::CHANNEL, "attribute channel")));
+    run(&mut expected, SectionKind::CHANNEL, "attribute channel");
     expected.push((SectionKind::END, "end marker"));
     for (i, &(kind, what)) in expected.iter().enumerate() {
         if !whole && i + 1 >= c.sections.len() {

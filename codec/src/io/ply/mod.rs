@@ -699,6 +699,20 @@ fn put_values(a: &Attribute, e: usize, binary: bool, buf: &mut Vec<u8>, text: &m
     }
 }
 
+/// Ends a record: an ASCII one's `line` and its line break into `buf`; `buf` out to
+/// `out` once it is large.
+fn end_record<W: Write>(binary: bool, line: &str, buf: &mut Vec<u8>, out: &mut W) -> Result<()> {
+    if !binary {
+        buf.extend_from_slice(line.as_bytes());
+        buf.push(b'\n');
+    }
+    if buf.len() > 60_000 {
+        out.write_all(buf)?;
+        buf.clear();
+    }
+    Ok(())
+}
+
 pub(crate) fn write<W: Write>(
     out: &mut W,
     mesh: &Mesh,
@@ -775,14 +789,7 @@ pub(crate) fn write<W: Write>(
         for a in &vchan {
             put_values(a, v, binary, &mut buf, &mut line);
         }
-        if !binary {
-            line.push('\n');
-            buf.extend_from_slice(line.as_bytes());
-        }
-        if buf.len() > 60_000 {
-            out.write_all(&buf)?;
-            buf.clear();
-        }
+        end_record(binary, &line, &mut buf, out)?;
     }
     for (f, face) in mesh.iter_faces().enumerate() {
         line.clear();
@@ -805,14 +812,7 @@ pub(crate) fn write<W: Write>(
         for a in &fchan {
             put_values(a, f, binary, &mut buf, &mut line);
         }
-        if !binary {
-            line.push('\n');
-            buf.extend_from_slice(line.as_bytes());
-        }
-        if buf.len() > 60_000 {
-            out.write_all(&buf)?;
-            buf.clear();
-        }
+        end_record(binary, &line, &mut buf, out)?;
     }
     out.write_all(&buf)?;
     Ok(())
