@@ -421,21 +421,34 @@ fn channel(payload: &[u8], limits: &Limits, mesh: &Mesh) -> Result<crate::mesh::
     {
         return Err(bad("values past the channel's width"));
     }
+    let indices = match head.domain {
+        Domain::Corner => m.faces,
+        _ => Vec::new(),
+    };
+    let values = (m.positions, m.floats, d.quantization);
+    channel_of(head, values, indices, mesh)
+}
+
+/// The channel of CHAN head `head` with `values` (integers, float bits, quantisation)
+/// and corner `indices`, checked against `mesh`: an integer type's values in its range,
+/// on an integer grid; names, entries and indices that fit.
+fn channel_of(
+    head: chan::Head,
+    (values, floats, quantization): (Vec<[i64; 3]>, Vec<[u64; 3]>, Quantization),
+    indices: Vec<u32>,
+    mesh: &Mesh,
+) -> Result<crate::mesh::Attribute> {
     let a = crate::mesh::Attribute {
         labels: head.labels,
         name: head.name,
         domain: head.domain,
         value_type: head.value_type,
         width: head.width,
-        values: m.positions,
-        floats: m.floats,
-        quantization: d.quantization,
-        indices: match head.domain {
-            Domain::Corner => m.faces,
-            _ => Vec::new(),
-        },
+        values,
+        floats,
+        quantization,
+        indices,
     };
-    // An integer type's values in its range, on an integer grid.
     a.validate(mesh)
         .map_err(|e| Error::corrupt("CHAN", e.to_string()))?;
     Ok(a)
@@ -467,22 +480,12 @@ fn predicted_normals(head: chan::Head, body: &[u8], mesh: &Mesh) -> Result<crate
     {
         return Err(bad("a component of other decimals"));
     }
-    let a = crate::mesh::Attribute {
-        labels: head.labels,
-        name: head.name,
-        domain: head.domain,
-        value_type: head.value_type,
-        width: head.width,
-        values: comps.chunks(3).map(|c| [c[0].m, c[1].m, c[2].m]).collect(),
-        floats: Vec::new(),
-        quantization: Quantization::Decimal {
-            decimals: n.decimals,
-        },
-        indices: numbers.iter().map(|&e| e - 1).collect(),
+    let values = comps.chunks(3).map(|c| [c[0].m, c[1].m, c[2].m]).collect();
+    let q = Quantization::Decimal {
+        decimals: n.decimals,
     };
-    a.validate(mesh)
-        .map_err(|e| Error::corrupt("CHAN", e.to_string()))?;
-    Ok(a)
+    let indices = numbers.iter().map(|&e| e - 1).collect();
+    channel_of(head, (values, Vec::new(), q), indices, mesh)
 }
 
 /// Refuses a refinement larger than the header's finest mesh, before it is built.
