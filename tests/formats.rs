@@ -283,3 +283,35 @@ fn records_as_real_writers_lay_them_out() {
     let empty = subwave::load(b"ply\nformat ascii 1.0\nend_header\n", None).unwrap();
     assert_eq!(empty.mesh.vertex_count(), 0);
 }
+
+#[test]
+fn corner_numbers_past_their_tables_are_one_line_errors() {
+    // A `vt` or `vn` number past the file's lines (counted from 1, or back from the
+    // lines so far) is an error naming the line, not a channel with a hole.
+    let cases: [(&[u8], &str); 4] = [
+        (
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n",
+            "line 5: vt reference 2",
+        ),
+        (
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//7\n",
+            "line 5: vn reference 7",
+        ),
+        (
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/-2 2/1 3/1\n",
+            "vt reference -2",
+        ),
+        (
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/x 2 3\n",
+            "no texture coordinate number",
+        ),
+    ];
+    for (obj, want) in cases {
+        let e = subwave::load(obj, None).unwrap_err().to_string();
+        assert!(e.contains(want) && !e.contains('\n'), "{e}");
+    }
+    // A number that points forward, to a line further down, is fine.
+    let ahead = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/2 3/1\nvt 0 0\nvt 1 0\n";
+    let m = subwave::load(ahead, None).unwrap();
+    assert_eq!(m.mesh.attribute("uv").unwrap().indices, [0, 1, 0]);
+}
