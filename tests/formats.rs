@@ -285,10 +285,13 @@ fn records_as_real_writers_lay_them_out() {
 }
 
 #[test]
-fn corner_numbers_past_their_tables_are_one_line_errors() {
+fn corner_numbers_past_their_tables_drop_the_channel_not_the_file() {
     // A `vt` or `vn` number past the file's lines (counted from 1, or back from the
-    // lines so far) is an error naming the line, not a channel with a hole.
-    let cases: [(&[u8], &str); 4] = [
+    // lines so far), a corner number that is no number, colours that are no numbers:
+    // real files have them (trimesh's cubevt.obj, nancolor.obj). The file is read (its
+    // own bytes keep them with --keep-order); that table is no channel, and what was
+    // dropped names the line.
+    let cases: [(&[u8], &str); 5] = [
         (
             b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n",
             "line 5: vt reference 2",
@@ -302,13 +305,30 @@ fn corner_numbers_past_their_tables_are_one_line_errors() {
             "vt reference -2",
         ),
         (
-            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/x 2 3\n",
-            "no texture coordinate number",
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/x 2/1 3/1\n",
+            "vt reference 0",
+        ),
+        (
+            b"v 0 0 0 1 0 nan\nv 1 0 0 1 1 1\nv 0 1 0 1 1 1\nf 1 2 3\n",
+            "line 1: 'nan'",
         ),
     ];
     for (obj, want) in cases {
-        let e = subwave::load(obj, None).unwrap_err().to_string();
-        assert!(e.contains(want) && !e.contains('\n'), "{e}");
+        let m = subwave::load(obj, None).unwrap();
+        assert!(m.mesh.attributes.is_empty(), "{:?}", m.mesh.attributes);
+        assert!(
+            m.dropped.iter().any(|d| d.contains(want)),
+            "{:?}",
+            m.dropped
+        );
+        // And the file comes back byte for byte with its order.
+        let opts = subwave::EncodeOptions {
+            keep_order: true,
+            ..Default::default()
+        };
+        let enc = subwave::encode_file(&m.mesh, &m.quantization, &opts, obj, m.format).unwrap();
+        let dec = subwave::decode_slice(&enc.bytes).unwrap();
+        assert_eq!(dec.file().unwrap().unwrap(), obj);
     }
     // A number that points forward, to a line further down, is fine.
     let ahead = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/2 3/1\nvt 0 0\nvt 1 0\n";

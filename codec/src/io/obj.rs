@@ -94,10 +94,14 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                         dropped.insert("homogeneous w coordinates".to_string());
                     }
                     3 if colour_lines + 1 == coords.len() => {
-                        colours
-                            .push([rest[0], rest[1], rest[2]])
-                            .map_err(|e| syntax("OBJ", lineno, e))?;
-                        colour_lines += 1;
+                        // Colours that are no numbers are no channel (the file's bytes
+                        // keep them).
+                        match colours.push([rest[0], rest[1], rest[2]]) {
+                            Ok(()) => colour_lines += 1,
+                            Err(e) => {
+                                dropped.insert(format!("vertex colors (line {lineno}: {e})"));
+                            }
+                        }
                     }
                     _ => {
                         dropped.insert("vertex colors".to_string());
@@ -267,9 +271,12 @@ impl Names {
 }
 
 /// A `vt` or `vn` table as read and the faces' numbers into it: a corner channel
-/// (SPEC.md 11.4) when every line has the same number of values and every corner a
-/// number.
+/// (SPEC.md 11.4) when every line has the same number of values, every value is a
+/// number and every corner a number in the table. A table that is not one is noted as
+/// dropped, with its first fault: the file is still read (its own bytes keep it).
 struct Table {
+    /// Why it is no channel: its first fault, with its line.
+    bad: Option<String>,
     /// What it holds, for messages.
     what: &'static str,
     /// Its keyword.
@@ -290,6 +297,7 @@ struct Table {
 impl Table {
     fn new(what: &'static str, keyword: &'static str) -> Self {
         Table {
+            bad: None,
             what,
             keyword,
             rows: TextCoords::default(),
@@ -319,8 +327,10 @@ impl Table {
             Some(w) if w == n => {}
             _ => self.width = None,
         }
-        if self.width.is_some() {
-            self.rows.push(t).map_err(|e| syntax("OBJ", lineno, e))?;
+        if self.width.is_some() && self.bad.is_none() {
+            if let Err(e) = self.rows.push(t) {
+                self.bad = Some(format!("line {lineno}: {e}"));
+            }
         }
         Ok(())
     }
@@ -345,11 +355,13 @@ impl Table {
                 _ => -1,
             };
             if idx < 0 || idx >= u32::MAX as i64 {
-                return Err(syntax(
-                    "OBJ",
-                    lineno,
-                    format!("{} reference {i} is out of range", self.keyword),
-                ));
+                let why = format!(
+                    "line {lineno}: {} reference {i} is out of range",
+                    self.keyword
+                );
+                self.bad.get_or_insert(why);
+                self.indices = None;
+                continue;
             }
             if idx as u64 + 1 > self.largest.0 {
                 self.largest = (idx as u64 + 1, lineno);
@@ -361,8 +373,8 @@ impl Table {
         Ok(())
     }
 
-    /// The channel named `name`, if the table is one; what it is not noted in
-    /// `dropped`. A number past the table is an error.
+    /// The channel named `name`, if the table is one; why it is not noted in
+    /// `dropped`.
     fn finish(
         self,
         name: &str,
@@ -370,14 +382,16 @@ impl Table {
         dropped: &mut BTreeSet<String>,
     ) -> Result<Option<RawAttribute>> {
         if self.largest.0 > self.lines as u64 {
-            return Err(syntax(
-                "OBJ",
-                self.largest.1,
-                format!(
-                    "{} reference {} is past the file's {} '{}' lines",
-                    self.keyword, self.largest.0, self.lines, self.keyword
-                ),
-            ));
+            let why = format!(
+                "line {}: {} reference {} is past the file's {} '{}' lines",
+                self.largest.1, self.keyword, self.largest.0, self.lines, self.keyword
+            );
+            dropped.insert(format!("{} ({})", self.what, self.bad.unwrap_or(why)));
+            return Ok(None);
+        }
+        if let Some(why) = self.bad {
+            dropped.insert(format!("{} ({why})", self.what));
+            return Ok(None);
         }
         if self.lines == 0 && self.numbered == 0 {
             return Ok(None);
@@ -441,19 +455,14 @@ fn read_face<'a>(
 ) -> Result<()> {
     face.clear();
     refs.clear();
-    let number = |t: &str, s: &str, what: &str| -> Result<Option<i64>> {
-        if s.is_empty() {
-            return Ok(None);
-        }
-        s.parse()
-            .map(Some)
-            .map_err(|_| syntax("OBJ", lineno, format!("'{t}' has no {what} number")))
-    };
+    // A number that is no number is number 0, out of every table's range (its table
+    // is then no channel).
+    let number = |s: &str| -> Option<i64> { (!s.is_empty()).then(|| s.parse().unwrap_or(0)) };
     for t in tok {
         let mut parts = t.split('/');
         let vi = parts.next().unwrap_or("");
-        let vt = number(t, parts.next().unwrap_or(""), "texture coordinate")?;
-        let vn = number(t, parts.next().unwrap_or(""), "normal")?;
+        let vt = number(parts.next().unwrap_or(""));
+        let vn = number(parts.next().unwrap_or(""));
         refs.push((vt, vn));
         let i: i64 = vi
             .parse()

@@ -159,6 +159,7 @@ impl<'a> Columns<'a> {
         domain: Domain,
         mode: Mode,
         out: &mut Vec<RawAttribute>,
+        dropped: &mut BTreeSet<String>,
     ) -> Result<()> {
         for (r, &(first, len, ty)) in self.runs.iter().enumerate() {
             let names: Vec<&str> = el.props[first..first + len]
@@ -170,8 +171,11 @@ impl<'a> Columns<'a> {
             let values = match mode {
                 Mode::Ascii => {
                     let mut t = TextCoords::default();
-                    for row in &self.tokens[r] {
-                        t.push(*row).map_err(err)?;
+                    // Values that are no numbers are no channel (the file's bytes keep
+                    // them).
+                    if let Some(e) = self.tokens[r].iter().find_map(|row| t.push(*row).err()) {
+                        dropped.insert(format!("{} property '{}' ({e})", el.name, names.join(" ")));
+                        continue;
                     }
                     t.finish().0
                 }
@@ -545,7 +549,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             } else {
                 Domain::Face
             };
-            columns.finish(el, domain, mode, &mut attributes)?;
+            columns.finish(el, domain, mode, &mut attributes, &mut dropped)?;
         }
     }
     // A file without a vertex element is an empty mesh (its header says so); a face
