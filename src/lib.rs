@@ -186,18 +186,7 @@ pub fn compare_up_to_order(
     }
     // The smallest rotation: a face with a repeated corner has several starting at its
     // smallest vertex.
-    let canon = |face: &[u32]| -> Vec<u32> {
-        (0..face.len())
-            .map(|k| {
-                face[k..]
-                    .iter()
-                    .chain(&face[..k])
-                    .copied()
-                    .collect::<Vec<u32>>()
-            })
-            .min()
-            .unwrap_or_default()
-    };
+    let canon = |face: &[u32]| smallest_rotation(face);
     let mut a: Vec<Vec<u32>> = original.iter_faces().map(canon).collect();
     let mut b: Vec<Vec<u32>> = decoded
         .iter_faces()
@@ -212,6 +201,20 @@ pub fn compare_up_to_order(
         ));
     }
     Ok(())
+}
+
+/// The smallest of a face's rotations (of its corners, or of what stands at them).
+fn smallest_rotation<T: Ord + Clone>(face: &[T]) -> Vec<T> {
+    (0..face.len())
+        .map(|k| {
+            face[k..]
+                .iter()
+                .chain(&face[..k])
+                .cloned()
+                .collect::<Vec<T>>()
+        })
+        .min()
+        .unwrap_or_default()
 }
 
 /// [`compare_up_to_order`]'s faces and channels, for meshes with channels: each face as
@@ -286,17 +289,7 @@ fn compare_channels(
                         c
                     })
                     .collect();
-                let d = corners.len();
-                let mut best = (0..d)
-                    .map(|r| {
-                        corners[r..]
-                            .iter()
-                            .chain(&corners[..r])
-                            .cloned()
-                            .collect::<Vec<_>>()
-                    })
-                    .min()
-                    .unwrap_or_default();
+                let mut best = smallest_rotation(&corners);
                 let mut own = Vec::new();
                 for a in m
                     .attributes

@@ -174,6 +174,15 @@ impl Attribute {
         s
     }
 
+    /// Appends entry `e`'s values as text ([`Attribute::value_text`]), each after a
+    /// space: what the text writers put on a line.
+    pub(crate) fn push_text(&self, e: usize, out: &mut String) {
+        for k in 0..self.width as usize {
+            out.push(' ');
+            crate::io::text_at(&self.values, &self.floats, e, k, &self.quantization, out);
+        }
+    }
+
     /// Checks the channel against `mesh`: its width, its entries per domain, its
     /// indices in range, its values within [`MAX_COORD`].
     pub(crate) fn validate(&self, mesh: &Mesh) -> Result<()> {

@@ -378,27 +378,19 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
             }
             crate::mesh::Domain::Face => faces.iter().for_each(|&(g, _)| pick(g, &mut m)),
             crate::mesh::Domain::Corner => {
-                // In canonical order the table's order is the encoder's to choose:
-                // entries numbered as the decoded corners first use them (then those no
-                // corner uses).
-                let number = match identity {
-                    true => (0..a.values.len() as u32).collect(),
-                    false => first_use(a, mesh, &faces),
-                };
-                let mut order = vec![0; a.values.len()];
-                number
-                    .iter()
-                    .enumerate()
-                    .for_each(|(e, &n)| order[n as usize] = e);
-                order.iter().for_each(|&e| pick(e, &mut m));
+                m.positions = a.values.clone();
+                m.floats = a.floats.clone();
                 m.faces.reserve(a.indices.len());
-                for &(g, r) in &faces {
-                    let s = mesh.face_starts[g] as usize;
-                    let d = mesh.face_starts[g + 1] as usize - s;
-                    m.faces
-                        .extend((0..d).map(|j| number[a.indices[s + (j + r) % d] as usize]));
+                for &f in &faces {
+                    m.faces.extend(input_corners(mesh, f).map(|c| a.indices[c]));
                 }
                 m.face_starts = out.face_starts.clone();
+                // In canonical order the table's order is the encoder's to choose:
+                // entries numbered as the decoded corners first use them (then those no
+                // corner uses; base::canonical_order).
+                if !identity {
+                    m = permuted(&m, &base::canonical_order(&m));
+                }
             }
         }
         let mut head = chan::Head {
@@ -433,11 +425,6 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
             c.keep_order = false;
             let pre = encode_inner(&m, &a.quantization, &c, None)?;
             if pre.order.len() == m.positions.len() {
-                let mut number = vec![0u32; m.positions.len()];
-                pre.order
-                    .iter()
-                    .enumerate()
-                    .for_each(|(i, &v)| number[v as usize] = i as u32);
                 // Padding stays last.
                 let keep = m.positions.len() - head.pad as usize;
                 if pre.order[keep..]
@@ -445,15 +432,7 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
                     .enumerate()
                     .all(|(i, &v)| v as usize == keep + i)
                 {
-                    let mut n = Mesh::new();
-                    for &v in &pre.order {
-                        n.positions.push(m.positions[v as usize]);
-                        if let Some(f) = m.floats.get(v as usize) {
-                            n.floats.push(*f);
-                        }
-                    }
-                    n.faces = m.faces.iter().map(|&v| number[v as usize]).collect();
-                    n.face_starts = m.face_starts.clone();
+                    let n = permuted(&m, &pre.order);
                     let renumbered = encode_inner(&n, &a.quantization, &o, None)?;
                     if renumbered.bytes.len() < nested.bytes.len() {
                         nested = renumbered;
@@ -488,28 +467,21 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
     Ok(enc)
 }
 
-/// Per entry of corner channel `a` of `mesh`, its number when entries are numbered as
-/// the decoded faces' corners (`faces`: each decoded face's input face and rotation)
-/// first use them, then those no corner uses.
-fn first_use(a: &crate::mesh::Attribute, mesh: &Mesh, faces: &[(usize, usize)]) -> Vec<u32> {
-    let mut number = vec![u32::MAX; a.values.len()];
-    let mut next = 0;
-    for &(g, r) in faces {
-        let s = mesh.face_starts[g] as usize;
-        let d = mesh.face_starts[g + 1] as usize - s;
-        for j in 0..d {
-            let e = a.indices[s + (j + r) % d] as usize;
-            if number[e] == u32::MAX {
-                number[e] = next;
-                next += 1;
-            }
-        }
+/// The corners of input face `g` (numbers into `mesh.faces`) in the order of the decoded
+/// face it is, rotated by `r` ([`match_faces`]).
+fn input_corners(mesh: &Mesh, (g, r): (usize, usize)) -> impl Iterator<Item = usize> {
+    let s = mesh.face_starts[g] as usize;
+    let d = mesh.face_starts[g + 1] as usize - s;
+    (0..d).map(move |j| s + (j + r) % d)
+}
+
+/// `m`'s vertices in the order `order[new] = old` ([`base::permute`]), float bits too.
+fn permuted(m: &Mesh, order: &[u32]) -> Mesh {
+    let mut n = base::permute(m, order);
+    if !m.floats.is_empty() {
+        n.floats = order.iter().map(|&o| m.floats[o as usize]).collect();
     }
-    for n in number.iter_mut().filter(|n| **n == u32::MAX) {
-        *n = next;
-        next += 1;
-    }
-    number
+    n
 }
 
 /// Coding 1 of a CHAN section (SPEC.md 11.4) for corner channel `a` as `m` holds it

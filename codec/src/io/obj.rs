@@ -112,16 +112,16 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                 read_face(tok, lineno, coords.len(), &mut face, &mut refs)?;
                 if face.len() >= 3 {
                     topo.push_face(&face);
-                    uv.corners(&refs, |r| r.0, lineno)?;
-                    nrm.corners(&refs, |r| r.1, lineno)?;
+                    uv.corners(&refs, |r| r.0, lineno);
+                    nrm.corners(&refs, |r| r.1, lineno);
                     names.iter_mut().for_each(Names::face);
                 } else {
                     // A face of one or two corners is a point or a line, not a polygon.
                     dropped.insert("faces of fewer than 3 corners".to_string());
                 }
             }
-            "vt" => uv.push(tok, lineno)?,
-            "vn" => nrm.push(tok, lineno)?,
+            "vt" => uv.push(tok, lineno),
+            "vn" => nrm.push(tok, lineno),
             "vp" => {
                 dropped.insert("parameter-space vertices".to_string());
             }
@@ -172,7 +172,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         }
     }
     for (t, name) in [(uv, "uv"), (nrm, "normal")] {
-        if let Some(a) = t.finish(name, topo.corner_count(), &mut dropped)? {
+        if let Some(a) = t.finish(name, topo.corner_count(), &mut dropped) {
             attributes.push(a);
         }
     }
@@ -310,7 +310,7 @@ impl Table {
     }
 
     /// A `vt` or `vn` line's values.
-    fn push<'a>(&mut self, tok: impl Iterator<Item = &'a str>, lineno: usize) -> Result<()> {
+    fn push<'a>(&mut self, tok: impl Iterator<Item = &'a str>, lineno: usize) {
         let mut t = ["0"; 3];
         let mut n = 0;
         for v in tok {
@@ -332,7 +332,6 @@ impl Table {
                 self.bad = Some(format!("line {lineno}: {e}"));
             }
         }
-        Ok(())
     }
 
     /// A face's corners' numbers into this table (`pick` of each corner's pair), 0-based
@@ -342,7 +341,7 @@ impl Table {
         refs: &[(Option<i64>, Option<i64>)],
         pick: impl Fn(&(Option<i64>, Option<i64>)) -> Option<i64>,
         lineno: usize,
-    ) -> Result<()> {
+    ) {
         for r in refs {
             let Some(i) = pick(r) else {
                 self.indices = None;
@@ -370,7 +369,6 @@ impl Table {
                 v.push(idx as u32);
             }
         }
-        Ok(())
     }
 
     /// The channel named `name`, if the table is one; why it is not noted in
@@ -380,21 +378,21 @@ impl Table {
         name: &str,
         corners: usize,
         dropped: &mut BTreeSet<String>,
-    ) -> Result<Option<RawAttribute>> {
+    ) -> Option<RawAttribute> {
         if self.largest.0 > self.lines as u64 {
             let why = format!(
                 "line {}: {} reference {} is past the file's {} '{}' lines",
                 self.largest.1, self.keyword, self.largest.0, self.lines, self.keyword
             );
             dropped.insert(format!("{} ({})", self.what, self.bad.unwrap_or(why)));
-            return Ok(None);
+            return None;
         }
         if let Some(why) = self.bad {
             dropped.insert(format!("{} ({why})", self.what));
-            return Ok(None);
+            return None;
         }
         if self.lines == 0 && self.numbered == 0 {
-            return Ok(None);
+            return None;
         }
         let why = match (self.width, &self.indices) {
             (None, _) => "of differing lengths",
@@ -404,10 +402,10 @@ impl Table {
         };
         if !why.is_empty() {
             dropped.insert(format!("{} {why}", self.what));
-            return Ok(None);
+            return None;
         }
         let (values, _) = self.rows.finish();
-        Ok(Some(RawAttribute {
+        Some(RawAttribute {
             name: name.to_string(),
             domain: Domain::Corner,
             value_type: ValueType::Text,
@@ -415,7 +413,7 @@ impl Table {
             values,
             indices: self.indices.unwrap_or_default(),
             labels: Vec::new(),
-        }))
+        })
     }
 }
 
@@ -515,10 +513,7 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
         for e in 0..a.entry_count() {
             line.clear();
             line.push_str(keyword);
-            for k in 0..a.width as usize {
-                line.push(' ');
-                super::text_at(&a.values, &a.floats, e, k, &a.quantization, line);
-            }
+            a.push_text(e, line);
             line.push('\n');
             out.write_all(line.as_bytes())?;
         }
@@ -528,10 +523,7 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
         coords_line("v", mesh, v, q, &mut line);
         if let Some(c) = colour {
             line.pop();
-            for k in 0..3 {
-                line.push(' ');
-                super::text_at(&c.values, &c.floats, v, k, &c.quantization, &mut line);
-            }
+            c.push_text(v, &mut line);
             line.push('\n');
         }
         out.write_all(line.as_bytes())?;

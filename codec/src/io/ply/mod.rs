@@ -93,6 +93,17 @@ fn runs(props: &[Prop], skip_axes: bool) -> Vec<(usize, usize, Scalar)> {
     runs
 }
 
+/// The name of the run of `len` properties from `first`: theirs, space-separated.
+fn run_name(props: &[Prop], first: usize, len: usize) -> String {
+    props[first..first + len]
+        .iter()
+        .map(|p| match p {
+            Prop::Scalar(n, _) | Prop::List(n, _, _) => n.as_str(),
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 /// The attribute channels of a vertex or face element as they are read: per run of
 /// properties ([`runs`]), its values as text (ASCII) or numbers.
 struct Columns<'a> {
@@ -162,19 +173,14 @@ impl<'a> Columns<'a> {
         dropped: &mut BTreeSet<String>,
     ) -> Result<()> {
         for (r, &(first, len, ty)) in self.runs.iter().enumerate() {
-            let names: Vec<&str> = el.props[first..first + len]
-                .iter()
-                .map(|p| match p {
-                    Prop::Scalar(n, _) | Prop::List(n, _, _) => n.as_str(),
-                })
-                .collect();
+            let name = run_name(&el.props, first, len);
             let values = match mode {
                 Mode::Ascii => {
                     let mut t = TextCoords::default();
                     // Values that are no numbers are no channel (the file's bytes keep
                     // them).
                     if let Some(e) = self.tokens[r].iter().find_map(|row| t.push(*row).err()) {
-                        dropped.insert(format!("{} property '{}' ({e})", el.name, names.join(" ")));
+                        dropped.insert(format!("{} property '{name}' ({e})", el.name));
                         continue;
                     }
                     t.finish().0
@@ -182,7 +188,7 @@ impl<'a> Columns<'a> {
                 _ => to_coords(&self.nums[r])?,
             };
             out.push(RawAttribute {
-                name: names.join(" "),
+                name,
                 domain,
                 value_type: ty.value_type(),
                 width: len as u8,
@@ -680,13 +686,11 @@ fn property_type(a: &Attribute) -> &'static str {
 /// Appends entry `e`'s values of channel `a`: binary little-endian in its type, or as
 /// text (each after a space).
 fn put_values(a: &Attribute, e: usize, binary: bool, buf: &mut Vec<u8>, text: &mut String) {
+    if !binary {
+        return a.push_text(e, text);
+    }
     let (p, f, q) = (&a.values, &a.floats, &a.quantization);
     for k in 0..a.width as usize {
-        if !binary {
-            text.push(' ');
-            super::text_at(p, f, e, k, q, text);
-            continue;
-        }
         let n = p[e][k];
         match (a.value_type, property_type(a)) {
             (ValueType::I8, _) => buf.push(n as i8 as u8),

@@ -2,7 +2,8 @@
 //! the coded values, and the vertex element's attributes (11.3).
 
 use super::{
-    line_len, parse_header, read_list, runs, to_coords, Body, Element, Mode, Num, Prop, Scalar,
+    line_len, parse_header, read_list, run_name, runs, to_coords, Body, Element, Mode, Num, Prop,
+    Scalar,
 };
 use crate::io::template::{Attribute, Builder, Form};
 use crate::quant::integerize;
@@ -45,12 +46,7 @@ fn attributes(
                 match mode {
                     Mode::Ascii => tokens[r] = vec![["0"; 3]; n],
                     _ => {
-                        let zero = match ty {
-                            Scalar::F32 => Num::F32(0.0),
-                            Scalar::F64 => Num::F64(0.0),
-                            _ => Num::Int(0),
-                        };
-                        nums[r] = vec![[zero; 3]; n];
+                        nums[r] = vec![[ty.zero(); 3]; n];
                     }
                 }
             }
@@ -77,13 +73,7 @@ fn attributes(
     let mesh = b.mesh();
     let mut numbers = Vec::with_capacity(runs.len());
     for (r, &(first, len, ty)) in runs.iter().enumerate() {
-        let name = props[first..first + len]
-            .iter()
-            .map(|p| match p {
-                Prop::Scalar(n, _) | Prop::List(n, _, _) => n.as_str(),
-            })
-            .collect::<Vec<_>>()
-            .join(" ");
+        let name = run_name(props, first, len);
         let raw = match (mode, ty) {
             (Mode::Ascii, _) => {
                 let g = crate::io::text_values(&tokens[r])
