@@ -351,6 +351,36 @@ fn auto_finds_a_creased_limit_surface() {
 }
 
 #[test]
+fn auto_finds_the_limit_surface_of_a_shallow_hierarchy() {
+    // One or two levels (Blender's "levels=2", a stand of two 16-gons and a side),
+    // smooth, on the limit: no five finest vertices in a row within a level-1 face,
+    // so the roughness screen cannot tell; one quick fit does, and `auto` codes the
+    // fit. The same control mesh with detail added after refining keeps its wavelet.
+    let (control, _) = prism_and_rims();
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    for levels in [1, 2] {
+        let surface = control.subdivision_surface(levels, &[], true);
+        let mesh = common::to_mesh(&surface, 1e6);
+        let enc = encode(&mesh, &q, TransformChoice::Auto);
+        assert!(
+            matches!(enc.header.transform, Transform::Fit { limit: true, .. }),
+            "{levels} levels: auto chose {}",
+            enc.header.transform.name()
+        );
+        assert_exact(&enc.bytes, &mesh, "shallow limit surface");
+        let mut rough = surface.clone();
+        rough.displace(0.05, 0.0, &mut Rng::new(7));
+        let mesh = common::to_mesh(&rough, 1e6);
+        let enc = encode(&mesh, &q, TransformChoice::Auto);
+        assert!(
+            !matches!(enc.header.transform, Transform::Fit { .. }),
+            "{levels} levels, displaced: auto chose the fit"
+        );
+        assert_exact(&enc.bytes, &mesh, "shallow displaced surface");
+    }
+}
+
+#[test]
 fn kept_boundary_corners_are_found() {
     // An open sheet with Blender's "Keep Corners": its four corners stay, which plain
     // boundary rules would round off; the fit finds the rule, with and without the

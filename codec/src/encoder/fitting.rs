@@ -48,14 +48,22 @@ pub(crate) fn code_fit(
         let mean = |f: &dyn Fn(&[i64]) -> Option<f64>| {
             pos.iter().map(|x| f(x).unwrap_or(f64::MAX)).sum::<f64>() / 3.0
         };
-        if mean(&|x| fit::defect(last, x)) > FIT_SCREEN
-            && mean(&|x| fit::roughness(&canon.levels, &finest, x)) > ROUGH_SCREEN
-        {
-            // A flat mesh with a boundary (one axis constant: a UV map's charts, cut at
-            // their seams) may still be a modelling tool's subdivision, by its UV rule:
-            // linear boundaries on the limit surface. That rule set alone is tried.
-            let flat = pos.iter().any(|x| x.iter().all(|&v| v == x[0]));
-            if !flat || crate::topology::sqrt2::closed(base) {
+        // Five finest vertices in a row inside one level-1 face, which roughness
+        // measures, take three levels; a shallower hierarchy is screened by one fit.
+        // A flat mesh with a boundary (one axis constant: a UV map's charts, cut at
+        // their seams) may still be a modelling tool's subdivision, by its UV rule:
+        // linear boundaries on the limit surface. That rule set alone is tried when
+        // the screens turn the fit away, and on a shallow chart.
+        let chart = pos.iter().any(|x| x.iter().all(|&v| v == x[0]))
+            && !crate::topology::sqrt2::closed(base);
+        let far = if canon.levels.len() < 3 {
+            chart || !near_limit(canon, &finest, pos)
+        } else {
+            mean(&|x| fit::defect(last, x)) > FIT_SCREEN
+                && mean(&|x| fit::roughness(&canon.levels, &finest, x)) > ROUGH_SCREEN
+        };
+        if far {
+            if !chart {
                 return None;
             }
             sets = Some(vec![Rules {
@@ -114,6 +122,42 @@ pub(crate) fn code_fit(
         }
     }
     best
+}
+
+/// Median distance (grid units, per axis) from the finest values to the limit surface
+/// of their least-squares control mesh at or below which `auto` tries the fit on a
+/// hierarchy of one or two levels: rounding leaves about 0.25, a modelling tool's
+/// creases or corners move few vertices, detail moves most by hundreds.
+const NEAR_LIMIT: f64 = 4.0;
+
+/// Iterations of that screening fit: its median settles within a few (the fit that is
+/// coded runs to [`FIT_TOLERANCE`]).
+const NEAR_ITERATIONS: usize = 10;
+
+/// Whether the finest values of `canon` are near the limit surface of a control mesh
+/// (one least-squares fit with the limit rules: cheap next to coding the fit).
+fn near_limit(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> bool {
+    let rules = Rules {
+        limit: true,
+        ..Rules::default()
+    };
+    let op = fit::Operator::new(&canon.levels, finest, &rules);
+    let fine: Vec<[f64; 3]> = (0..pos[0].len())
+        .map(|i| std::array::from_fn(|k| pos[k][i] as f64))
+        .collect();
+    let nb = canon.base.nv;
+    let control = op.fit(&fine, &fine[..nb], &[], NEAR_ITERATIONS, FIT_TOLERANCE);
+    let mut dist: Vec<f64> = op
+        .apply(&control)
+        .iter()
+        .zip(&fine)
+        .flat_map(|(p, y)| (0..3).map(move |k| (p[k] - y[k]).abs()))
+        .collect();
+    if dist.is_empty() {
+        return false;
+    }
+    let mid = dist.len() / 2;
+    *dist.select_nth_unstable_by(mid, f64::total_cmp).1 <= NEAR_LIMIT
 }
 
 /// Finest vertices whose distance from the first fit exceeds this many times the
