@@ -482,3 +482,94 @@ fn repeated_corners(first: &[u32]) {
         subwave::compare_up_to_order(&mesh, &dec.mesh, &order).unwrap();
     }
 }
+
+/// A 5 x 5 grid of quads as a PLY, with a `texcoord` list per face (MeshLab's texture
+/// coordinates: two values for each corner in turn, a seam between odd and even faces)
+/// and a `flags` list of one value per face (no corner channel): ASCII or binary.
+fn grid_with_texcoords(binary: bool) -> (Vec<u8>, Vec<[f32; 2]>) {
+    let n = 5u32;
+    let mut faces = Vec::new();
+    for y in 0..n {
+        for x in 0..n {
+            let v = |i: u32, j: u32| j * (n + 1) + i;
+            faces.push([v(x, y), v(x + 1, y), v(x + 1, y + 1), v(x, y + 1)]);
+        }
+    }
+    let uv = |f: usize, v: u32| -> [f32; 2] {
+        let (i, j) = ((v % (n + 1)) as f32, (v / (n + 1)) as f32);
+        [i / 7.0 + (f % 2) as f32 * 0.5, j / 3.0]
+    };
+    let mut out = format!(
+        "ply\nformat {} 1.0\nelement vertex {}\nproperty float x\nproperty float y\n\
+         property float z\nelement face {}\nproperty list uchar int vertex_indices\n\
+         property list uchar float texcoord\nproperty list uchar int flags\nend_header\n",
+        if binary {
+            "binary_little_endian"
+        } else {
+            "ascii"
+        },
+        (n + 1) * (n + 1),
+        faces.len()
+    )
+    .into_bytes();
+    let mut corners = Vec::new();
+    for v in 0..(n + 1) * (n + 1) {
+        let p = [
+            (v % (n + 1)) as f32,
+            (v / (n + 1)) as f32,
+            ((v * 7) % 5) as f32 * 0.25,
+        ];
+        match binary {
+            true => p.iter().for_each(|c| out.extend(c.to_le_bytes())),
+            false => out.extend(format!("{} {} {}\n", p[0], p[1], p[2]).bytes()),
+        }
+    }
+    for (f, face) in faces.iter().enumerate() {
+        let t: Vec<[f32; 2]> = face.iter().map(|&v| uv(f, v)).collect();
+        corners.extend(&t);
+        if binary {
+            out.push(4);
+            face.iter().for_each(|i| out.extend(i.to_le_bytes()));
+            out.push(8);
+            t.iter().flatten().for_each(|c| out.extend(c.to_le_bytes()));
+            out.push(1);
+            out.extend((f as i32).to_le_bytes());
+        } else {
+            let idx: Vec<String> = face.iter().map(u32::to_string).collect();
+            let tex: Vec<String> = t.iter().flatten().map(f32::to_string).collect();
+            out.extend(format!("4 {} 8 {} 1 {f}\n", idx.join(" "), tex.join(" ")).bytes());
+        }
+    }
+    (out, corners)
+}
+
+#[test]
+fn ply_texcoord_lists_are_corner_channels_in_canonical_order() {
+    for binary in [false, true] {
+        let (bytes, corners) = grid_with_texcoords(binary);
+        let name = format!("grid, binary {binary}");
+        let input = subwave::load(&bytes, None).unwrap();
+        // The list of one value per face is no corner channel: noted, the file read.
+        assert!(
+            input.dropped.iter().any(|d| d.contains("'flags'")),
+            "{name}: {:?}",
+            input.dropped
+        );
+        let tex = input
+            .mesh
+            .attribute("texcoord")
+            .expect("a texcoord channel");
+        assert_eq!((tex.domain, tex.width), (Domain::Corner, 2), "{name}");
+        for (c, t) in corners.iter().enumerate() {
+            for (k, &want) in t.iter().enumerate() {
+                let v = tex.value_f64(tex.indices[c] as usize, k);
+                assert_eq!(v as f32, want, "{name}: corner {c}");
+            }
+        }
+        // Equal entries are one: 36 vertices, each with one value on either side of
+        // the seams, fewer than the 100 corners.
+        assert!(tex.entry_count() < corners.len(), "{name}");
+        let (channels, _) = canonical_round_trip(&name, &bytes);
+        assert_eq!(channels, 1, "{name}");
+    }
+}

@@ -263,7 +263,13 @@ fn records_as_real_writers_lay_them_out() {
     let ply = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\nproperty uchar red\nend_header\n0 0 0\n1 0 0\n0 1 0 7 7\n3 0 1 2 6 0.5 0.25 0 0 1 1 9 1 1 1\n";
     let m = subwave::load(ply, None).unwrap();
     assert_eq!(m.mesh.face(0), &[0, 1, 2]);
-    assert!(m.dropped.iter().any(|d| d.contains("texcoord")));
+    // Two values for each corner: a corner channel (in canonical order too).
+    let tex = m.mesh.attribute("texcoord").expect("texcoord read");
+    let values: Vec<f64> = (0..3)
+        .flat_map(|c| (0..2).map(move |k| (c, k)))
+        .map(|(c, k)| tex.value_f64(tex.indices[c] as usize, k))
+        .collect();
+    assert_eq!(values, [0.5, 0.25, 0.0, 0.0, 1.0, 1.0]);
     assert!(m.dropped.iter().any(|d| d.contains("values past the end")));
     let opts = EncodeOptions {
         keep_order: true,

@@ -285,11 +285,12 @@ pub(crate) fn text_values(rows: &[[&str; 3]]) -> Option<crate::quant::Integers> 
 
 /// Whether [`write_mesh`] writes attribute channel `a` in `format`: an OBJ its
 /// `color`, `uv` and `normal` channels (`v` line colours, `vt`, `vn`), a PLY every
-/// per-vertex and per-face channel (as properties), OFF and STL none.
+/// channel (per vertex and per face as properties, per corner as a face list of its
+/// values for each corner in turn), OFF and STL none.
 pub fn writes_attribute(format: Format, a: &Attribute) -> bool {
     match format {
         Format::Obj => obj::writes(a),
-        f if f.is_ply() => a.domain != Domain::Corner,
+        f if f.is_ply() => true,
         _ => false,
     }
 }

@@ -1,7 +1,7 @@
 //! PLY: ASCII, binary little-endian and big-endian; `vertex` (x, y, z) and `face`
 //! (`vertex_indices`) elements. Other properties and elements are reported as dropped.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeSet, HashMap};
 use std::io::Write;
 
 use super::{value_f32, value_f64, write_counted_text, Format, RawAttribute, RawMesh};
@@ -201,6 +201,160 @@ impl<'a> Columns<'a> {
     }
 }
 
+/// A face element's lists besides its vertex indices as they are read (texture
+/// coordinates per corner, as MeshLab writes `texcoord`): per list property, its
+/// lengths and values, as text (ASCII) or numbers.
+#[derive(Default)]
+struct Lists<'a> {
+    read: Vec<List<'a>>,
+}
+
+/// One list property as read.
+struct List<'a> {
+    /// The property.
+    prop: usize,
+    /// Its items' type.
+    ty: Scalar,
+    /// Per face, its length.
+    lens: Vec<u64>,
+    /// The items (binary).
+    nums: Vec<Num>,
+    /// The items' text (ASCII).
+    tokens: Vec<&'a str>,
+}
+
+impl<'a> Lists<'a> {
+    /// Reads property `i`'s list of the current face.
+    fn read(&mut self, i: usize, ty: Scalar, body: &mut Body<'a>, cty: Scalar) -> Result<()> {
+        let n = body.int(cty, "list count")?;
+        let item = if body.mode == Mode::Ascii {
+            2
+        } else {
+            ty.size() as u64
+        };
+        if n < 0 || (n as u64).saturating_mul(item) > body.remaining() as u64 {
+            return Err(err(format!("list of {n} items does not fit in the file")));
+        }
+        let at = match self.read.iter().position(|r| r.prop == i) {
+            Some(at) => at,
+            None => {
+                self.read.push(List {
+                    prop: i,
+                    ty,
+                    lens: Vec::new(),
+                    nums: Vec::new(),
+                    tokens: Vec::new(),
+                });
+                self.read.len() - 1
+            }
+        };
+        let r = &mut self.read[at];
+        r.lens.push(n as u64);
+        for _ in 0..n {
+            match body.mode {
+                Mode::Ascii => r.tokens.push(body.token()?),
+                _ => r.nums.push(body.num(ty)?),
+            }
+        }
+        Ok(())
+    }
+
+    /// The lists that hold the same number (1 to 3) of values for each corner of every
+    /// face, as corner channels named by their properties (equal entries once); the
+    /// others noted as dropped.
+    fn finish(
+        self,
+        el: &Element,
+        topo: &Mesh,
+        out: &mut Vec<RawAttribute>,
+        dropped: &mut BTreeSet<String>,
+    ) -> Result<()> {
+        for List {
+            prop: i,
+            ty: ity,
+            lens,
+            nums,
+            tokens,
+        } in self.read
+        {
+            let Prop::List(name, _, _) = &el.props[i] else {
+                continue;
+            };
+            let degrees = topo.face_starts.windows(2).map(|w| (w[1] - w[0]) as u64);
+            let width = match (lens.first(), degrees.clone().next()) {
+                (Some(&n), Some(d)) if n % d == 0 && (1..=3).contains(&(n / d)) => n / d,
+                _ => 0,
+            };
+            if width == 0
+                || lens.len() != topo.face_count()
+                || degrees.zip(&lens).any(|(d, &n)| n != width * d)
+            {
+                dropped.insert(format!(
+                    "{} property '{name}' (not 1 to 3 values for each corner)",
+                    el.name
+                ));
+                continue;
+            }
+            let w = width as usize;
+            // Equal entries (the same text, the same bits) are one entry of the table.
+            let mut seen: HashMap<Vec<u64>, u32> = HashMap::new();
+            let mut indices = Vec::with_capacity(lens.len());
+            let (mut rows, mut texts): (Vec<[Num; 3]>, Vec<[&str; 3]>) = (Vec::new(), Vec::new());
+            let corners = nums.len().max(tokens.len()) / w;
+            for c in 0..corners {
+                let key: Vec<u64> = match tokens.is_empty() {
+                    true => nums[c * w..c * w + w].iter().map(Num::bits).collect(),
+                    false => tokens[c * w..c * w + w]
+                        .iter()
+                        .flat_map(|t| t.bytes().map(u64::from).chain([u64::MAX]))
+                        .collect(),
+                };
+                let next = seen.len() as u32;
+                let e = *seen.entry(key).or_insert(next);
+                if e == next {
+                    match tokens.is_empty() {
+                        true => rows.push(std::array::from_fn(|k| {
+                            nums.get(c * w + k)
+                                .filter(|_| k < w)
+                                .copied()
+                                .unwrap_or(ity.zero())
+                        })),
+                        false => texts.push(std::array::from_fn(|k| {
+                            if k < w {
+                                tokens[c * w + k]
+                            } else {
+                                "0"
+                            }
+                        })),
+                    }
+                }
+                indices.push(e);
+            }
+            let values = match tokens.is_empty() {
+                true => to_coords(&rows)?,
+                false => {
+                    let mut t = TextCoords::default();
+                    if let Some(e) = texts.iter().find_map(|row| t.push(*row).err()) {
+                        dropped.insert(format!("{} property '{name}' ({e})", el.name));
+                        continue;
+                    }
+                    t.finish().0
+                }
+            };
+            out.push(RawAttribute {
+                name: name.clone(),
+                domain: Domain::Corner,
+                value_type: ity.value_type(),
+                width: width as u8,
+                values,
+                indices,
+                labels: Vec::new(),
+            });
+        }
+        Ok(())
+    }
+}
+
 #[derive(Debug, Clone)]
 enum Prop {
     Scalar(String, Scalar),
@@ -227,6 +381,18 @@ enum Num {
     F32(f32),
     F64(f64),
     Dec(Decimal),
+}
+
+impl Num {
+    /// What tells two values apart: their kind and bits.
+    fn bits(&self) -> u64 {
+        match *self {
+            Num::Int(i) => i as u64,
+            Num::F32(f) => f.to_bits() as u64,
+            Num::F64(f) => f.to_bits(),
+            Num::Dec(d) => d.mantissa as u64 ^ (d.decimals as u64) << 56,
+        }
+    }
 }
 
 fn err(what: impl std::fmt::Display) -> Error {
@@ -466,8 +632,9 @@ fn check_element(
             Prop::Scalar(n, _) | Prop::List(n, _, _) => n,
         };
         // Scalar properties of both are attribute channels.
-        let used = ((is_vertex || is_face) && matches!(p, Prop::Scalar(..)))
-            || (is_face && (name == "vertex_indices" || name == "vertex_index"));
+        // So are a face's other lists: per corner channels when they hold as many
+        // values for each corner (decided once read, [`Lists::finish`]).
+        let used = is_face || (is_vertex && matches!(p, Prop::Scalar(..)));
         if (is_vertex || is_face) && !used {
             dropped.insert(format!("{} property '{name}'", el.name));
         }
@@ -494,6 +661,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         let is_vertex = el.name == "vertex";
         let is_face = el.name == "face";
         let mut columns = Columns::new(el, is_vertex);
+        let mut lists = Lists::default();
         let channels = (is_vertex || is_face) && !columns.runs.is_empty();
         let axis_of = |name: &str| ["x", "y", "z"].iter().position(|a| *a == name);
         if is_vertex {
@@ -523,6 +691,10 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                         let want = is_face
                             && !took_list
                             && (name == "vertex_indices" || name == "vertex_index");
+                        if is_face && !want {
+                            lists.read(i, *ity, &mut body, *cty)?;
+                            continue;
+                        }
                         read_list(&mut body, *cty, *ity, want.then_some(&mut face))?;
                         if want {
                             took_list = true;
@@ -556,6 +728,9 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                 Domain::Face
             };
             columns.finish(el, domain, mode, &mut attributes, &mut dropped)?;
+        }
+        if is_face {
+            lists.finish(el, &topo, &mut attributes, &mut dropped)?;
         }
     }
     // A file without a vertex element is an empty mesh (its header says so); a face
@@ -741,7 +916,16 @@ pub(crate) fn write<W: Write>(
     let of = |d: Domain| -> Vec<&Attribute> {
         mesh.attributes.iter().filter(|a| a.domain == d).collect()
     };
-    let (vchan, fchan) = (of(Domain::Vertex), of(Domain::Face));
+    let (vchan, fchan, cchan) = (of(Domain::Vertex), of(Domain::Face), of(Domain::Corner));
+    // A corner channel is a list per face: its values for each corner in turn.
+    let longest = mesh.iter_faces().map(<[u32]>::len).max().unwrap_or(0);
+    let ltys: Vec<&str> = cchan
+        .iter()
+        .map(|a| match longest * a.width as usize <= 255 {
+            true => "uchar",
+            false => "uint",
+        })
+        .collect();
     write!(
         out,
         "ply\nformat {} 1.0\ncomment written by subwave\nelement vertex {}\n",
@@ -775,8 +959,12 @@ pub(crate) fn write<W: Write>(
             writeln!(out, "property {} {n}", property_type(a))?;
         }
     }
+    for (a, lty) in cchan.iter().zip(&ltys) {
+        let name = a.name.replace(|c: char| c.is_ascii_whitespace(), "_");
+        writeln!(out, "property list {lty} {} {name}", property_type(a))?;
+    }
     writeln!(out, "end_header")?;
-    if !binary && vchan.is_empty() && fchan.is_empty() {
+    if !binary && vchan.is_empty() && fchan.is_empty() && cchan.is_empty() {
         return write_counted_text(out, mesh, q);
     }
     let mut buf = Vec::with_capacity(1 << 16);
@@ -819,6 +1007,21 @@ pub(crate) fn write<W: Write>(
         }
         for a in &fchan {
             put_values(a, f, binary, &mut buf, &mut line);
+        }
+        let corners = mesh.face_starts[f] as usize..mesh.face_starts[f + 1] as usize;
+        for (a, &lty) in cchan.iter().zip(&ltys) {
+            let n = corners.len() * a.width as usize;
+            if !binary {
+                use std::fmt::Write as _;
+                let _ = write!(line, " {n}");
+            } else if lty == "uchar" {
+                buf.push(n as u8);
+            } else {
+                buf.extend_from_slice(&(n as u32).to_le_bytes());
+            }
+            for c in corners.clone() {
+                put_values(a, a.indices[c] as usize, binary, &mut buf, &mut line);
+            }
         }
         end_record(binary, &line, &mut buf, out)?;
     }
