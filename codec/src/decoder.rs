@@ -218,6 +218,15 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
         h.base_corners,
         bound,
     )?;
+    // The base faces, for an order coded by the hierarchy's base elements (SPEC.md 7.3).
+    let by_elements = (h.has_order && level == h.levels && level > 0 && h.family == Family::Cc)
+        .then(|| {
+            (
+                base.vertex_count(),
+                base.face_starts.clone(),
+                base.faces.clone(),
+            )
+        });
     let mut mesh = match h.transform {
         _ if h.levels == 0 => base,
         Transform::Wavelet(w) => synthesise_levels(&c, &h, base, w, level, opts.threads)?,
@@ -261,6 +270,14 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
                 nv: mesh.vertex_count(),
                 starts: &mesh.face_starts,
                 idx: &mesh.faces,
+                hierarchy: by_elements
+                    .as_ref()
+                    .map(|(nv, starts, idx)| ordr::Hierarchy {
+                        nv: *nv,
+                        starts,
+                        idx,
+                        levels: h.levels as u32,
+                    }),
             };
             let o = ordr::decode(s.payload, faces)?;
             order_payload = Some(s.payload);

@@ -48,20 +48,21 @@ pub(crate) fn code_fit(
         let mean = |f: &dyn Fn(&[i64]) -> Option<f64>| {
             pos.iter().map(|x| f(x).unwrap_or(f64::MAX)).sum::<f64>() / 3.0
         };
-        // Five finest vertices in a row inside one level-1 face, which roughness
-        // measures, take three levels; a shallower hierarchy is screened by one fit.
+        // Refinement (small defect) is fitted; else a surface: five finest vertices
+        // in a row inside one level-1 face, which roughness measures, take three
+        // levels, and a shallower hierarchy is screened by one fit on the limit.
         // A flat mesh with a boundary (one axis constant: a UV map's charts, cut at
         // their seams) may still be a modelling tool's subdivision, by its UV rule:
         // linear boundaries on the limit surface. That rule set alone is tried when
         // the screens turn the fit away, and on a shallow chart.
         let chart = pos.iter().any(|x| x.iter().all(|&v| v == x[0]))
             && !crate::topology::sqrt2::closed(base);
-        let far = if canon.levels.len() < 3 {
-            chart || !near_limit(canon, &finest, pos)
-        } else {
-            mean(&|x| fit::defect(last, x)) > FIT_SCREEN
-                && mean(&|x| fit::roughness(&canon.levels, &finest, x)) > ROUGH_SCREEN
-        };
+        let far = mean(&|x| fit::defect(last, x)) > FIT_SCREEN
+            && if canon.levels.len() < 3 {
+                chart || !near_limit(canon, &finest, pos)
+            } else {
+                mean(&|x| fit::roughness(&canon.levels, &finest, x)) > ROUGH_SCREEN
+            };
         if far {
             if !chart {
                 return None;

@@ -265,10 +265,19 @@ pub(crate) fn order_section(
 pub(crate) fn hierarchy_order(mesh: &Mesh, canon: &Canonical) -> Result<Vec<u8>> {
     let fine = canon.fine();
     let (faces, rotations) = face_order(mesh, &fine, &canon.order)?;
+    let base = canon.levels.first().map(|l| &l.coarse);
     let canonical = ordr::Faces {
         nv: fine.nv,
         starts: &fine.starts,
         idx: &fine.idx,
+        hierarchy: base
+            .filter(|_| canon.family == topology::Family::Cc)
+            .map(|b| ordr::Hierarchy {
+                nv: b.nv,
+                starts: &b.starts,
+                idx: &b.idx,
+                levels: canon.levels.len() as u32,
+            }),
     };
     Ok(order_section(&canon.order, faces, rotations, canonical))
 }
@@ -903,6 +912,7 @@ fn best_flat(mesh: &Mesh, opts: &EncodeOptions, flat_h: &Header) -> (Payloads, V
                 nv: canonical.vertex_count(),
                 starts: &canonical.face_starts,
                 idx: &canonical.faces,
+                hierarchy: None,
             };
             order_section(&order, forder, rot, faces)
         });

@@ -5,16 +5,21 @@
 //! random order); or walks over the faces and then the vertices in the input's order,
 //! each next one coded as which of a few predicted neighbours it is (straight on, turning,
 //! the next row, the next vertex of the faces' corners), so that the orders exporters
-//! write (rows, grids, Blender's subdivision order, first use) cost little.
+//! write (rows, grids, first use) cost little; or, on a Catmull-Clark hierarchy's finest
+//! level, as blocks of its base elements, each in the order of the last block of its
+//! shape turned (Blender's subdivision order).
 
 
 mod around;
+mod elements;
 mod walks;
 #[cfg(test)]
 mod tests;
 
 use crate::entropy::{AdaptiveModel, Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
+use elements::{decode_elements, encode_elements};
+pub use elements::Hierarchy;
 use walks::{decode_walks, encode_walks};
 
 const SECTION: &str = "ORDR";
@@ -100,6 +105,9 @@ pub struct Faces<'a> {
     pub starts: &'a [u32],
     /// Corners.
     pub idx: &'a [u32],
+    /// The Catmull-Clark hierarchy these faces are the finest level of, if they are
+    /// (method 2).
+    pub hierarchy: Option<Hierarchy<'a>>,
 }
 
 impl<'a> Faces<'a> {
@@ -193,16 +201,22 @@ fn decode_lists(payload: &[u8], nv: usize, degrees: &[u32]) -> Result<InputOrder
 }
 
 /// Codes the ORDR section (SPEC.md 7) of the input order `o` of the canonical
-/// `faces`: a method byte, then the order as three lists (method 0) or as walks
-/// (method 1), whichever is smaller.
+/// `faces`: a method byte, then the order as three lists (method 0), as walks
+/// (method 1) or, on the finest level of a Catmull-Clark hierarchy, by its base
+/// elements (method 2), whichever is smallest.
 pub fn encode(o: &InputOrder, faces: Faces<'_>) -> Vec<u8> {
     let lists = encode_lists(o);
     let walks = encode_walks(o, faces);
-    let (method, body) = if walks.len() < lists.len() {
+    let (mut method, mut body) = if walks.len() < lists.len() {
         (1, walks)
     } else {
         (0, lists)
     };
+    if let Some(h) = faces.hierarchy {
+        if let Some(b) = encode_elements(o, faces, h).filter(|b| b.len() < body.len()) {
+            (method, body) = (2, b);
+        }
+    }
     let mut out = Vec::with_capacity(body.len() + 1);
     out.push(method);
     out.extend_from_slice(&body);
@@ -217,6 +231,7 @@ pub fn decode(payload: &[u8], faces: Faces<'_>) -> Result<InputOrder> {
             decode_lists(body, faces.nv, &degrees)
         }
         Some((1, body)) => decode_walks(body, faces),
+        Some((2, body)) => decode_elements(body, faces, faces.hierarchy),
         Some((m, _)) => Err(Error::corrupt(SECTION, format!("unknown method {m}"))),
         None => Err(Error::corrupt(SECTION, "empty payload")),
     }

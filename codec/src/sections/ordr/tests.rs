@@ -29,7 +29,7 @@ proptest! {
     #[test]
     fn orders_round_trip(n in 2u32..14, seed in proptest::num::u64::ANY, swaps in 0usize..300) {
         let (nv, starts, idx) = grid(n);
-        let faces = Faces { nv, starts: &starts, idx: &idx };
+        let faces = Faces { nv, starts: &starts, idx: &idx, hierarchy: None };
         let mut vertices: Vec<u32> = (0..nv as u32).collect();
         shuffle(&mut vertices, seed, swaps);
         let nf = starts.len() - 1;
@@ -56,7 +56,7 @@ proptest! {
 fn predictable_orders_are_nearly_free() {
     let n = 100u32;
     let (nv, starts, idx) = grid(n);
-    let faces = Faces { nv, starts: &starts, idx: &idx };
+    let faces = Faces { nv, starts: &starts, idx: &idx, hierarchy: None };
     let nf = starts.len() - 1;
     let identity = InputOrder {
         vertices: (0..nv as u32).collect(),
@@ -100,7 +100,7 @@ fn predictable_orders_are_nearly_free() {
 #[test]
 fn damaged_payloads_are_errors_not_panics() {
     let (nv, starts, idx) = grid(9);
-    let faces = Faces { nv, starts: &starts, idx: &idx };
+    let faces = Faces { nv, starts: &starts, idx: &idx, hierarchy: None };
     let nf = starts.len() - 1;
     let mut vertices: Vec<u32> = (0..nv as u32).collect();
     shuffle(&mut vertices, 5, 40);
@@ -122,5 +122,55 @@ fn damaged_payloads_are_errors_not_panics() {
                 assert!(!std::mem::replace(&mut seen[v as usize], true));
             }
         }
+    }
+}
+
+#[test]
+fn element_places_follow_the_refinement() {
+    use crate::topology::{Level, Topo};
+    // One quad, three levels: every finest point's place in its element is where
+    // midpoint refinement of the quad's corners puts it, row-major.
+    let l = 3u32;
+    let s = 1i64 << l;
+    let mut base = Topo::new(4);
+    base.idx = vec![0, 1, 2, 3];
+    base.starts = vec![0, 4];
+    let mut pos: Vec<[i64; 2]> = vec![[0, 0], [s, 0], [s, s], [0, s]];
+    let mut level = Level::new(&base).unwrap();
+    for k in 0..l {
+        let mut next = pos.clone();
+        for &[a, b] in &level.edges {
+            let (p, q) = (pos[a as usize], pos[b as usize]);
+            next.push([(p[0] + q[0]) / 2, (p[1] + q[1]) / 2]);
+        }
+        for f in 0..level.nf() {
+            let c = level.coarse.face(f);
+            let sum = c.iter().fold([0, 0], |a, &v| [a[0] + pos[v as usize][0], a[1] + pos[v as usize][1]]);
+            next.push([sum[0] / c.len() as i64, sum[1] / c.len() as i64]);
+        }
+        pos = next;
+        if k + 1 < l {
+            level = level.next();
+        }
+    }
+    let fine = level.fine();
+    let faces = Faces {
+        nv: fine.nv,
+        starts: &fine.starts,
+        idx: &fine.idx,
+        hierarchy: None,
+    };
+    let h = Hierarchy {
+        nv: 4,
+        starts: &base.starts,
+        idx: &base.idx,
+        levels: l,
+    };
+    let el = super::elements::tests_places(h, faces).expect("elements");
+    for (w, place) in el {
+        let [x, y] = pos[w as usize];
+        // A quad's places: its grid, row-major from corner 0.
+        let want = (y - 1) * (s - 1) + (x - 1);
+        assert_eq!(place as i64, want, "vertex {w} at ({x}, {y})");
     }
 }

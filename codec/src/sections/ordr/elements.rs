@@ -1,0 +1,745 @@
+//! Method 2 of ORDR (SPEC.md 7.3): the input's order as blocks of a Catmull-Clark
+//! hierarchy's base elements. Every finest vertex belongs to one base element (a base
+//! vertex, the inside of a base edge, the inside of a base face) and has a place in it;
+//! every finest face lies in one base face. Exporters that write a subdivision surface
+//! element by element (Blender: base vertices, then every base edge's points along it,
+//! then every base face's inside, all levels at once) give one block per element, and
+//! within a block the same order of places as the last block of its kind, turned: so
+//! the order costs the element sequence and one turn per element.
+
+use std::collections::HashMap;
+
+use super::{get_perm, put_perm, Faces, InputOrder, Unused, SECTION};
+use crate::entropy::{AdaptiveModel, Decoder, Encoder};
+use crate::error::{Error, Result};
+use crate::topology::{Level, Topo};
+
+/// Levels beyond which method 2 is not used (the places of a base edge, 2^L - 1, stay
+/// far inside `u32`).
+const MAX_LEVELS: u32 = 15;
+
+/// The base mesh of the Catmull-Clark hierarchy (SPEC.md 8.1) whose finest level the
+/// canonical faces are.
+#[derive(Debug, Clone, Copy)]
+pub struct Hierarchy<'a> {
+    /// Base vertices.
+    pub nv: usize,
+    /// Base face starts (one more than faces).
+    pub starts: &'a [u32],
+    /// Base corners.
+    pub idx: &'a [u32],
+    /// Refinement levels (at least 1).
+    pub levels: u32,
+}
+
+/// Element kinds, in the order of their numbers.
+const KINDS: usize = 3;
+const V: usize = 0;
+const E: usize = 1;
+const F: usize = 2;
+
+/// The base elements of a hierarchy and their places (SPEC.md 7.3).
+struct Elements {
+    /// Base vertices, edges, faces.
+    count: [usize; KINDS],
+    /// Per element (vertices, then edges, then faces), where its points start in
+    /// `points` (one more than elements).
+    starts: Vec<usize>,
+    /// Per element, its canonical vertices by place.
+    points: Vec<u32>,
+    /// Base face starts.
+    base_starts: Vec<u32>,
+    /// Per base corner, its face.
+    corner_face: Vec<u32>,
+    /// Finest faces per base corner: 4^(L - 1).
+    per_corner: usize,
+    /// Places of a base edge (2^L - 1) and of one corner's quarter of a base face
+    /// (h (h - 1), h = 2^(L - 1)).
+    edge_len: usize,
+    quarter: usize,
+    /// 2^L.
+    side: i64,
+    /// Per finest face, its place in its base face's block.
+    face_place: Vec<u32>,
+    /// Per base face block (from `base_starts[f] * per_corner`), its faces by place.
+    face_at: Vec<u32>,
+}
+
+impl Elements {
+    /// The elements of `h`, whose finest level `faces` is; `None` when it is not.
+    fn new(h: Hierarchy<'_>, faces: Faces<'_>) -> Option<Elements> {
+        let l = h.levels;
+        if !(1..=MAX_LEVELS).contains(&l) {
+            return None;
+        }
+        let topo = Topo {
+            nv: h.nv,
+            starts: h.starts.to_vec(),
+            idx: h.idx.to_vec(),
+        };
+        let base = Level::new(&topo).ok()?;
+        let s = 1i64 << l;
+        let half = s / 2;
+        let per_corner = 1usize << (2 * (l - 1));
+        let corners = h.idx.len();
+        if faces.count() != corners.checked_mul(per_corner)? {
+            return None;
+        }
+        let edge_len = (s - 1) as usize;
+        let quarter = (half * (half - 1)) as usize;
+        let nf = topo.nf();
+        let count = [h.nv, base.ne(), nf];
+        let mut starts = Vec::with_capacity(count.iter().sum::<usize>() + 1);
+        starts.push(0usize);
+        let mut push = |n: usize| starts.push(starts.last().copied().unwrap_or(0) + n);
+        (0..h.nv).for_each(|_| push(1));
+        (0..base.ne()).for_each(|_| push(edge_len));
+        for f in 0..nf {
+            push(topo.face(f).len() * quarter + 1);
+        }
+        let total = *starts.last()?;
+        if total != faces.nv {
+            return None;
+        }
+        let mut points = vec![u32::MAX; total];
+        (0..h.nv).for_each(|v| points[v] = v as u32);
+        let mut corner_face = vec![0u32; corners];
+        for f in 0..nf {
+            corner_face[h.starts[f] as usize..h.starts[f + 1] as usize].fill(f as u32);
+        }
+        let first_face = h.nv + base.ne();
+        let mut face_place = vec![0u32; faces.count()];
+        let mut face_at = vec![u32::MAX; faces.count()];
+        for g in 0..faces.count() {
+            let face = faces.face(g);
+            if face.len() != 4 {
+                return None;
+            }
+            let bc = g / per_corner;
+            let f = corner_face[bc] as usize;
+            let st = h.starts[f] as usize;
+            let (i, k) = (bc - st, h.starts[f + 1] as usize - st);
+            // The face's corners in the frame of base corner i's quarter: the corner
+            // at (0, 0), its edge's point at (h, 0), the face point at (h, h).
+            let mut p = [[0, 0], [half, 0], [half, half], [0, half]];
+            let q = g % per_corner;
+            for d in (0..l - 1).rev() {
+                let j = (q >> (2 * d)) & 3;
+                let mid = |a: [i64; 2], b: [i64; 2]| [(a[0] + b[0]) / 2, (a[1] + b[1]) / 2];
+                p = [
+                    p[j],
+                    mid(p[j], p[(j + 1) % 4]),
+                    mid(p[0], p[2]),
+                    mid(p[(j + 3) % 4], p[j]),
+                ];
+            }
+            // A quad's places are its grid's, row-major from corner 0 (the full
+            // face's frame: corner 1 at (s, 0), corner 3 at (0, s)); another face's
+            // are its quarters' in turn, each row-major in its frame.
+            let full = |[u, v]: [i64; 2]| match i {
+                0 => [u, v],
+                1 => [s - v, u],
+                2 => [s - u, s - v],
+                _ => [v, s - u],
+            };
+            let cell = if k == 4 {
+                let c = p.map(full);
+                let (x, y) = (c.iter().map(|c| c[0]).min()?, c.iter().map(|c| c[1]).min()?);
+                y * s + x
+            } else {
+                let (u, v) = (p.iter().map(|c| c[0]).min()?, p.iter().map(|c| c[1]).min()?);
+                i as i64 * half * half + v * half + u
+            };
+            let at = st * per_corner + cell as usize;
+            if face_at[at] != u32::MAX {
+                return None;
+            }
+            face_at[at] = g as u32;
+            face_place[g] = cell as u32;
+            for (&w, &[u, v]) in face.iter().zip(&p) {
+                let ci = h.idx[st + i];
+                let (elem, place) = if u == 0 && v == 0 {
+                    if w != ci {
+                        return None;
+                    }
+                    (w as usize, 0)
+                } else if u == 0 || v == 0 {
+                    // On the base edge from corner i (v = 0) or into it (u = 0).
+                    let (side, d) = if v == 0 { (i, u) } else { ((i + k - 1) % k, v) };
+                    let e = base.face_edges[st + side] as usize;
+                    let t = if base.edges[e][0] == ci { d } else { s - d };
+                    (h.nv + e, (t - 1) as usize)
+                } else if k == 4 {
+                    let [x, y] = full([u, v]);
+                    (first_face + f, ((y - 1) * (s - 1) + x - 1) as usize)
+                } else if u == half && v == half {
+                    (first_face + f, 0)
+                } else {
+                    // A point on the line to the previous corner's edge point is the
+                    // previous quarter's.
+                    let (i, u, v) = if v == half {
+                        ((i + k - 1) % k, half, u)
+                    } else {
+                        (i, u, v)
+                    };
+                    let at = (v - 1) * half + (u - 1);
+                    (first_face + f, 1 + i * quarter + at as usize)
+                };
+                let slot = &mut points[starts[elem] + place];
+                if *slot != u32::MAX && *slot != w {
+                    return None;
+                }
+                *slot = w;
+            }
+        }
+        // Every place taken, by every vertex once.
+        let mut seen = vec![false; total];
+        for &w in &points {
+            if w as usize >= total || std::mem::replace(&mut seen[w as usize], true) {
+                return None;
+            }
+        }
+        Some(Elements {
+            count,
+            starts,
+            points,
+            base_starts: h.starts.to_vec(),
+            corner_face,
+            per_corner,
+            edge_len,
+            quarter,
+            side: s,
+            face_place,
+            face_at,
+        })
+    }
+
+    fn kind(&self, elem: usize) -> (usize, usize) {
+        let [nv, ne, _] = self.count;
+        match elem {
+            e if e < nv => (V, e),
+            e if e < nv + ne => (E, e - nv),
+            e => (F, e - nv - ne),
+        }
+    }
+
+    fn element(&self, kind: usize, x: usize) -> usize {
+        match kind {
+            V => x,
+            E => self.count[V] + x,
+            _ => self.count[V] + self.count[E] + x,
+        }
+    }
+
+    fn degree(&self, f: usize) -> usize {
+        (self.base_starts[f + 1] - self.base_starts[f]) as usize
+    }
+
+    /// Template key of an element of `kind` (its base face's degree for a face) and
+    /// its turns: an edge's two directions, a face's corners.
+    fn shape(&self, kind: usize, x: usize) -> (usize, usize) {
+        match kind {
+            E => (0, 2),
+            _ => (self.degree(x), self.degree(x)),
+        }
+    }
+
+    /// Place `a` of an element of `kind` (a face of degree `k`), turned by `r`: an
+    /// edge's reversed, a face's `r` corners on.
+    fn turn(&self, kind: usize, k: usize, a: u32, r: usize) -> u32 {
+        let s = self.side;
+        match (kind, k, a) {
+            (E, _, a) if r == 1 => (self.edge_len - 1) as u32 - a,
+            (E, _, a) => a,
+            (_, 4, a) => {
+                // Corner 0's quarter to corner 1's: (x, y) -> (s - y, x).
+                let (mut x, mut y) = (a as i64 % (s - 1) + 1, a as i64 / (s - 1) + 1);
+                for _ in 0..r {
+                    (x, y) = (s - y, x);
+                }
+                ((y - 1) * (s - 1) + x - 1) as u32
+            }
+            (_, _, 0) => 0,
+            (_, k, a) => {
+                let x = a as usize - 1;
+                (1 + ((x / self.quarter + r) % k) * self.quarter + x % self.quarter) as u32
+            }
+        }
+    }
+
+    /// The place of a finest face of a block of degree `k` at place `a`, turned by `r`.
+    fn turn_face(&self, k: usize, a: u32, r: usize) -> u32 {
+        let s = self.side;
+        if k == 4 {
+            let (mut x, mut y) = (a as i64 % s, a as i64 / s);
+            for _ in 0..r {
+                (x, y) = (s - 1 - y, x);
+            }
+            return (y * s + x) as u32;
+        }
+        let a = a as usize;
+        (((a / self.per_corner + r) % k) * self.per_corner + a % self.per_corner) as u32
+    }
+
+    fn size(&self, elem: usize) -> usize {
+        self.starts[elem + 1] - self.starts[elem]
+    }
+}
+
+/// The adaptive state both sides keep (SPEC.md 7.3).
+struct State {
+    kinds: Vec<AdaptiveModel>,
+    prev_kind: usize,
+    ids: [Ids; KINDS + 1],
+    /// Whether a block's order is a turn of the last one of its shape: per kind, and
+    /// for face blocks.
+    same: [AdaptiveModel; KINDS + 1],
+    places: HashMap<(usize, usize), Vec<u32>>,
+    faces: HashMap<usize, Vec<(u32, u32)>>,
+    /// A new face order's first corners.
+    rot: AdaptiveModel,
+}
+
+/// The numbers of one kind's items in the order met: each is the last one's next, or
+/// its rank among those not yet met.
+struct Ids {
+    run: [AdaptiveModel; 2],
+    hit: usize,
+    last: i64,
+    unused: Unused,
+    met: Vec<bool>,
+    taken: usize,
+}
+
+impl Ids {
+    fn new(n: usize) -> Self {
+        Ids {
+            run: [AdaptiveModel::new(2), AdaptiveModel::new(2)],
+            hit: 0,
+            last: -1,
+            unused: Unused::new(n),
+            met: vec![false; n],
+            taken: 0,
+        }
+    }
+
+    fn left(&self) -> usize {
+        self.met.len() - self.taken
+    }
+
+    fn take(&mut self, x: usize, hit: bool) {
+        self.met[x] = true;
+        self.unused.remove(x);
+        self.last = x as i64;
+        self.hit = hit as usize;
+        self.taken += 1;
+    }
+
+    fn put(&mut self, e: &mut Encoder, x: usize) {
+        let hit = x as i64 == self.last + 1;
+        e.symbol(&mut self.run[self.hit], hit as usize);
+        if !hit {
+            e.uniform(self.unused.rank(x), self.left() as u64);
+        }
+        self.take(x, hit);
+    }
+
+    fn get(&mut self, d: &mut Decoder) -> Result<usize> {
+        let hit = d.symbol(&mut self.run[self.hit])? == 1;
+        let x = if hit {
+            (self.last + 1) as usize
+        } else {
+            self.unused.select(d.uniform(self.left() as u64)?)
+        };
+        if x >= self.met.len() || self.met[x] {
+            return Err(Error::corrupt(SECTION, "an element met twice"));
+        }
+        self.take(x, hit);
+        Ok(x)
+    }
+}
+
+impl State {
+    fn new(el: &Elements) -> Self {
+        State {
+            kinds: (0..=KINDS).map(|_| AdaptiveModel::new(KINDS)).collect(),
+            prev_kind: KINDS,
+            ids: [
+                Ids::new(el.count[V]),
+                Ids::new(el.count[E]),
+                Ids::new(el.count[F]),
+                Ids::new(el.count[F]),
+            ],
+            same: std::array::from_fn(|_| AdaptiveModel::new(2)),
+            places: HashMap::new(),
+            faces: HashMap::new(),
+            rot: AdaptiveModel::new(4),
+        }
+    }
+}
+
+/// The turn of `template` that gives `seen` (the first), if any.
+fn turn_of<T: PartialEq + Copy>(
+    template: Option<&Vec<T>>,
+    seen: &[T],
+    turns: usize,
+    turn: impl Fn(T, usize) -> T,
+) -> Option<usize> {
+    let t = template?;
+    (0..turns).find(|&r| t.len() == seen.len() && t.iter().zip(seen).all(|(&a, &b)| turn(a, r) == b))
+}
+
+/// Codes the order by elements (method 2); `None` when the input's order is not one
+/// block per element, vertices and faces alike.
+pub(super) fn encode_elements(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>) -> Option<Vec<u8>> {
+    let el = Elements::new(h, faces)?;
+    let nv = faces.nv;
+    let elements = el.starts.len() - 1;
+    let mut of = vec![(0u32, 0u32); nv];
+    for elem in 0..elements {
+        for (place, &w) in el.points[el.starts[elem]..el.starts[elem + 1]].iter().enumerate() {
+            of[w as usize] = (elem as u32, place as u32);
+        }
+    }
+    let mut in_vert = vec![0u32; nv];
+    for (c, &p) in o.vertices.iter().enumerate() {
+        in_vert[p as usize] = c as u32;
+    }
+    let mut e = Encoder::new();
+    let mut st = State::new(&el);
+    let mut face_rank = vec![0u32; el.count[F]];
+    let mut pos = 0;
+    while pos < nv {
+        let elem = of[in_vert[pos] as usize].0 as usize;
+        let n = el.size(elem);
+        let block = in_vert.get(pos..pos + n)?;
+        let mut places = Vec::with_capacity(n);
+        for &w in block {
+            let (x, place) = of[w as usize];
+            if x as usize != elem {
+                return None;
+            }
+            places.push(place);
+        }
+        let (kind, x) = el.kind(elem);
+        if st.ids[kind].met[x] {
+            return None;
+        }
+        e.symbol(&mut st.kinds[st.prev_kind], kind);
+        st.prev_kind = kind;
+        if kind == F {
+            face_rank[x] = st.ids[F].taken as u32;
+        }
+        st.ids[kind].put(&mut e, x);
+        if kind != V {
+            let (key, turns) = el.shape(kind, x);
+            let k = el.degree_or(kind, x);
+            let hit = turn_of(st.places.get(&(kind, key)), &places, turns, |a, r| {
+                el.turn(kind, k, a, r)
+            });
+            e.symbol(&mut st.same[kind], hit.is_some() as usize);
+            match hit {
+                Some(r) => e.uniform(r as u64, turns as u64),
+                None => {
+                    put_perm(&mut e, &places);
+                    st.places.insert((kind, key), places);
+                }
+            }
+        }
+        pos += n;
+    }
+    // The faces: a block per base face, in the order of the base faces' insides.
+    let nfaces = o.faces.len();
+    let mut in_face = vec![0u32; nfaces];
+    for (c, &p) in o.faces.iter().enumerate() {
+        in_face[p as usize] = c as u32;
+    }
+    let mut pos = 0;
+    while pos < nfaces {
+        let g = in_face[pos] as usize;
+        let f = el.corner_face[g / el.per_corner] as usize;
+        let k = el.degree(f);
+        let first = el.base_starts[f] as usize * el.per_corner;
+        let block = in_face.get(pos..pos + k * el.per_corner)?;
+        let mut seen = Vec::with_capacity(block.len());
+        for &c in block {
+            let c = c as usize;
+            if !(first..first + block.len()).contains(&c) || o.rotations[c] >= 4 {
+                return None;
+            }
+            seen.push((el.face_place[c], o.rotations[c]));
+        }
+        if st.ids[KINDS].met[face_rank[f] as usize] {
+            return None;
+        }
+        st.ids[KINDS].put(&mut e, face_rank[f] as usize);
+        let hit = turn_of(st.faces.get(&k), &seen, k, |(a, rot), r| {
+            (el.turn_face(k, a, r), rot)
+        });
+        e.symbol(&mut st.same[KINDS], hit.is_some() as usize);
+        match hit {
+            Some(r) => e.uniform(r as u64, k as u64),
+            None => {
+                let order: Vec<u32> = seen.iter().map(|s| s.0).collect();
+                put_perm(&mut e, &order);
+                for &(_, rot) in &seen {
+                    e.symbol(&mut st.rot, rot as usize);
+                }
+                st.faces.insert(k, seen);
+            }
+        }
+        pos += block.len();
+    }
+    Some(e.finish())
+}
+
+impl Elements {
+    /// The degree of the base face of an element of `kind` (0 for others).
+    fn degree_or(&self, kind: usize, x: usize) -> usize {
+        if kind == F {
+            self.degree(x)
+        } else {
+            0
+        }
+    }
+}
+
+/// Decodes method 2 (SPEC.md 7.3).
+pub(super) fn decode_elements(
+    payload: &[u8],
+    faces: Faces<'_>,
+    h: Option<Hierarchy<'_>>,
+) -> Result<InputOrder> {
+    let h = h.ok_or_else(|| Error::corrupt(SECTION, "method 2 without a Catmull-Clark hierarchy"))?;
+    let el = Elements::new(h, faces)
+        .ok_or_else(|| Error::corrupt(SECTION, "method 2 on faces that are not the hierarchy's"))?;
+    let mut d = Decoder::new(payload, SECTION)?;
+    let mut st = State::new(&el);
+    let nv = faces.nv;
+    let mut vertices = vec![0u32; nv];
+    let mut face_of_rank = Vec::with_capacity(el.count[F]);
+    let mut pos = 0u32;
+    for _ in 0..el.starts.len() - 1 {
+        let kind = d.symbol(&mut st.kinds[st.prev_kind])?;
+        st.prev_kind = kind;
+        if st.ids[kind].left() == 0 {
+            return Err(Error::corrupt(SECTION, "more elements of a kind than the mesh has"));
+        }
+        let x = st.ids[kind].get(&mut d)?;
+        if kind == F {
+            face_of_rank.push(x);
+        }
+        let elem = el.element(kind, x);
+        let points = &el.points[el.starts[elem]..el.starts[elem + 1]];
+        let places: Vec<u32> = if kind == V {
+            vec![0]
+        } else {
+            let (key, turns) = el.shape(kind, x);
+            let k = el.degree_or(kind, x);
+            if d.symbol(&mut st.same[kind])? == 1 {
+                let t = st
+                    .places
+                    .get(&(kind, key))
+                    .ok_or_else(|| Error::corrupt(SECTION, "a turn of no order met"))?;
+                let r = d.uniform(turns as u64)? as usize;
+                t.iter().map(|&a| el.turn(kind, k, a, r)).collect()
+            } else {
+                let p = get_perm(&mut d, points.len())?;
+                st.places.insert((kind, key), p.clone());
+                p
+            }
+        };
+        if places.len() != points.len() {
+            return Err(Error::corrupt(SECTION, "an element's order of the wrong size"));
+        }
+        for &a in &places {
+            vertices[points[a as usize] as usize] = pos;
+            pos += 1;
+        }
+    }
+    let nfaces = faces.count();
+    let mut forder = vec![0u32; nfaces];
+    let mut rotations = vec![0u32; nfaces];
+    let mut pos = 0u32;
+    for _ in 0..el.count[F] {
+        let rank = st.ids[KINDS].get(&mut d)?;
+        let f = *face_of_rank
+            .get(rank)
+            .ok_or_else(|| Error::corrupt(SECTION, "a face block of no base face"))?;
+        let k = el.degree(f);
+        let first = el.base_starts[f] as usize * el.per_corner;
+        let n = k * el.per_corner;
+        let seen: Vec<(u32, u32)> = if d.symbol(&mut st.same[KINDS])? == 1 {
+            let t = st
+                .faces
+                .get(&k)
+                .ok_or_else(|| Error::corrupt(SECTION, "a turn of no face order met"))?;
+            let r = d.uniform(k as u64)? as usize;
+            t.iter().map(|&(a, rot)| (el.turn_face(k, a, r), rot)).collect()
+        } else {
+            let order = get_perm(&mut d, n)?;
+            let mut s = Vec::with_capacity(n);
+            for a in order {
+                s.push((a, d.symbol(&mut st.rot)? as u32));
+            }
+            st.faces.insert(k, s.clone());
+            s
+        };
+        if seen.len() != n {
+            return Err(Error::corrupt(SECTION, "a face block of the wrong size"));
+        }
+        for (a, rot) in seen {
+            let c = el.face_at[first + a as usize] as usize;
+            forder[c] = pos;
+            rotations[c] = rot;
+            pos += 1;
+        }
+    }
+    Ok(InputOrder {
+        vertices,
+        faces: forder,
+        rotations,
+    })
+}
+
+/// Per point inside the base face 0 of `h`: its vertex and place (the tests').
+#[cfg(test)]
+pub(super) fn tests_places(h: Hierarchy<'_>, faces: Faces<'_>) -> Option<Vec<(u32, u32)>> {
+    let el = Elements::new(h, faces)?;
+    let f0 = el.element(F, 0);
+    Some(
+        el.points[el.starts[f0]..el.starts[f0 + 1]]
+            .iter()
+            .enumerate()
+            .map(|(p, &w)| (w, p as u32))
+            .collect(),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{decode, encode};
+    use super::*;
+
+    /// A quad, a triangle and a pentagon side by side, refined `levels` times: the base
+    /// and the finest faces.
+    fn hierarchy(levels: u32) -> (Topo, Topo) {
+        let mut base = Topo::new(8);
+        base.idx = vec![0, 1, 2, 3, 1, 4, 2, 4, 5, 6, 7, 2];
+        base.starts = vec![0, 4, 7, 12];
+        let mut level = Level::new(&base).unwrap();
+        for _ in 1..levels {
+            level = level.next();
+        }
+        (base, level.fine())
+    }
+
+    /// A xorshift step.
+    fn next(x: &mut u64) -> u64 {
+        *x ^= *x << 13;
+        *x ^= *x >> 7;
+        *x ^= *x << 17;
+        *x
+    }
+
+    #[test]
+    fn element_blocks_round_trip_and_cost_little() {
+        for levels in 1..=3u32 {
+            let (base, fine) = hierarchy(levels);
+            let h = Hierarchy {
+                nv: base.nv,
+                starts: &base.starts,
+                idx: &base.idx,
+                levels,
+            };
+            let faces = Faces {
+                nv: fine.nv,
+                starts: &fine.starts,
+                idx: &fine.idx,
+                hierarchy: Some(h),
+            };
+            let el = Elements::new(h, faces).expect("the finest level's elements");
+            let mut seed = 0x9e37_79b9_7f4a_7c15u64 ^ levels as u64;
+            // Elements in a shuffled order (kinds mixed), each block its shape's places
+            // turned at random; face blocks likewise, each face's rotation that of its
+            // place before the turn.
+            let n = el.starts.len() - 1;
+            let mut order: Vec<usize> = (0..n).collect();
+            for i in (1..n).rev() {
+                order.swap(i, next(&mut seed) as usize % (i + 1));
+            }
+            let mut vertices = vec![u32::MAX; fine.nv];
+            let mut pos = 0;
+            for &elem in &order {
+                let (kind, x) = el.kind(elem);
+                let (_, turns) = if kind == V { (0, 1) } else { el.shape(kind, x) };
+                let r = next(&mut seed) as usize % turns;
+                let k = el.degree_or(kind, x);
+                for p in 0..el.size(elem) as u32 {
+                    let p = if kind == V { p } else { el.turn(kind, k, p, r) };
+                    vertices[el.points[el.starts[elem] + p as usize] as usize] = pos;
+                    pos += 1;
+                }
+            }
+            let nf = el.count[F];
+            let mut blocks: Vec<usize> = (0..nf).collect();
+            for i in (1..nf).rev() {
+                blocks.swap(i, next(&mut seed) as usize % (i + 1));
+            }
+            let mut forder = vec![u32::MAX; fine.nf()];
+            let mut rotations = vec![0; fine.nf()];
+            let mut pos = 0;
+            for &f in &blocks {
+                let k = el.degree(f);
+                let r = next(&mut seed) as usize % k;
+                let first = el.base_starts[f] as usize * el.per_corner;
+                for p in 0..(k * el.per_corner) as u32 {
+                    let c = el.face_at[first + el.turn_face(k, p, r) as usize] as usize;
+                    forder[c] = pos;
+                    rotations[c] = p % 4;
+                    pos += 1;
+                }
+            }
+            assert!(!vertices.contains(&u32::MAX) && !forder.contains(&u32::MAX));
+            let o = InputOrder {
+                vertices,
+                faces: forder,
+                rotations,
+            };
+            let body = encode_elements(&o, faces, h).expect("blocks of elements");
+            assert_eq!(decode_elements(&body, faces, Some(h)).unwrap(), o);
+            // Walks pay an escape at most blocks; here a block costs its number and
+            // turn (and each shape's first order once), and the smallest is kept.
+            let walks = super::super::walks::encode_walks(&o, faces).len();
+            assert!(levels == 1 || body.len() < walks, "{levels}: {} B, walks {walks} B", body.len());
+            let bytes = encode(&o, faces);
+            if levels > 1 {
+                assert_eq!(bytes[0], 2, "{levels} levels: method {}", bytes[0]);
+            }
+            assert_eq!(decode(&bytes, faces).unwrap(), o, "{levels} levels");
+            // Without the hierarchy, method 2 is corrupt; a cut or flipped payload
+            // is an error or an order, never a panic.
+            let flat = Faces {
+                hierarchy: None,
+                ..faces
+            };
+            assert_eq!(decode(&bytes, flat).is_err(), bytes[0] == 2);
+            for cut in 1..bytes.len() {
+                let _ = decode(&bytes[..cut], faces);
+            }
+            for bit in 8..bytes.len() * 8 {
+                let mut b = bytes.clone();
+                b[bit / 8] ^= 1 << (bit % 8);
+                let _ = decode(&b, faces);
+            }
+            // An order that is no blocks of elements is coded otherwise.
+            let mut shuffled = o.clone();
+            let (edge, face) = (el.element(E, 0), el.element(F, 0));
+            let (a, b) = (el.points[el.starts[edge]], el.points[el.starts[face] + 1]);
+            shuffled.vertices.swap(a as usize, b as usize);
+            // (With one level an edge and a quad hold one point each: still blocks.)
+            assert_eq!(encode_elements(&shuffled, faces, h).is_none(), levels > 1);
+            assert_eq!(decode(&encode(&shuffled, faces), faces).unwrap(), shuffled);
+        }
+    }
+}
