@@ -148,10 +148,45 @@ fn best_candidate(
     first: Wavelet,
 ) -> Result<Option<Candidate>> {
     let effort = Effort::of(opts.effort);
-    // Below effort 8, the preferred candidate alone (recovery ranks it first).
-    let take = if effort.candidates { canons.len() } else { 1 };
+    // Below effort 8, the preferred candidate alone (recovery ranks it first); with
+    // the input's order kept, also the one whose order codes smallest, if another
+    // (an exporter's own base mesh, whose elements its order follows: SPEC.md 7.3).
+    let mut take: Vec<bool> = (0..canons.len())
+        .map(|i| i == 0 || effort.candidates)
+        .collect();
+    let mut orders: Vec<Option<Vec<u8>>> = vec![None; canons.len()];
+    let mut canons = canons;
+    if opts.keep_order && !effort.candidates && canons.len() > 1 {
+        for (i, canon) in canons.iter_mut().enumerate() {
+            canon.unstow()?;
+            orders[i] = Some(hierarchy_order(mesh, canon)?);
+            if i > 0 {
+                canon.stow();
+            }
+        }
+        let smallest = (0..orders.len()).min_by_key(|&i| orders[i].as_ref().map_or(0, Vec::len));
+        if let Some(j) = smallest {
+            take[j] = true;
+        }
+    }
+    best_of(mesh, opts, flat_h, canons, first, &take, orders)
+}
+
+/// [`best_candidate`] over the candidates `take` marks, with the orders already coded.
+#[allow(clippy::too_many_arguments)]
+fn best_of(
+    mesh: &Mesh,
+    opts: &EncodeOptions,
+    flat_h: &Header,
+    canons: Vec<Canonical>,
+    first: Wavelet,
+    take: &[bool],
+    mut orders: Vec<Option<Vec<u8>>>,
+) -> Result<Option<Candidate>> {
+    let effort = Effort::of(opts.effort);
     let mut fam_best: Option<Candidate> = None;
-    for mut canon in canons.into_iter().take(take) {
+    let picked = canons.into_iter().enumerate().filter(|(i, _)| take[*i]);
+    for (i, mut canon) in picked {
         // One candidate's levels at a time: the best so far waits stowed.
         if let Some((_, best)) = fam_best.as_mut() {
             best.stow();
@@ -159,9 +194,10 @@ fn best_candidate(
         canon.unstow()?;
         // code_hierarchy drops the disc transform of a hierarchy without poles.
         let disc = opts.disc.unwrap_or(DiscTransform::None);
-        let order = match opts.keep_order {
-            true => Some(hierarchy_order(mesh, &canon)?),
-            false => None,
+        let order = match (opts.keep_order, orders[i].take()) {
+            (true, Some(o)) => Some(o),
+            (true, None) => Some(hierarchy_order(mesh, &canon)?),
+            (false, _) => None,
         };
         // Wanted only if smaller than the best candidate so far.
         let bound = fam_best.as_ref().map_or(UNBOUNDED, |b| {
