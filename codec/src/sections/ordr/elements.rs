@@ -297,7 +297,8 @@ struct State {
     places: HashMap<(usize, usize), Vec<u32>>,
     faces: HashMap<usize, Vec<(u32, u32)>>,
     /// A new face order's first corners.
-    rot: AdaptiveModel,
+    /// A new face order's first corners, per previous face's in the block.
+    rot: [AdaptiveModel; 4],
 }
 
 /// The numbers of one kind's items in the order met: each is the last one's next, the
@@ -398,7 +399,7 @@ impl State {
             same: std::array::from_fn(|_| AdaptiveModel::new(2)),
             places: HashMap::new(),
             faces: HashMap::new(),
-            rot: AdaptiveModel::new(4),
+            rot: std::array::from_fn(|_| AdaptiveModel::new(4)),
         }
     }
 }
@@ -473,48 +474,8 @@ pub(super) fn encode_elements(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>
         }
         pos += n;
     }
-    // The faces: a block per base face, in the order of the base faces' insides.
-    let nfaces = o.faces.len();
-    let mut in_face = vec![0u32; nfaces];
-    for (c, &p) in o.faces.iter().enumerate() {
-        in_face[p as usize] = c as u32;
-    }
-    let mut pos = 0;
-    while pos < nfaces {
-        let g = in_face[pos] as usize;
-        let f = el.corner_face[g / el.per_corner] as usize;
-        let k = el.degree(f);
-        let first = el.base_starts[f] as usize * el.per_corner;
-        let block = in_face.get(pos..pos + k * el.per_corner)?;
-        let mut seen = Vec::with_capacity(block.len());
-        for &c in block {
-            let c = c as usize;
-            if !(first..first + block.len()).contains(&c) || o.rotations[c] >= 4 {
-                return None;
-            }
-            seen.push((el.face_place[c], o.rotations[c]));
-        }
-        if st.ids[KINDS].met[face_rank[f] as usize] {
-            return None;
-        }
-        st.ids[KINDS].put(&mut e, face_rank[f] as usize);
-        let hit = turn_of(st.faces.get(&k), &seen, k, |(a, rot), r| {
-            (el.turn_face(k, a, r), rot)
-        });
-        e.symbol(&mut st.same[KINDS], hit.is_some() as usize);
-        match hit {
-            Some(r) => e.uniform(r as u64, k as u64),
-            None => {
-                let order: Vec<u32> = seen.iter().map(|s| s.0).collect();
-                put_perm(&mut e, &order);
-                for &(_, rot) in &seen {
-                    e.symbol(&mut st.rot, rot as usize);
-                }
-                st.faces.insert(k, seen);
-            }
-        }
-        pos += block.len();
-    }
+    // The faces: a block per base face, numbered by the rank of its inside.
+    put_face_blocks(&mut e, &mut st, &el, o, |f| face_rank[f] as usize)?;
     Some(e.finish())
 }
 
@@ -582,14 +543,86 @@ pub(super) fn decode_elements(
             pos += 1;
         }
     }
-    let nfaces = faces.count();
+    let (forder, rotations) = get_face_blocks(&mut d, &mut st, &el, faces.count(), |r| {
+        face_of_rank.get(r).copied()
+    })?;
+    Ok(InputOrder {
+        vertices,
+        faces: forder,
+        rotations,
+    })
+}
+
+/// Codes the faces in input order as blocks, one per base face (SPEC.md 7.3), each
+/// numbered `number(f)`; `None` when they are not such blocks.
+fn put_face_blocks(
+    e: &mut Encoder,
+    st: &mut State,
+    el: &Elements,
+    o: &InputOrder,
+    number: impl Fn(usize) -> usize,
+) -> Option<()> {
+    let nfaces = o.faces.len();
+    let mut in_face = vec![0u32; nfaces];
+    for (c, &p) in o.faces.iter().enumerate() {
+        in_face[p as usize] = c as u32;
+    }
+    let mut pos = 0;
+    while pos < nfaces {
+        let g = in_face[pos] as usize;
+        let f = el.corner_face[g / el.per_corner] as usize;
+        let k = el.degree(f);
+        let first = el.base_starts[f] as usize * el.per_corner;
+        let block = in_face.get(pos..pos + k * el.per_corner)?;
+        let mut seen = Vec::with_capacity(block.len());
+        for &c in block {
+            let c = c as usize;
+            if !(first..first + block.len()).contains(&c) || o.rotations[c] >= 4 {
+                return None;
+            }
+            seen.push((el.face_place[c], o.rotations[c]));
+        }
+        if st.ids[KINDS].met[number(f)] {
+            return None;
+        }
+        st.ids[KINDS].put(e, number(f));
+        let hit = turn_of(st.faces.get(&k), &seen, k, |(a, rot), r| {
+            (el.turn_face(k, a, r), rot)
+        });
+        e.symbol(&mut st.same[KINDS], hit.is_some() as usize);
+        match hit {
+            Some(r) => e.uniform(r as u64, k as u64),
+            None => {
+                let order: Vec<u32> = seen.iter().map(|s| s.0).collect();
+                put_perm(e, &order);
+                let mut prev = 0;
+                for &(_, rot) in &seen {
+                    e.symbol(&mut st.rot[prev], rot as usize);
+                    prev = rot as usize;
+                }
+                st.faces.insert(k, seen);
+            }
+        }
+        pos += block.len();
+    }
+    Some(())
+}
+
+/// Decodes the face blocks of [`put_face_blocks`]: the base face of each number from
+/// `face_of`.
+fn get_face_blocks(
+    d: &mut Decoder,
+    st: &mut State,
+    el: &Elements,
+    nfaces: usize,
+    face_of: impl Fn(usize) -> Option<usize>,
+) -> Result<(Vec<u32>, Vec<u32>)> {
     let mut forder = vec![0u32; nfaces];
     let mut rotations = vec![0u32; nfaces];
     let mut pos = 0u32;
     for _ in 0..el.count[F] {
-        let rank = st.ids[KINDS].get(&mut d)?;
-        let f = *face_of_rank
-            .get(rank)
+        let number = st.ids[KINDS].get(d)?;
+        let f = face_of(number)
             .ok_or_else(|| Error::corrupt(SECTION, "a face block of no base face"))?;
         let k = el.degree(f);
         let first = el.base_starts[f] as usize * el.per_corner;
@@ -602,10 +635,12 @@ pub(super) fn decode_elements(
             let r = d.uniform(k as u64)? as usize;
             t.iter().map(|&(a, rot)| (el.turn_face(k, a, r), rot)).collect()
         } else {
-            let order = get_perm(&mut d, n)?;
+            let order = get_perm(d, n)?;
             let mut s = Vec::with_capacity(n);
+            let mut prev = 0;
             for a in order {
-                s.push((a, d.symbol(&mut st.rot)? as u32));
+                prev = d.symbol(&mut st.rot[prev])?;
+                s.push((a, prev as u32));
             }
             st.faces.insert(k, s.clone());
             s
@@ -620,8 +655,71 @@ pub(super) fn decode_elements(
             pos += 1;
         }
     }
+    Ok((forder, rotations))
+}
+
+/// The vertices in order of first use by the faces in input order, each face's corners
+/// from its first input corner, then those no face uses in canonical order (SPEC.md
+/// 7.4): `vertices[c]`, the input number of canonical vertex c.
+fn first_use(faces: Faces<'_>, forder: &[u32], rotations: &[u32]) -> Vec<u32> {
+    let mut in_face = vec![0u32; forder.len()];
+    for (c, &p) in forder.iter().enumerate() {
+        in_face[p as usize] = c as u32;
+    }
+    let mut vertices = vec![u32::MAX; faces.nv];
+    let mut next = 0u32;
+    for &c in &in_face {
+        let face = faces.face(c as usize);
+        let k = face.len();
+        let first = (k - rotations[c as usize] as usize % k) % k;
+        for i in 0..k {
+            let v = face[(first + i) % k] as usize;
+            if vertices[v] == u32::MAX {
+                vertices[v] = next;
+                next += 1;
+            }
+        }
+    }
+    for v in vertices.iter_mut().filter(|v| **v == u32::MAX) {
+        *v = next;
+        next += 1;
+    }
+    vertices
+}
+
+/// Codes the order as face blocks, the vertices by first use (method 3); `None` when
+/// the input's order is not so.
+pub(super) fn encode_first_use(
+    o: &InputOrder,
+    faces: Faces<'_>,
+    h: Hierarchy<'_>,
+) -> Option<Vec<u8>> {
+    let el = Elements::new(h, faces)?;
+    if first_use(faces, &o.faces, &o.rotations) != o.vertices {
+        return None;
+    }
+    let mut e = Encoder::new();
+    let mut st = State::new(&el);
+    put_face_blocks(&mut e, &mut st, &el, o, |f| f)?;
+    Some(e.finish())
+}
+
+/// Decodes method 3 (SPEC.md 7.4).
+pub(super) fn decode_first_use(
+    payload: &[u8],
+    faces: Faces<'_>,
+    h: Option<Hierarchy<'_>>,
+) -> Result<InputOrder> {
+    let h = h.ok_or_else(|| Error::corrupt(SECTION, "method 3 without a Catmull-Clark hierarchy"))?;
+    let el = Elements::new(h, faces)
+        .ok_or_else(|| Error::corrupt(SECTION, "method 3 on faces that are not the hierarchy's"))?;
+    let mut d = Decoder::new(payload, SECTION)?;
+    let mut st = State::new(&el);
+    let nf = el.count[F];
+    let (forder, rotations) =
+        get_face_blocks(&mut d, &mut st, &el, faces.count(), |f| (f < nf).then_some(f))?;
     Ok(InputOrder {
-        vertices,
+        vertices: first_use(faces, &forder, &rotations),
         faces: forder,
         rotations,
     })
@@ -769,6 +867,26 @@ mod tests {
                 b[bit / 8] ^= 1 << (bit % 8);
                 let _ = decode(&b, faces);
             }
+            // The same faces with the vertices numbered by first use (a PLY cut at
+            // its seams): method 3, the vertices for free.
+            let fu = InputOrder {
+                vertices: first_use(faces, &o.faces, &o.rotations),
+                ..o.clone()
+            };
+            let body3 = encode_first_use(&fu, faces, h).expect("face blocks");
+            assert_eq!(decode_first_use(&body3, faces, Some(h)).unwrap(), fu);
+            let bytes3 = encode(&fu, faces);
+            if levels > 1 {
+                assert_eq!(bytes3[0], 3, "{levels} levels: method {}", bytes3[0]);
+                assert!(body3.len() < body.len(), "{levels} levels");
+            }
+            assert_eq!(decode(&bytes3, faces).unwrap(), fu);
+            for bit in 8..bytes3.len() * 8 {
+                let mut b = bytes3.clone();
+                b[bit / 8] ^= 1 << (bit % 8);
+                let _ = decode(&b, faces);
+            }
+            assert!(encode_first_use(&o, faces, h).is_none() || o.vertices == fu.vertices);
             // An order that is no blocks of elements is coded otherwise.
             let mut shuffled = o.clone();
             let (edge, face) = (el.element(E, 0), el.element(F, 0));

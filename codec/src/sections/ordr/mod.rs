@@ -7,7 +7,8 @@
 //! the next row, the next vertex of the faces' corners), so that the orders exporters
 //! write (rows, grids, first use) cost little; or, on a Catmull-Clark hierarchy's finest
 //! level, as blocks of its base elements, each in the order of the last block of its
-//! shape turned (Blender's subdivision order).
+//! shape turned (Blender's subdivision order), the vertices also by first use in those
+//! faces (Blender's PLY cut at UV seams).
 
 
 mod around;
@@ -18,7 +19,7 @@ mod tests;
 
 use crate::entropy::{AdaptiveModel, Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
-use elements::{decode_elements, encode_elements};
+use elements::{decode_elements, decode_first_use, encode_elements, encode_first_use};
 pub use elements::Hierarchy;
 use walks::{decode_walks, encode_walks};
 
@@ -203,7 +204,8 @@ fn decode_lists(payload: &[u8], nv: usize, degrees: &[u32]) -> Result<InputOrder
 /// Codes the ORDR section (SPEC.md 7) of the input order `o` of the canonical
 /// `faces`: a method byte, then the order as three lists (method 0), as walks
 /// (method 1) or, on the finest level of a Catmull-Clark hierarchy, by its base
-/// elements (method 2), whichever is smallest.
+/// elements (method 2) or as face blocks with the vertices by first use (method 3),
+/// whichever is smallest.
 pub fn encode(o: &InputOrder, faces: Faces<'_>) -> Vec<u8> {
     let lists = encode_lists(o);
     let walks = encode_walks(o, faces);
@@ -215,6 +217,9 @@ pub fn encode(o: &InputOrder, faces: Faces<'_>) -> Vec<u8> {
     if let Some(h) = faces.hierarchy {
         if let Some(b) = encode_elements(o, faces, h).filter(|b| b.len() < body.len()) {
             (method, body) = (2, b);
+        }
+        if let Some(b) = encode_first_use(o, faces, h).filter(|b| b.len() < body.len()) {
+            (method, body) = (3, b);
         }
     }
     let mut out = Vec::with_capacity(body.len() + 1);
@@ -232,6 +237,7 @@ pub fn decode(payload: &[u8], faces: Faces<'_>) -> Result<InputOrder> {
         }
         Some((1, body)) => decode_walks(body, faces),
         Some((2, body)) => decode_elements(body, faces, faces.hierarchy),
+        Some((3, body)) => decode_first_use(body, faces, faces.hierarchy),
         Some((m, _)) => Err(Error::corrupt(SECTION, format!("unknown method {m}"))),
         None => Err(Error::corrupt(SECTION, "empty payload")),
     }
