@@ -59,6 +59,8 @@ struct Elements {
     quarter: usize,
     /// 2^L.
     side: i64,
+    /// Base edges' ends, as first met.
+    edges: Vec<[u32; 2]>,
     /// Per finest face, its place in its base face's block.
     face_place: Vec<u32>,
     /// Per base face block (from `base_starts[f] * per_corner`), its faces by place.
@@ -209,6 +211,7 @@ impl Elements {
             edge_len,
             quarter,
             side: s,
+            edges: base.edges.clone(),
             face_place,
             face_at,
         })
@@ -299,6 +302,11 @@ struct State {
     /// A new face order's first corners.
     /// A new face order's first corners, per previous face's in the block.
     rot: [AdaptiveModel; 4],
+    /// An edge's turn against the one its ends' order among the base vertices met
+    /// predicts (an exporter's edges run from its lower vertex, or from its higher).
+    direction: AdaptiveModel,
+    /// Per base vertex, when its element was met (`u32::MAX`: not yet).
+    met_at: Vec<u32>,
 }
 
 /// The numbers of one kind's items in the order met: each is the last one's next, the
@@ -400,6 +408,44 @@ impl State {
             places: HashMap::new(),
             faces: HashMap::new(),
             rot: std::array::from_fn(|_| AdaptiveModel::new(4)),
+            direction: AdaptiveModel::new(2),
+            met_at: vec![u32::MAX; el.count[V]],
+        }
+    }
+}
+
+impl State {
+    /// The turn an edge's ends predict: 1 when its first end was met after its second.
+    fn predicted(&self, el: &Elements, x: usize) -> usize {
+        let [a, b] = el.edges[x];
+        (self.met_at[a as usize] > self.met_at[b as usize]) as usize
+    }
+
+    /// Codes an element's turn (an edge's against its prediction).
+    fn put_turn(&mut self, e: &mut Encoder, el: &Elements, kind: usize, x: usize, r: usize, turns: usize) {
+        match kind {
+            E => {
+                let p = self.predicted(el, x);
+                e.symbol(&mut self.direction, r ^ p);
+            }
+            _ => e.uniform(r as u64, turns as u64),
+        }
+    }
+
+    fn get_turn(&mut self, d: &mut Decoder, el: &Elements, kind: usize, x: usize, turns: usize) -> Result<usize> {
+        match kind {
+            E => {
+                let p = self.predicted(el, x);
+                Ok(d.symbol(&mut self.direction)? ^ p)
+            }
+            _ => Ok(d.uniform(turns as u64)? as usize),
+        }
+    }
+
+    /// Notes that the element of kind `kind`, number `x`, is met.
+    fn met(&mut self, kind: usize, x: usize) {
+        if kind == V {
+            self.met_at[x] = self.ids[V].taken as u32;
         }
     }
 }
@@ -456,6 +502,7 @@ pub(super) fn encode_elements(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>
         if kind == F {
             face_rank[x] = st.ids[F].taken as u32;
         }
+        st.met(kind, x);
         st.ids[kind].put(&mut e, x);
         if kind != V {
             let (key, turns) = el.shape(kind, x);
@@ -465,7 +512,7 @@ pub(super) fn encode_elements(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>
             });
             e.symbol(&mut st.same[kind], hit.is_some() as usize);
             match hit {
-                Some(r) => e.uniform(r as u64, turns as u64),
+                Some(r) => st.put_turn(&mut e, &el, kind, x, r, turns),
                 None => {
                     put_perm(&mut e, &places);
                     st.places.insert((kind, key), places);
@@ -512,6 +559,9 @@ pub(super) fn decode_elements(
             return Err(Error::corrupt(SECTION, "more elements of a kind than the mesh has"));
         }
         let x = st.ids[kind].get(&mut d)?;
+        if kind == V {
+            st.met_at[x] = st.ids[V].taken as u32 - 1;
+        }
         if kind == F {
             face_of_rank.push(x);
         }
@@ -523,11 +573,11 @@ pub(super) fn decode_elements(
             let (key, turns) = el.shape(kind, x);
             let k = el.degree_or(kind, x);
             if d.symbol(&mut st.same[kind])? == 1 {
-                let t = st
-                    .places
-                    .get(&(kind, key))
-                    .ok_or_else(|| Error::corrupt(SECTION, "a turn of no order met"))?;
-                let r = d.uniform(turns as u64)? as usize;
+                if !st.places.contains_key(&(kind, key)) {
+                    return Err(Error::corrupt(SECTION, "a turn of no order met"));
+                }
+                let r = st.get_turn(&mut d, &el, kind, x, turns)?;
+                let t = &st.places[&(kind, key)];
                 t.iter().map(|&a| el.turn(kind, k, a, r)).collect()
             } else {
                 let p = get_perm(&mut d, points.len())?;
