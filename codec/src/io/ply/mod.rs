@@ -226,15 +226,7 @@ struct List<'a> {
 impl<'a> Lists<'a> {
     /// Reads property `i`'s list of the current face.
     fn read(&mut self, i: usize, ty: Scalar, body: &mut Body<'a>, cty: Scalar) -> Result<()> {
-        let n = body.int(cty, "list count")?;
-        let item = if body.mode == Mode::Ascii {
-            2
-        } else {
-            ty.size() as u64
-        };
-        if n < 0 || (n as u64).saturating_mul(item) > body.remaining() as u64 {
-            return Err(err(format!("list of {n} items does not fit in the file")));
-        }
+        let n = list_len(body, cty, ty)?;
         let at = match self.read.iter().position(|r| r.prop == i) {
             Some(at) => at,
             None => {
@@ -754,13 +746,8 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     })
 }
 
-/// One list property's items; with `face`, kept as vertex indices.
-fn read_list(
-    body: &mut Body<'_>,
-    cty: Scalar,
-    ity: Scalar,
-    mut face: Option<&mut Vec<u32>>,
-) -> Result<()> {
+/// A list's length, read, that the bytes left can hold (two per item in ASCII).
+fn list_len(body: &mut Body<'_>, cty: Scalar, ity: Scalar) -> Result<u64> {
     let n = body.int(cty, "list count")?;
     let item = if body.mode == Mode::Ascii {
         2
@@ -770,6 +757,17 @@ fn read_list(
     if n < 0 || (n as u64).saturating_mul(item) > body.remaining() as u64 {
         return Err(err(format!("list of {n} items does not fit in the file")));
     }
+    Ok(n as u64)
+}
+
+/// One list property's items; with `face`, kept as vertex indices.
+fn read_list(
+    body: &mut Body<'_>,
+    cty: Scalar,
+    ity: Scalar,
+    mut face: Option<&mut Vec<u32>>,
+) -> Result<()> {
+    let n = list_len(body, cty, ity)?;
     if let Some(f) = face.as_deref_mut() {
         f.clear();
     }

@@ -537,17 +537,32 @@ impl Elements {
     }
 }
 
+/// What decoding method 2 or 3 starts from: the elements of `h` (which the faces must
+/// be the finest level of), the decoder, the models.
+fn start(
+    method: u8,
+    payload: &[u8],
+    faces: Faces<'_>,
+    h: Option<Hierarchy<'_>>,
+) -> Result<(Elements, Decoder, State)> {
+    let h = h.ok_or_else(|| {
+        Error::corrupt(SECTION, format!("method {method} without a Catmull-Clark hierarchy"))
+    })?;
+    let el = Elements::new(h, faces).ok_or_else(|| {
+        Error::corrupt(SECTION, format!("method {method} on faces that are not the hierarchy's"))
+    })?;
+    let d = Decoder::new(payload, SECTION)?;
+    let st = State::new(&el);
+    Ok((el, d, st))
+}
+
 /// Decodes method 2 (SPEC.md 7.3).
 pub(super) fn decode_elements(
     payload: &[u8],
     faces: Faces<'_>,
     h: Option<Hierarchy<'_>>,
 ) -> Result<InputOrder> {
-    let h = h.ok_or_else(|| Error::corrupt(SECTION, "method 2 without a Catmull-Clark hierarchy"))?;
-    let el = Elements::new(h, faces)
-        .ok_or_else(|| Error::corrupt(SECTION, "method 2 on faces that are not the hierarchy's"))?;
-    let mut d = Decoder::new(payload, SECTION)?;
-    let mut st = State::new(&el);
+    let (el, mut d, mut st) = start(2, payload, faces, h)?;
     let nv = faces.nv;
     let mut vertices = vec![0u32; nv];
     let mut face_of_rank = Vec::with_capacity(el.count[F]);
@@ -760,11 +775,7 @@ pub(super) fn decode_first_use(
     faces: Faces<'_>,
     h: Option<Hierarchy<'_>>,
 ) -> Result<InputOrder> {
-    let h = h.ok_or_else(|| Error::corrupt(SECTION, "method 3 without a Catmull-Clark hierarchy"))?;
-    let el = Elements::new(h, faces)
-        .ok_or_else(|| Error::corrupt(SECTION, "method 3 on faces that are not the hierarchy's"))?;
-    let mut d = Decoder::new(payload, SECTION)?;
-    let mut st = State::new(&el);
+    let (el, mut d, mut st) = start(3, payload, faces, h)?;
     let nf = el.count[F];
     let (forder, rotations) =
         get_face_blocks(&mut d, &mut st, &el, faces.count(), |f| (f < nf).then_some(f))?;
