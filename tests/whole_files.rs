@@ -301,3 +301,85 @@ fn public_files_are_accepted_and_come_back() {
     );
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// The TMPL payload's size of `bytes` compressed with its own bytes.
+fn template_len(bytes: &[u8]) -> usize {
+    let m = subwave::load(bytes, None).unwrap();
+    let opts = EncodeOptions {
+        keep_order: true,
+        source: m.source(),
+        ..Default::default()
+    };
+    let enc = subwave::encode_file(&m.mesh, &m.quantization, &opts, bytes, m.format).unwrap();
+    let c = subwave_container::Container::parse(&enc.bytes, &subwave::Limits::default()).unwrap();
+    c.sections
+        .iter()
+        .find(|s| s.kind == subwave_container::SectionKind::TEMPLATE)
+        .map_or(0, |s| s.payload.len())
+}
+
+#[test]
+fn floats_in_exponent_form_are_markers_not_literals() {
+    // An ASCII PLY of float32 values as C++ and Python write their shortest text:
+    // small values in exponent form (`-2.3283064e-10`, `3.9062503e-05`), coordinates
+    // and a float property alike. It comes back byte for byte, and its template is
+    // no larger than the same file's with every value in plain form (both all
+    // markers), where the exponent forms' text would cost kilobytes.
+    let n = 9u32;
+    let tiny = |i: u32| -> f32 { (i as f32 + 1.5) * 3.7e-9 * if i % 2 == 0 { -1.0 } else { 1.0 } };
+    let make = |exp: bool| -> Vec<u8> {
+        let mut body = String::new();
+        for y in 0..=n {
+            for x in 0..=n {
+                let i = y * (n + 1) + x;
+                let vals = [
+                    x as f32 * 0.25 + tiny(i),
+                    y as f32 * 0.5,
+                    tiny(i + 7),
+                    tiny(i + 3),
+                ];
+                let toks: Vec<String> = vals
+                    .iter()
+                    .map(|v| {
+                        // Python's repr of a float32's shortest digits.
+                        let t = format!("{v:e}");
+                        let (m, e) = t.split_once('e').unwrap();
+                        let e: i32 = e.parse().unwrap();
+                        match exp && !(-4..16).contains(&e) {
+                            true => format!("{m}e{}{:02}", if e < 0 { '-' } else { '+' }, e.abs()),
+                            false => format!("{v}"),
+                        }
+                    })
+                    .collect();
+                body.push_str(&toks.join(" "));
+                body.push('\n');
+            }
+        }
+        for y in 0..n {
+            for x in 0..n {
+                let v = |i: u32, j: u32| j * (n + 1) + i;
+                let f = [v(x, y), v(x + 1, y), v(x + 1, y + 1), v(x, y + 1)];
+                body.push_str(&format!("4 {} {} {} {}\n", f[0], f[1], f[2], f[3]));
+            }
+        }
+        format!(
+            "ply\nformat ascii 1.0\ncomment Created in Blender version 5.0.1\n\
+             element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+             property float Wear\nelement face {}\nproperty list uchar uint vertex_indices\n\
+             end_header\n{body}",
+            (n + 1) * (n + 1),
+            n * n
+        )
+        .into_bytes()
+    };
+    let (exp, plain) = (make(true), make(false));
+    let count = String::from_utf8_lossy(&exp).matches("e-0").count();
+    assert!(count > 100, "{count} values in exponent form");
+    round_trip("exponent floats", &exp).unwrap();
+    round_trip("plain floats", &plain).unwrap();
+    let (t_exp, t_plain) = (template_len(&exp), template_len(&plain));
+    assert!(
+        t_exp <= t_plain + 200,
+        "template {t_exp} B with exponent forms, {t_plain} B without"
+    );
+}

@@ -369,6 +369,34 @@ pub(crate) fn text_at(
     }
 }
 
+/// Entry `v`'s value `k` in exponent form, as C++'s and Python's shortest float text
+/// writes small and large values (`-2.3283064e-10`, `1e+16`): the shortest digits
+/// that read back as the same float, one before the point, then `e`, the exponent's
+/// sign and at least two digits (SPEC.md 11). `None` without float bits.
+pub(crate) fn exp_text_at(
+    f: &[[u64; 3]],
+    v: usize,
+    k: usize,
+    q: &Quantization,
+    out: &mut String,
+) -> Option<()> {
+    let (Some(f), Quantization::Float { width, .. }) = (f.get(v), q) else {
+        return None;
+    };
+    let t = match width {
+        FloatWidth::F32 => format!("{:e}", f32::from_bits(f[k] as u32)),
+        FloatWidth::F64 => format!("{:e}", f64::from_bits(f[k])),
+    };
+    let (mantissa, exp) = t.split_once('e')?;
+    let (sign, digits) = match exp.strip_prefix('-') {
+        Some(d) => ('-', d),
+        None => ('+', exp),
+    };
+    use std::fmt::Write as _;
+    let _ = write!(out, "{mantissa}e{sign}{digits:0>2}");
+    Some(())
+}
+
 /// [`value_f64`] of entry `v` of `p` with the float bits `f`.
 pub(crate) fn f64_at(p: &[[i64; 3]], f: &[[u64; 3]], v: usize, k: usize, q: &Quantization) -> f64 {
     match (f.get(v), q) {

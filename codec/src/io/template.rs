@@ -4,7 +4,7 @@
 //! for byte. Everything else (attributes, comments, number styles, line endings, a PLY
 //! header) is kept as it is; the TMPL section compresses it.
 
-use super::{format_coord, value_f32, value_f64};
+use super::{exp_text_at, format_coord, value_f32, value_f64};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::quant::Quantization;
@@ -101,6 +101,8 @@ pub(crate) enum Form {
     /// Not a value: the last corner's vertex in the attribute's faces, counted from 1,
     /// as decimal text (an OBJ corner's `vt` number).
     Corner = 16,
+    /// Text in exponent form (SPEC.md 11: as 0x10 writes a coordinate).
+    TextExp = 17,
 }
 
 impl Form {
@@ -108,7 +110,7 @@ impl Form {
         use Form::*;
         [
             Text, F32Le, F32Be, F64Le, F64Be, I8, U8, I16Le, I16Be, U16Le, U16Be, I32Le, I32Be,
-            U32Le, U32Be, Skip, Corner,
+            U32Le, U32Be, Skip, Corner, TextExp,
         ]
         .get(b as usize)
         .copied()
@@ -153,6 +155,11 @@ impl Form {
             Text => {
                 let mut t = String::new();
                 format_coord(&a.mesh, v, k, &a.q, &mut t);
+                out.extend_from_slice(t.as_bytes());
+            }
+            TextExp => {
+                let mut t = String::new();
+                exp_text_at(&a.mesh.floats, v, k, &a.q, &mut t)?;
                 out.extend_from_slice(t.as_bytes());
             }
             F32Le => out.extend_from_slice(&value_f32(&a.mesh, v, k, &a.q).to_le_bytes()),
@@ -245,8 +252,10 @@ const CORNER_TEXT: u8 = 14;
 /// Followed by a channel number k: the next value of corner index channel k (CIDX,
 /// SPEC.md 11.1) as text.
 const CHANNEL_TEXT: u8 = 15;
+/// The next coordinate as text in exponent form (a vertex with float bits).
+const COORD_EXP: u8 = 16;
 /// Bytes at most this are markers; a literal one is escaped.
-const LAST_MARKER: u8 = 15;
+const LAST_MARKER: u8 = 16;
 
 /// Builds a template while a format's walker reads the file.
 pub(super) struct Builder<'m> {
@@ -314,11 +323,17 @@ impl<'m> Builder<'m> {
         let i = self.attr_used[g];
         self.attr_used[g] += 1;
         let mut w = Vec::with_capacity(token.len());
-        let same = form
-            .write(&self.channels.attributes[g], i, &mut w)
-            .is_some()
-            && w == token;
-        let form = if same { form } else { Form::Skip };
+        let a = &self.channels.attributes[g];
+        let mut same = |form: Form| {
+            w.clear();
+            form.write(a, i, &mut w).is_some() && w == token
+        };
+        let form = match form {
+            f if same(f) => f,
+            Form::Text if same(Form::TextExp) => Form::TextExp,
+            _ => Form::Skip,
+        };
+        let same = form != Form::Skip;
         self.out
             .extend_from_slice(&[CHANNEL_TEXT, FIRST_ATTRIBUTE + g as u8, form as u8]);
         if !same {
@@ -346,6 +361,12 @@ impl<'m> Builder<'m> {
         }
         if v < self.mesh.vertex_count() && self.text.as_bytes() == token {
             self.out.push(COORD_TEXT);
+            return;
+        }
+        self.text.clear();
+        let exp = exp_text_at(&self.mesh.floats, v, k, self.q, &mut self.text);
+        if exp.is_some() && self.text.as_bytes() == token {
+            self.out.push(COORD_EXP);
         } else {
             self.out.push(SKIP_COORD);
             self.literal(token);
@@ -611,6 +632,14 @@ pub(crate) fn expand(
                     next_coord(&mut coord).ok_or_else(|| bad("more coordinates than vertices"))?;
                 text.clear();
                 format_coord(mesh, v, k, q, &mut text);
+                out.extend_from_slice(text.as_bytes());
+            }
+            COORD_EXP => {
+                let (v, k) =
+                    next_coord(&mut coord).ok_or_else(|| bad("more coordinates than vertices"))?;
+                text.clear();
+                exp_text_at(&mesh.floats, v, k, q, &mut text)
+                    .ok_or_else(|| bad("a coordinate in exponent form without float bits"))?;
                 out.extend_from_slice(text.as_bytes());
             }
             COORD_F32_LE | COORD_F32_BE | COORD_F64_LE | COORD_F64_BE => {
