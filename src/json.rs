@@ -69,6 +69,7 @@ pub fn info(info: &Info) -> Value {
             Some(m) => json!({"kind": s.kind, "bytes": s.bytes, "mode": m, "unbinned": s.unbinned, "joint": s.joint, "zero_slots": s.zero_slots}),
             None => match &s.attribute {
                 Some(a) => json!({"kind": s.kind, "bytes": s.bytes, "attribute": {"name": a.name, "domain": a.domain, "width": a.width, "entries": a.entries, "transform": a.transform, "fit_rules": a.rules}}),
+                None if !s.order_method.is_empty() => json!({"kind": s.kind, "bytes": s.bytes, "order_method": s.order_method}),
                 None => json!({"kind": s.kind, "bytes": s.bytes}),
             },
         }).collect::<Vec<_>>(),

@@ -1057,6 +1057,9 @@ fn print_info(info: &subwave::Info, as_json: bool) {
                         s.kind, s.bytes, a.entries, a.width, a.transform
                     )
                 }
+                None if !s.order_method.is_empty() => {
+                    format!("{} {} B ({})", s.kind, s.bytes, s.order_method)
+                }
                 None => format!("{} {} B", s.kind, s.bytes),
             },
         })

@@ -673,3 +673,38 @@ fn verify_repeats_and_reports_medians() {
     let bad = run(&["verify", cube.to_str().unwrap(), "--repeat", "0"]);
     assert_eq!(bad.status.code(), Some(2));
 }
+
+/// `info` names how an ORDR section codes the order (SPEC.md 7), in text and JSON.
+#[test]
+fn info_names_the_order_method() {
+    let swv = compressed(
+        &corpus("cube_cc4.shuffled.obj"),
+        "ordr.swv",
+        &["--keep-order"],
+    );
+    let v = json(&run(&["info", swv.to_str().unwrap(), "--json"]));
+    let sections = v["sections"].as_array().unwrap();
+    let ordr = sections
+        .iter()
+        .find(|s| s["kind"] == "ORDR")
+        .expect("an ORDR section");
+    let method = ordr["order_method"].as_str().unwrap().to_string();
+    assert!(
+        [
+            "lists",
+            "walks",
+            "base elements",
+            "face blocks and first use"
+        ]
+        .contains(&method.as_str()),
+        "{method}"
+    );
+    let text = String::from_utf8_lossy(&run(&["info", swv.to_str().unwrap()]).stdout).to_string();
+    let want = format!("ORDR {} B ({method})", ordr["bytes"]);
+    assert!(text.contains(&want), "{want} not in {text}");
+    // Other sections have no method.
+    assert!(sections
+        .iter()
+        .filter(|s| s["kind"] != "ORDR")
+        .all(|s| s.get("order_method").is_none()));
+}

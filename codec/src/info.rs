@@ -29,6 +29,9 @@ pub struct SectionInfo {
     /// An ATTR section's attribute (SPEC.md 11.3): its values per entry and how its
     /// nested container codes them; `None` for other sections.
     pub attribute: Option<AttributeInfo>,
+    /// An ORDR section's method (SPEC.md 7): `lists`, `walks`, `base elements` or
+    /// `face blocks and first use`; empty for other sections.
+    pub order_method: String,
 }
 
 /// How an ATTR or CHAN section codes its attribute.
@@ -87,6 +90,10 @@ pub(crate) fn section_info(
             false => Vec::new(),
         },
         attribute: None,
+        order_method: match kind {
+            SectionKind::ORDER => crate::sections::ordr::method_name(payload).to_string(),
+            _ => String::new(),
+        },
     }
 }
 

@@ -228,6 +228,17 @@ pub fn encode(o: &InputOrder, faces: Faces<'_>) -> Vec<u8> {
     out
 }
 
+/// What `info` calls an ORDR payload's method (SPEC.md 7).
+pub fn method_name(payload: &[u8]) -> &'static str {
+    match payload.first() {
+        Some(0) => "lists",
+        Some(1) => "walks",
+        Some(2) => "base elements",
+        Some(3) => "face blocks and first use",
+        _ => "unknown method",
+    }
+}
+
 /// Decodes an ORDR section for the canonical `faces`.
 pub fn decode(payload: &[u8], faces: Faces<'_>) -> Result<InputOrder> {
     match payload.split_first() {
