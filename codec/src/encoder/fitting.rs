@@ -43,6 +43,9 @@ pub(crate) fn code_fit(
     let last = canon.levels.last()?;
     let finest = last.next();
     let base = &canon.levels[0];
+    let fine: Vec<[f64; 3]> = (0..pos[0].len())
+        .map(|i| std::array::from_fn(|k| pos[k][i] as f64))
+        .collect();
     let mut sets = None;
     if screen {
         let mean = |f: &dyn Fn(&[i64]) -> Option<f64>| {
@@ -59,7 +62,7 @@ pub(crate) fn code_fit(
             && !crate::topology::sqrt2::closed(base);
         let far = mean(&|x| fit::defect(last, x)) > FIT_SCREEN
             && if canon.levels.len() < 3 {
-                chart || !near_limit(canon, &finest, pos)
+                chart || !near_limit(canon, &finest, &fine)
             } else {
                 mean(&|x| fit::roughness(&canon.levels, &finest, x)) > ROUGH_SCREEN
             };
@@ -75,9 +78,6 @@ pub(crate) fn code_fit(
         }
     }
     let nb = canon.base.nv;
-    let fine: Vec<[f64; 3]> = (0..pos[0].len())
-        .map(|i| std::array::from_fn(|k| pos[k][i] as f64))
-        .collect();
     let mut best: Option<Payloads> = None;
     let sets = sets.unwrap_or_else(|| rule_sets(canon, &finest, pos));
     for rules in sets {
@@ -135,23 +135,20 @@ const NEAR_LIMIT: f64 = 4.0;
 /// coded runs to [`FIT_TOLERANCE`]).
 const NEAR_ITERATIONS: usize = 10;
 
-/// Whether the finest values of `canon` are near the limit surface of a control mesh
-/// (one least-squares fit with the limit rules: cheap next to coding the fit).
-fn near_limit(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> bool {
+/// Whether the finest values `fine` of `canon` are near the limit surface of a control
+/// mesh (one least-squares fit with the limit rules: cheap next to coding the fit).
+fn near_limit(canon: &Canonical, finest: &Level, fine: &[[f64; 3]]) -> bool {
     let rules = Rules {
         limit: true,
         ..Rules::default()
     };
     let op = fit::Operator::new(&canon.levels, finest, &rules);
-    let fine: Vec<[f64; 3]> = (0..pos[0].len())
-        .map(|i| std::array::from_fn(|k| pos[k][i] as f64))
-        .collect();
     let nb = canon.base.nv;
-    let control = op.fit(&fine, &fine[..nb], &[], NEAR_ITERATIONS, FIT_TOLERANCE);
+    let control = op.fit(fine, &fine[..nb], &[], NEAR_ITERATIONS, FIT_TOLERANCE);
     let mut dist: Vec<f64> = op
         .apply(&control)
         .iter()
-        .zip(&fine)
+        .zip(fine)
         .flat_map(|(p, y)| (0..3).map(move |k| (p[k] - y[k]).abs()))
         .collect();
     if dist.is_empty() {

@@ -144,7 +144,7 @@ fn best_candidate(
     mesh: &Mesh,
     opts: &EncodeOptions,
     flat_h: &Header,
-    canons: Vec<Canonical>,
+    mut canons: Vec<Canonical>,
     first: Wavelet,
 ) -> Result<Option<Candidate>> {
     let effort = Effort::of(opts.effort);
@@ -155,7 +155,6 @@ fn best_candidate(
         .map(|i| i == 0 || effort.candidates)
         .collect();
     let mut orders: Vec<Option<Vec<u8>>> = vec![None; canons.len()];
-    let mut canons = canons;
     if opts.keep_order && !effort.candidates && canons.len() > 1 {
         for (i, canon) in canons.iter_mut().enumerate() {
             canon.unstow()?;
@@ -169,21 +168,6 @@ fn best_candidate(
             take[j] = true;
         }
     }
-    best_of(mesh, opts, flat_h, canons, first, &take, orders)
-}
-
-/// [`best_candidate`] over the candidates `take` marks, with the orders already coded.
-#[allow(clippy::too_many_arguments)]
-fn best_of(
-    mesh: &Mesh,
-    opts: &EncodeOptions,
-    flat_h: &Header,
-    canons: Vec<Canonical>,
-    first: Wavelet,
-    take: &[bool],
-    mut orders: Vec<Option<Vec<u8>>>,
-) -> Result<Option<Candidate>> {
-    let effort = Effort::of(opts.effort);
     let mut fam_best: Option<Candidate> = None;
     let picked = canons.into_iter().enumerate().filter(|(i, _)| take[*i]);
     for (i, mut canon) in picked {

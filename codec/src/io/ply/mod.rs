@@ -241,7 +241,7 @@ impl<'a> Lists<'a> {
             }
         };
         let r = &mut self.read[at];
-        r.lens.push(n as u64);
+        r.lens.push(n);
         for _ in 0..n {
             match body.mode {
                 Mode::Ascii => r.tokens.push(body.token()?),

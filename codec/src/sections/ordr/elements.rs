@@ -238,8 +238,8 @@ impl Elements {
         (self.base_starts[f + 1] - self.base_starts[f]) as usize
     }
 
-    /// Template key of an element of `kind` (its base face's degree for a face) and
-    /// its turns: an edge's two directions, a face's corners.
+    /// Template key of an element of `kind` (0 for an edge, its base face's degree for
+    /// a face) and its turns: an edge's two directions, a face's corners.
     fn shape(&self, kind: usize, x: usize) -> (usize, usize) {
         match kind {
             E => (0, 2),
@@ -299,7 +299,6 @@ struct State {
     same: [AdaptiveModel; KINDS + 1],
     places: HashMap<(usize, usize), Vec<u32>>,
     faces: HashMap<usize, Vec<(u32, u32)>>,
-    /// A new face order's first corners.
     /// A new face order's first corners, per previous face's in the block.
     rot: [AdaptiveModel; 4],
     /// An edge's turn against the one its ends' order among the base vertices met
@@ -442,10 +441,10 @@ impl State {
         }
     }
 
-    /// Notes that the element of kind `kind`, number `x`, is met.
+    /// Notes when the element of kind `kind`, number `x`, just taken, was met.
     fn met(&mut self, kind: usize, x: usize) {
         if kind == V {
-            self.met_at[x] = self.ids[V].taken as u32;
+            self.met_at[x] = self.ids[V].taken as u32 - 1;
         }
     }
 }
@@ -461,10 +460,25 @@ fn turn_of<T: PartialEq + Copy>(
     (0..turns).find(|&r| t.len() == seen.len() && t.iter().zip(seen).all(|(&a, &b)| turn(a, r) == b))
 }
 
+/// The smaller of methods 2 and 3 (method 2 on a tie) that codes `o` on the finest
+/// level of `h`, with its method number; `None` when neither does.
+pub(super) fn encode_by_elements(
+    o: &InputOrder,
+    faces: Faces<'_>,
+    h: Hierarchy<'_>,
+) -> Option<(u8, Vec<u8>)> {
+    let el = Elements::new(h, faces)?;
+    let by_blocks = encode_elements(&el, o, faces).map(|b| (2, b));
+    let by_first_use = encode_first_use(&el, o, faces).map(|b| (3, b));
+    match (by_blocks, by_first_use) {
+        (Some(a), Some(b)) => Some(if b.1.len() < a.1.len() { b } else { a }),
+        (a, b) => a.or(b),
+    }
+}
+
 /// Codes the order by elements (method 2); `None` when the input's order is not one
 /// block per element, vertices and faces alike.
-pub(super) fn encode_elements(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>) -> Option<Vec<u8>> {
-    let el = Elements::new(h, faces)?;
+fn encode_elements(el: &Elements, o: &InputOrder, faces: Faces<'_>) -> Option<Vec<u8>> {
     let nv = faces.nv;
     let elements = el.starts.len() - 1;
     let mut of = vec![(0u32, 0u32); nv];
@@ -478,7 +492,7 @@ pub(super) fn encode_elements(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>
         in_vert[p as usize] = c as u32;
     }
     let mut e = Encoder::new();
-    let mut st = State::new(&el);
+    let mut st = State::new(el);
     let mut face_rank = vec![0u32; el.count[F]];
     let mut pos = 0;
     while pos < nv {
@@ -502,17 +516,16 @@ pub(super) fn encode_elements(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>
         if kind == F {
             face_rank[x] = st.ids[F].taken as u32;
         }
-        st.met(kind, x);
         st.ids[kind].put(&mut e, x);
+        st.met(kind, x);
         if kind != V {
             let (key, turns) = el.shape(kind, x);
-            let k = el.degree_or(kind, x);
             let hit = turn_of(st.places.get(&(kind, key)), &places, turns, |a, r| {
-                el.turn(kind, k, a, r)
+                el.turn(kind, key, a, r)
             });
             e.symbol(&mut st.same[kind], hit.is_some() as usize);
             match hit {
-                Some(r) => st.put_turn(&mut e, &el, kind, x, r, turns),
+                Some(r) => st.put_turn(&mut e, el, kind, x, r, turns),
                 None => {
                     put_perm(&mut e, &places);
                     st.places.insert((kind, key), places);
@@ -522,19 +535,8 @@ pub(super) fn encode_elements(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>
         pos += n;
     }
     // The faces: a block per base face, numbered by the rank of its inside.
-    put_face_blocks(&mut e, &mut st, &el, o, |f| face_rank[f] as usize)?;
+    put_face_blocks(&mut e, &mut st, el, o, |f| face_rank[f] as usize)?;
     Some(e.finish())
-}
-
-impl Elements {
-    /// The degree of the base face of an element of `kind` (0 for others).
-    fn degree_or(&self, kind: usize, x: usize) -> usize {
-        if kind == F {
-            self.degree(x)
-        } else {
-            0
-        }
-    }
 }
 
 /// What decoding method 2 or 3 starts from: the elements of `h` (which the faces must
@@ -574,9 +576,7 @@ pub(super) fn decode_elements(
             return Err(Error::corrupt(SECTION, "more elements of a kind than the mesh has"));
         }
         let x = st.ids[kind].get(&mut d)?;
-        if kind == V {
-            st.met_at[x] = st.ids[V].taken as u32 - 1;
-        }
+        st.met(kind, x);
         if kind == F {
             face_of_rank.push(x);
         }
@@ -586,14 +586,13 @@ pub(super) fn decode_elements(
             vec![0]
         } else {
             let (key, turns) = el.shape(kind, x);
-            let k = el.degree_or(kind, x);
             if d.symbol(&mut st.same[kind])? == 1 {
                 if !st.places.contains_key(&(kind, key)) {
                     return Err(Error::corrupt(SECTION, "a turn of no order met"));
                 }
                 let r = st.get_turn(&mut d, &el, kind, x, turns)?;
                 let t = &st.places[&(kind, key)];
-                t.iter().map(|&a| el.turn(kind, k, a, r)).collect()
+                t.iter().map(|&a| el.turn(kind, key, a, r)).collect()
             } else {
                 let p = get_perm(&mut d, points.len())?;
                 st.places.insert((kind, key), p.clone());
@@ -754,18 +753,13 @@ fn first_use(faces: Faces<'_>, forder: &[u32], rotations: &[u32]) -> Vec<u32> {
 
 /// Codes the order as face blocks, the vertices by first use (method 3); `None` when
 /// the input's order is not so.
-pub(super) fn encode_first_use(
-    o: &InputOrder,
-    faces: Faces<'_>,
-    h: Hierarchy<'_>,
-) -> Option<Vec<u8>> {
-    let el = Elements::new(h, faces)?;
+fn encode_first_use(el: &Elements, o: &InputOrder, faces: Faces<'_>) -> Option<Vec<u8>> {
     if first_use(faces, &o.faces, &o.rotations) != o.vertices {
         return None;
     }
     let mut e = Encoder::new();
-    let mut st = State::new(&el);
-    put_face_blocks(&mut e, &mut st, &el, o, |f| f)?;
+    let mut st = State::new(el);
+    put_face_blocks(&mut e, &mut st, el, o, |f| f)?;
     Some(e.finish())
 }
 
@@ -884,9 +878,8 @@ mod tests {
             let mut pos = 0;
             for &elem in &order {
                 let (kind, x) = el.kind(elem);
-                let (_, turns) = if kind == V { (0, 1) } else { el.shape(kind, x) };
+                let (k, turns) = if kind == V { (0, 1) } else { el.shape(kind, x) };
                 let r = next(&mut seed) as usize % turns;
-                let k = el.degree_or(kind, x);
                 for p in 0..el.size(elem) as u32 {
                     let p = if kind == V { p } else { el.turn(kind, k, p, r) };
                     vertices[el.points[el.starts[elem] + p as usize] as usize] = pos;
@@ -918,7 +911,7 @@ mod tests {
                 faces: forder,
                 rotations,
             };
-            let body = encode_elements(&o, faces, h).expect("blocks of elements");
+            let body = encode_elements(&el, &o, faces).expect("blocks of elements");
             assert_eq!(decode_elements(&body, faces, Some(h)).unwrap(), o);
             // Walks pay an escape at most blocks; here a block costs its number and
             // turn (and each shape's first order once), and the smallest is kept
@@ -951,7 +944,7 @@ mod tests {
                 vertices: first_use(faces, &o.faces, &o.rotations),
                 ..o.clone()
             };
-            let body3 = encode_first_use(&fu, faces, h).expect("face blocks");
+            let body3 = encode_first_use(&el, &fu, faces).expect("face blocks");
             assert_eq!(decode_first_use(&body3, faces, Some(h)).unwrap(), fu);
             let bytes3 = encode(&fu, faces);
             if sizes && levels > 1 {
@@ -964,14 +957,14 @@ mod tests {
                 b[bit / 8] ^= 1 << (bit % 8);
                 let _ = decode(&b, faces);
             }
-            assert!(encode_first_use(&o, faces, h).is_none() || o.vertices == fu.vertices);
+            assert!(encode_first_use(&el, &o, faces).is_none() || o.vertices == fu.vertices);
             // An order that is no blocks of elements is coded otherwise.
             let mut shuffled = o.clone();
             let (edge, face) = (el.element(E, 0), el.element(F, 0));
             let (a, b) = (el.points[el.starts[edge]], el.points[el.starts[face] + 1]);
             shuffled.vertices.swap(a as usize, b as usize);
             // (With one level an edge and a quad hold one point each: still blocks.)
-            assert_eq!(encode_elements(&shuffled, faces, h).is_none(), levels > 1);
+            assert_eq!(encode_elements(&el, &shuffled, faces).is_none(), levels > 1);
             assert_eq!(decode(&encode(&shuffled, faces), faces).unwrap(), shuffled);
         }
     }

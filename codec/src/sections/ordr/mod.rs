@@ -19,7 +19,7 @@ mod tests;
 
 use crate::entropy::{AdaptiveModel, Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
-use elements::{decode_elements, decode_first_use, encode_elements, encode_first_use};
+use elements::{decode_elements, decode_first_use, encode_by_elements};
 pub use elements::Hierarchy;
 use walks::{decode_walks, encode_walks};
 
@@ -214,13 +214,9 @@ pub fn encode(o: &InputOrder, faces: Faces<'_>) -> Vec<u8> {
     } else {
         (0, lists)
     };
-    if let Some(h) = faces.hierarchy {
-        if let Some(b) = encode_elements(o, faces, h).filter(|b| b.len() < body.len()) {
-            (method, body) = (2, b);
-        }
-        if let Some(b) = encode_first_use(o, faces, h).filter(|b| b.len() < body.len()) {
-            (method, body) = (3, b);
-        }
+    let by_elements = faces.hierarchy.and_then(|h| encode_by_elements(o, faces, h));
+    if let Some((m, b)) = by_elements.filter(|(_, b)| b.len() < body.len()) {
+        (method, body) = (m, b);
     }
     let mut out = Vec::with_capacity(body.len() + 1);
     out.push(method);
