@@ -9,7 +9,7 @@
 
 use std::collections::HashMap;
 
-use super::{get_perm, put_perm, Faces, InputOrder, Unused, SECTION};
+use super::{get_perm, put_perm, Faces, InputOrder, Steps, Unused, OTHER, SECTION};
 use crate::entropy::{AdaptiveModel, Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
 use crate::topology::{Level, Topo};
@@ -65,6 +65,9 @@ struct Elements {
     face_place: Vec<u32>,
     /// Per base face block (from `base_starts[f] * per_corner`), its faces by place.
     face_at: Vec<u32>,
+    /// Per finest face, its corner at the lowest coordinates of its base face's frame
+    /// (a quad's, another face's quarter's): exporters start a face there.
+    face_low: Vec<u8>,
 }
 
 impl Elements {
@@ -112,6 +115,7 @@ impl Elements {
         let first_face = h.nv + base.ne();
         let mut face_place = vec![0u32; faces.count()];
         let mut face_at = vec![u32::MAX; faces.count()];
+        let mut face_low = vec![0u8; faces.count()];
         for g in 0..faces.count() {
             let face = faces.face(g);
             if face.len() != 4 {
@@ -144,14 +148,16 @@ impl Elements {
                 2 => [s - u, s - v],
                 _ => [v, s - u],
             };
+            // The cell's place, and which of the face's corners is at its lowest
+            // coordinates in the frame (a quad's, another face's quarter's).
+            let c = if k == 4 { p.map(full) } else { p };
+            let (x, y) = (c.iter().map(|c| c[0]).min()?, c.iter().map(|c| c[1]).min()?);
             let cell = if k == 4 {
-                let c = p.map(full);
-                let (x, y) = (c.iter().map(|c| c[0]).min()?, c.iter().map(|c| c[1]).min()?);
                 y * s + x
             } else {
-                let (u, v) = (p.iter().map(|c| c[0]).min()?, p.iter().map(|c| c[1]).min()?);
-                i as i64 * half * half + v * half + u
+                i as i64 * half * half + y * half + x
             };
+            face_low[g] = c.iter().position(|&c| c == [x, y])? as u8;
             let at = st * per_corner + cell as usize;
             if face_at[at] != u32::MAX {
                 return None;
@@ -214,6 +220,7 @@ impl Elements {
             edges: base.edges.clone(),
             face_place,
             face_at,
+            face_low,
         })
     }
 
@@ -308,17 +315,14 @@ struct State {
     met_at: Vec<u32>,
 }
 
-/// The numbers of one kind's items in the order met: each is the last one's next, the
-/// last one's plus the last step (a stride, as when an exporter's order is the
-/// canonical one transposed), or a jump: its rank among those not yet met less the
-/// rank of the last one's next.
+/// The numbers of one kind's items in the order met, coded as a permutation's values
+/// are (SPEC.md 7.1: the last one's next, the last one plus either of the last two
+/// steps other than 1, as when an exporter's order is the canonical one transposed or
+/// paired), but a jump is an integer: its rank among those not yet met less the rank of
+/// the last one's next.
 struct Ids {
-    /// Per previous symbol, a model of next / stride / jump.
-    step: [AdaptiveModel; 3],
+    step: Steps,
     jump: IntModel,
-    sym: usize,
-    last: i64,
-    stride: i64,
     unused: Unused,
     met: Vec<bool>,
     taken: usize,
@@ -327,11 +331,8 @@ struct Ids {
 impl Ids {
     fn new(n: usize) -> Self {
         Ids {
-            step: std::array::from_fn(|_| AdaptiveModel::new(3)),
+            step: Steps::new(),
             jump: IntModel::new(),
-            sym: 0,
-            last: -1,
-            stride: 1,
             unused: Unused::new(n),
             met: vec![false; n],
             taken: 0,
@@ -344,27 +345,20 @@ impl Ids {
 
     /// The rank among those not yet met of the last one's next.
     fn next_rank(&self) -> i64 {
-        self.unused.rank(((self.last + 1) as usize).min(self.met.len())) as i64
+        self.unused.rank(((self.step.last + 1) as usize).min(self.met.len())) as i64
     }
 
     fn take(&mut self, x: usize, sym: usize) {
         self.met[x] = true;
         self.unused.remove(x);
-        self.stride = x as i64 - self.last;
-        self.last = x as i64;
-        self.sym = sym;
+        self.step.take(x as i64, sym);
         self.taken += 1;
     }
 
     fn put(&mut self, e: &mut Encoder, x: usize) {
-        let d = x as i64 - self.last;
-        let sym = match d {
-            1 => 0,
-            d if d == self.stride => 1,
-            _ => 2,
-        };
-        e.symbol(&mut self.step[self.sym], sym);
-        if sym == 2 {
+        let sym = self.step.symbol_of(x as i64);
+        e.symbol(self.step.model(), sym);
+        if sym == OTHER {
             let jump = self.unused.rank(x) as i64 - self.next_rank();
             e.int(&mut self.jump, jump);
         }
@@ -372,17 +366,17 @@ impl Ids {
     }
 
     fn get(&mut self, d: &mut Decoder) -> Result<usize> {
-        let sym = d.symbol(&mut self.step[self.sym])?;
-        let x = match sym {
-            0 => self.last + 1,
-            1 => self.last + self.stride,
-            _ => {
+        let sym = d.symbol(self.step.model())?;
+        let x = match (sym, self.step.value(sym)) {
+            (OTHER, _) => {
                 let r = self.next_rank().saturating_add(d.int(&mut self.jump)?);
                 if !(0..self.left() as i64).contains(&r) {
                     return Err(Error::corrupt(SECTION, "an element's rank out of range"));
                 }
                 self.unused.select(r as u64) as i64
             }
+            (_, Some(x)) => x,
+            _ => return Err(Error::corrupt(SECTION, "a step of no number yet")),
         };
         if !(0..self.met.len() as i64).contains(&x) || self.met[x as usize] {
             return Err(Error::corrupt(SECTION, "an element met twice"));
@@ -660,9 +654,10 @@ fn put_face_blocks(
                 let order: Vec<u32> = seen.iter().map(|s| s.0).collect();
                 put_perm(e, &order);
                 let mut prev = 0;
-                for &(_, rot) in &seen {
-                    e.symbol(&mut st.rot[prev], rot as usize);
-                    prev = rot as usize;
+                for (&(_, rot), &c) in seen.iter().zip(block) {
+                    let r = (rot as usize + el.face_low[c as usize] as usize) % 4;
+                    e.symbol(&mut st.rot[prev], r);
+                    prev = r;
                 }
                 st.faces.insert(k, seen);
             }
@@ -704,7 +699,9 @@ fn get_face_blocks(
             let mut prev = 0;
             for a in order {
                 prev = d.symbol(&mut st.rot[prev])?;
-                s.push((a, prev as u32));
+                let c = el.face_at[first + a as usize] as usize;
+                let low = el.face_low[c] as usize;
+                s.push((a, ((prev + 4 - low) % 4) as u32));
             }
             st.faces.insert(k, s.clone());
             s

@@ -124,46 +124,112 @@ impl<'a> Faces<'a> {
 /// Codes a permutation `order[new] = old` of `0..order.len()` (SPEC.md 7.1).
 fn put_perm(e: &mut Encoder, order: &[u32]) {
     let n = order.len();
-    let mut run = [AdaptiveModel::new(2), AdaptiveModel::new(2)];
+    let mut step = Steps::new();
     let mut unused = Unused::new(n);
-    let mut prev: i64 = -1;
-    let mut prev_hit = 0usize;
     for (i, &o) in order.iter().enumerate() {
-        let hit = o as i64 == prev + 1;
-        e.symbol(&mut run[prev_hit], hit as usize);
-        if !hit {
+        let sym = step.symbol_of(o as i64);
+        e.symbol(step.model(), sym);
+        if sym == OTHER {
             e.uniform(unused.rank(o as usize), (n - i) as u64);
         }
         unused.remove(o as usize);
-        prev = o as i64;
-        prev_hit = hit as usize;
+        step.take(o as i64, sym);
+    }
+}
+
+/// Each value of a permutation (SPEC.md 7.1): the last one's next, the last one plus
+/// the last step that was not 1 or the one before it (a row's end, a column's next, a
+/// block's next: a grid's order, row by row in blocks), or another, by its rank among
+/// those not yet taken.
+const NEXT: usize = 0;
+const STRIDE: usize = 1;
+const STRIDE2: usize = 2;
+pub(super) const OTHER: usize = 3;
+
+/// What [`put_perm`] and [`get_perm`] keep: the last value, the last two different
+/// steps other than 1, the run of the last symbol (how many times in a row it came)
+/// and per symbol its last run's length, and per last symbol and whether its run is as
+/// long as its last one a model of the next symbol.
+pub(super) struct Steps {
+    models: [AdaptiveModel; 8],
+    prev_sym: usize,
+    pub(super) last: i64,
+    strides: [i64; 2],
+    run: usize,
+    last_run: [usize; 4],
+}
+
+impl Steps {
+    pub(super) fn new() -> Self {
+        Steps {
+            models: std::array::from_fn(|_| AdaptiveModel::new(4)),
+            prev_sym: NEXT,
+            last: -1,
+            strides: [1, 1],
+            run: 0,
+            last_run: [usize::MAX; 4],
+        }
+    }
+
+    /// The model of the next symbol.
+    pub(super) fn model(&mut self) -> &mut AdaptiveModel {
+        &mut self.models[self.prev_sym * 2 + (self.run == self.last_run[self.prev_sym]) as usize]
+    }
+
+    /// The value symbol `sym` stands for, if any.
+    pub(super) fn value(&self, sym: usize) -> Option<i64> {
+        let [a, b] = self.strides;
+        match sym {
+            NEXT => Some(self.last + 1),
+            STRIDE if a != 1 => Some(self.last + a),
+            STRIDE2 if b != 1 && b != a => Some(self.last + b),
+            _ => None,
+        }
+    }
+
+    pub(super) fn symbol_of(&self, o: i64) -> usize {
+        [NEXT, STRIDE, STRIDE2]
+            .into_iter()
+            .find(|&s| self.value(s) == Some(o))
+            .unwrap_or(OTHER)
+    }
+
+    pub(super) fn take(&mut self, o: i64, sym: usize) {
+        let d = o - self.last;
+        if d != 1 && d != self.strides[0] {
+            self.strides = [d, self.strides[0]];
+        }
+        if sym == self.prev_sym {
+            self.run += 1;
+        } else {
+            self.last_run[self.prev_sym] = self.run;
+            self.run = 1;
+        }
+        self.last = o;
+        self.prev_sym = sym;
     }
 }
 
 /// Decodes a permutation of `0..n` and checks it is one.
 fn get_perm(d: &mut Decoder, n: usize) -> Result<Vec<u32>> {
-    let mut run = [AdaptiveModel::new(2), AdaptiveModel::new(2)];
+    let mut step = Steps::new();
     let mut unused = Unused::new(n);
     let mut used = vec![false; n];
     let mut out = Vec::with_capacity(n);
-    let mut prev: i64 = -1;
-    let mut prev_hit = 0usize;
     for i in 0..n {
-        let hit = d.symbol(&mut run[prev_hit])? == 1;
-        let o = if hit {
-            (prev + 1) as usize
-        } else {
-            let r = d.uniform((n - i) as u64)?;
-            unused.select(r)
+        let sym = d.symbol(step.model())?;
+        let o = match (sym, step.value(sym)) {
+            (OTHER, _) => unused.select(d.uniform((n - i) as u64)?) as i64,
+            (_, Some(o)) => o,
+            _ => return Err(Error::corrupt(SECTION, "a step of a permutation not yet taken")),
         };
-        if o >= n || used[o] {
+        if !(0..n as i64).contains(&o) || used[o as usize] {
             return Err(Error::corrupt(SECTION, "not a permutation"));
         }
-        used[o] = true;
-        unused.remove(o);
+        used[o as usize] = true;
+        unused.remove(o as usize);
         out.push(o as u32);
-        prev = o as i64;
-        prev_hit = hit as usize;
+        step.take(o, sym);
     }
     Ok(out)
 }

@@ -174,3 +174,59 @@ fn element_places_follow_the_refinement() {
         assert_eq!(place as i64, want, "vertex {w} at ({x}, {y})");
     }
 }
+
+/// A permutation coded alone (7.1) and decoded.
+fn perm_round_trip(p: &[u32]) -> usize {
+    let mut e = Encoder::new();
+    put_perm(&mut e, p);
+    let bytes = e.finish();
+    let mut d = Decoder::new(&bytes, SECTION).unwrap();
+    assert_eq!(get_perm(&mut d, p.len()).unwrap(), p);
+    bytes.len()
+}
+
+/// Orders of a grid's cells as exporters write them cost about a bit per row: rows of a
+/// sub-grid (each row's end a stride), such sub-grids in turn (two strides alternating),
+/// columns (one stride throughout); a shuffled one about log2(n!) bits.
+#[test]
+fn grid_orders_cost_a_bit_per_row() {
+    let (s, h) = (64u32, 32u32);
+    // The inner cells of an s x s grid row by row, then its border ring.
+    let mut inner: Vec<u32> = (1..s - 1).flat_map(|y| (1..s - 1).map(move |x| y * s + x)).collect();
+    let ring = (0..s - 1)
+        .chain((0..s - 1).map(|y| y * s + s - 1))
+        .chain((1..s).rev().map(|x| (s - 1) * s + x))
+        .chain((1..s).rev().map(|y| y * s));
+    inner.extend(ring);
+    // Four quarters of h x h cells, each one's inner rows (x, y >= 1) in turn, then the rest.
+    let mut quarters: Vec<u32> = (0..4)
+        .flat_map(|q| (1..h).flat_map(move |y| (1..h).map(move |x| q * h * h + y * h + x)))
+        .collect();
+    let rest: Vec<u32> = (0..4 * h * h).filter(|c| !quarters.contains(c)).collect();
+    quarters.extend(rest);
+    let columns: Vec<u32> = (0..s).flat_map(|x| (0..s).map(move |y| y * s + x)).collect();
+    for (name, p, rows) in [("inner, ring", &inner, s), ("quarters", &quarters, 4 * h), ("columns", &columns, s)] {
+        let bytes = perm_round_trip(p);
+        assert!(bytes * 8 <= 3 * rows as usize + 96, "{name}: {bytes} B for {rows} rows");
+    }
+    let mut shuffled = columns.clone();
+    shuffle(&mut shuffled, 7, 20_000);
+    let bits: f64 = (1..=shuffled.len()).map(|k| (k as f64).log2()).sum();
+    let bytes = perm_round_trip(&shuffled);
+    assert!((bytes as f64) < bits / 8.0 * 1.01 + 16.0, "shuffled: {bytes} B, log2(n!) = {bits:.0} bits");
+}
+
+/// A stride symbol where no stride is kept, or one that leaves `0..n`, is corrupt.
+#[test]
+fn a_permutation_stream_out_of_step_is_corrupt() {
+    for seed in 0..200u64 {
+        let bytes: Vec<u8> = (0..12).map(|i| (seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> (i * 5)) as u8).collect();
+        if let Ok(mut d) = Decoder::new(&bytes, SECTION) {
+            if let Ok(p) = get_perm(&mut d, 50) {
+                let mut seen = p.clone();
+                seen.sort_unstable();
+                assert_eq!(seen, (0..50).collect::<Vec<u32>>());
+            }
+        }
+    }
+}
