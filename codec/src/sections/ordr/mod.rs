@@ -8,11 +8,14 @@
 //! write (rows, grids, first use) cost little; or, on a Catmull-Clark hierarchy's finest
 //! level, as blocks of its base elements, each in the order of the last block of its
 //! shape turned (Blender's subdivision order), the vertices also by first use in those
-//! faces (Blender's PLY cut at UV seams).
+//! faces (Blender's PLY cut at UV seams), or as the order a refinement produces level
+//! by level from its base's order (a tool that writes each level's old vertices, edge
+//! points and face points as blocks).
 
 
 mod around;
 mod elements;
+mod levels;
 mod walks;
 #[cfg(test)]
 mod tests;
@@ -20,6 +23,7 @@ mod tests;
 use crate::entropy::{AdaptiveModel, Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
 use elements::{decode_elements, decode_first_use, encode_by_elements};
+use levels::{decode_levels, encode_levels};
 pub use elements::Hierarchy;
 use walks::{decode_walks, encode_walks};
 
@@ -270,8 +274,8 @@ fn decode_lists(payload: &[u8], nv: usize, degrees: &[u32]) -> Result<InputOrder
 /// Codes the ORDR section (SPEC.md 7) of the input order `o` of the canonical
 /// `faces`: a method byte, then the order as three lists (method 0), as walks
 /// (method 1) or, on the finest level of a Catmull-Clark hierarchy, by its base
-/// elements (method 2) or as face blocks with the vertices by first use (method 3),
-/// whichever is smallest.
+/// elements (method 2), as face blocks with the vertices by first use (method 3) or
+/// as the order its refinement produces (method 4), whichever is smallest.
 pub fn encode(o: &InputOrder, faces: Faces<'_>) -> Vec<u8> {
     let lists = encode_lists(o);
     let walks = encode_walks(o, faces);
@@ -283,6 +287,10 @@ pub fn encode(o: &InputOrder, faces: Faces<'_>) -> Vec<u8> {
     let by_elements = faces.hierarchy.and_then(|h| encode_by_elements(o, faces, h));
     if let Some((m, b)) = by_elements.filter(|(_, b)| b.len() < body.len()) {
         (method, body) = (m, b);
+    }
+    let by_levels = faces.hierarchy.and_then(|h| encode_levels(o, faces, h));
+    if let Some(b) = by_levels.filter(|b| b.len() < body.len()) {
+        (method, body) = (4, b);
     }
     let mut out = Vec::with_capacity(body.len() + 1);
     out.push(method);
@@ -297,6 +305,7 @@ pub fn method_name(payload: &[u8]) -> &'static str {
         Some(1) => "walks",
         Some(2) => "base elements",
         Some(3) => "face blocks and first use",
+        Some(4) => "refinement levels",
         _ => "unknown method",
     }
 }
@@ -311,6 +320,7 @@ pub fn decode(payload: &[u8], faces: Faces<'_>) -> Result<InputOrder> {
         Some((1, body)) => decode_walks(body, faces),
         Some((2, body)) => decode_elements(body, faces, faces.hierarchy),
         Some((3, body)) => decode_first_use(body, faces, faces.hierarchy),
+        Some((4, body)) => decode_levels(body, faces, faces.hierarchy),
         Some((m, _)) => Err(Error::corrupt(SECTION, format!("unknown method {m}"))),
         None => Err(Error::corrupt(SECTION, "empty payload")),
     }
