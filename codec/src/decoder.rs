@@ -218,15 +218,19 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
         h.base_corners,
         bound,
     )?;
-    // The base faces, for an order coded by the hierarchy's base elements (SPEC.md 7.3).
-    let by_elements = (h.has_order && level == h.levels && level > 0 && h.family == Family::Cc)
-        .then(|| {
-            (
-                base.vertex_count(),
-                base.face_starts.clone(),
-                base.faces.clone(),
-            )
-        });
+    // The base faces, for an order coded by the hierarchy's base elements or levels
+    // (SPEC.md 7.3 to 7.5).
+    let by_elements = (h.has_order
+        && level == h.levels
+        && level > 0
+        && matches!(h.family, Family::Cc | Family::Sqrt2))
+    .then(|| {
+        (
+            base.vertex_count(),
+            base.face_starts.clone(),
+            base.faces.clone(),
+        )
+    });
     let mut mesh = match h.transform {
         _ if h.levels == 0 => base,
         Transform::Wavelet(w) => synthesise_levels(&c, &h, base, w, level, opts.threads)?,
@@ -277,6 +281,7 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
                         starts,
                         idx,
                         levels: h.levels as u32,
+                        family: h.family,
                     }),
             };
             let o = ordr::decode(s.payload, faces)?;

@@ -271,12 +271,13 @@ pub(crate) fn hierarchy_order(mesh: &Mesh, canon: &Canonical) -> Result<Vec<u8>>
         starts: &fine.starts,
         idx: &fine.idx,
         hierarchy: base
-            .filter(|_| canon.family == topology::Family::Cc)
+            .filter(|_| matches!(canon.family, topology::Family::Cc | topology::Family::Sqrt2))
             .map(|b| ordr::Hierarchy {
                 nv: b.nv,
                 starts: &b.starts,
                 idx: &b.idx,
                 levels: canon.levels.len() as u32,
+                family: canon.family,
             }),
     };
     Ok(order_section(&canon.order, faces, rotations, canonical))

@@ -12,14 +12,14 @@ use std::collections::HashMap;
 use super::{get_perm, put_perm, Faces, InputOrder, Steps, Unused, OTHER, SECTION};
 use crate::entropy::{AdaptiveModel, Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
-use crate::topology::{Level, Topo};
+use crate::topology::{Family, Level, Topo};
 
 /// Levels beyond which method 2 is not used (the places of a base edge, 2^L - 1, stay
 /// far inside `u32`).
 const MAX_LEVELS: u32 = 15;
 
-/// The base mesh of the Catmull-Clark hierarchy (SPEC.md 8.1) whose finest level the
-/// canonical faces are.
+/// The base mesh of the Catmull-Clark (SPEC.md 8.1) or sqrt(2) (8.4) hierarchy whose
+/// finest level the canonical faces are (methods 2 and 3 take Catmull-Clark ones only).
 #[derive(Debug, Clone, Copy)]
 pub struct Hierarchy<'a> {
     /// Base vertices.
@@ -30,6 +30,8 @@ pub struct Hierarchy<'a> {
     pub idx: &'a [u32],
     /// Refinement levels (at least 1).
     pub levels: u32,
+    /// Catmull-Clark or sqrt(2).
+    pub family: Family,
 }
 
 /// Element kinds, in the order of their numbers.
@@ -74,7 +76,7 @@ impl Elements {
     /// The elements of `h`, whose finest level `faces` is; `None` when it is not.
     fn new(h: Hierarchy<'_>, faces: Faces<'_>) -> Option<Elements> {
         let l = h.levels;
-        if !(1..=MAX_LEVELS).contains(&l) {
+        if !(1..=MAX_LEVELS).contains(&l) || h.family != Family::Cc {
             return None;
         }
         let topo = Topo {
@@ -541,7 +543,7 @@ fn start(
     faces: Faces<'_>,
     h: Option<Hierarchy<'_>>,
 ) -> Result<(Elements, Decoder, State)> {
-    let h = h.ok_or_else(|| {
+    let h = h.filter(|h| h.family == Family::Cc).ok_or_else(|| {
         Error::corrupt(SECTION, format!("method {method} without a Catmull-Clark hierarchy"))
     })?;
     let el = Elements::new(h, faces).ok_or_else(|| {
@@ -792,13 +794,13 @@ pub(super) fn tests_places(h: Hierarchy<'_>, faces: Faces<'_>) -> Option<Vec<(u3
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::super::{decode, encode};
     use super::*;
 
     /// A quad, a triangle and a pentagon side by side, refined `levels` times: the base
     /// and the finest faces.
-    fn hierarchy(levels: u32) -> (Topo, Topo) {
+    pub(in super::super) fn hierarchy(levels: u32) -> (Topo, Topo) {
         let mut base = Topo::new(8);
         base.idx = vec![0, 1, 2, 3, 1, 4, 2, 4, 5, 6, 7, 2];
         base.starts = vec![0, 4, 7, 12];
@@ -843,6 +845,7 @@ mod tests {
                 starts: &base.starts,
                 idx: &base.idx,
                 levels,
+                family: Family::Cc,
             };
             let faces = Faces {
                 nv: fine.nv,

@@ -5,12 +5,14 @@
 //! their ends' numbers (lowest end first, then the other), the faces' points by the
 //! faces' order, and each face's children in its corner order. So the whole order
 //! follows from the base mesh's: its vertices' order, its faces' order and each face's
-//! first corner.
+//! first corner. A sqrt(2) step (SPEC.md 8.4) has no edge points: its blocks are the
+//! old vertices and the faces' points, and its faces, one per coarse edge, come in the
+//! order of their edges' ends' numbers, each from its lower end.
 
 use super::{get_perm, put_perm, Faces, Hierarchy, InputOrder, SECTION};
 use crate::entropy::{Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
-use crate::topology::{Level, Topo};
+use crate::topology::{sqrt2, Family, Level, Topo};
 
 /// The orders of a level's three blocks (0: its old vertices, 1: its edges' points, 2:
 /// its faces' points), by number.
@@ -28,7 +30,7 @@ const MAX_LEVELS: u32 = 15;
 
 /// The coarse levels of `h` (the base mesh's, then each refinement's but the last),
 /// canonical numbering; `None` when `h` has no level or too many, or its base is no
-/// mesh.
+/// mesh (or, for sqrt(2), no closed one).
 fn levels(h: Hierarchy<'_>) -> Option<Vec<Level>> {
     if !(1..=MAX_LEVELS).contains(&h.levels) {
         return None;
@@ -40,8 +42,16 @@ fn levels(h: Hierarchy<'_>) -> Option<Vec<Level>> {
     };
     let mut out = vec![Level::new(&topo).ok()?];
     for _ in 1..h.levels {
-        let next = out.last()?.next();
+        let last = out.last()?;
+        let next = match h.family {
+            Family::Cc => last.next(),
+            Family::Sqrt2 if sqrt2::closed(last) => sqrt2::next_level(last.clone(), true).ok()?,
+            _ => return None,
+        };
         out.push(next);
+    }
+    if h.family == Family::Sqrt2 && !sqrt2::closed(out.last()?) {
+        return None;
     }
     Some(out)
 }
@@ -49,7 +59,8 @@ fn levels(h: Hierarchy<'_>) -> Option<Vec<Level>> {
 /// What the stream gives (SPEC.md 7.5): the blocks' arrangement, the base vertices in
 /// order, the base faces in order, and per base face (by number) its first corner.
 struct Base {
-    arrangement: usize,
+    /// Per level, coarse first.
+    arrangement: Vec<usize>,
     vertices: Vec<u32>,
     faces: Vec<u32>,
     first: Vec<u32>,
@@ -58,8 +69,7 @@ struct Base {
 /// The order the refinement of `levels` produces from `base`, as an [`InputOrder`] of
 /// the finest level (`nv` vertices, `nf` faces); `None` when the finest level does not
 /// have these counts.
-fn produce(levels: &[Level], base: &Base, nv: usize, nf: usize) -> Option<InputOrder> {
-    let blocks = ARRANGEMENTS[base.arrangement];
+fn produce(levels: &[Level], family: Family, base: &Base, nv: usize, nf: usize) -> Option<InputOrder> {
     // Per vertex of the current level, its number; the faces in order with their
     // first corners.
     let mut number = vec![0u32; levels[0].nv];
@@ -71,7 +81,8 @@ fn produce(levels: &[Level], base: &Base, nv: usize, nf: usize) -> Option<InputO
         .iter()
         .map(|&f| (f, base.first[f as usize]))
         .collect();
-    for level in levels {
+    for (level, &arrangement) in levels.iter().zip(&base.arrangement) {
+        let blocks = ARRANGEMENTS[arrangement];
         let (lnv, ne, lnf) = (level.nv, level.ne(), level.nf());
         // The edges by their ends' numbers, lowest end first.
         let mut by_ends: Vec<(u32, u32, u32)> = level
@@ -84,30 +95,48 @@ fn produce(levels: &[Level], base: &Base, nv: usize, nf: usize) -> Option<InputO
             })
             .collect();
         by_ends.sort_unstable();
-        let sizes = [lnv, ne, lnf];
+        let cc = family == Family::Cc;
+        // A sqrt(2) step has no edge points: its faces' points follow its old vertices.
+        let sizes = [lnv, if cc { ne } else { 0 }, lnf];
         let mut offset = [0usize; 3];
         let mut at = 0;
         for &b in &blocks {
             offset[b] = at;
             at += sizes[b];
         }
-        let mut next = vec![0u32; lnv + ne + lnf];
+        let mut next = vec![0u32; lnv + sizes[1] + lnf];
         for (v, &n) in number.iter().enumerate() {
             next[v] = (offset[0] + n as usize) as u32;
         }
-        for (rank, &(_, _, e)) in by_ends.iter().enumerate() {
-            next[lnv + e as usize] = (offset[1] + rank) as u32;
+        let first_point = lnv + sizes[1];
+        for (rank, &(f, _)) in faces.iter().enumerate() {
+            next[first_point + f as usize] = (offset[2] + rank) as u32;
         }
-        let mut children = Vec::with_capacity(level.coarse.idx.len());
-        for (rank, &(f, r)) in faces.iter().enumerate() {
-            next[lnv + ne + f as usize] = (offset[2] + rank) as u32;
+        let children = if cc {
+            for (rank, &(_, _, e)) in by_ends.iter().enumerate() {
+                next[lnv + e as usize] = (offset[1] + rank) as u32;
+            }
             // Each face's children from its first corner on, each from its corner.
-            let (start, k) = (
-                level.coarse.starts[f as usize],
-                level.coarse.face(f as usize).len() as u32,
-            );
-            children.extend((0..k).map(|i| (start + (r + i) % k, 0)));
-        }
+            let mut children = Vec::with_capacity(level.coarse.idx.len());
+            for &(f, r) in &faces {
+                let (start, k) = (
+                    level.coarse.starts[f as usize],
+                    level.coarse.face(f as usize).len() as u32,
+                );
+                children.extend((0..k).map(|i| (start + (r + i) % k, 0)));
+            }
+            children
+        } else {
+            // One face per edge (its quad (a, f2, b, f1)), from its lower end: corner 0
+            // or 2.
+            by_ends
+                .iter()
+                .map(|&(x, _, e)| {
+                    let [a, _] = level.edges[e as usize];
+                    (e, if number[a as usize] == x { 0 } else { 2 })
+                })
+                .collect()
+        };
         number = next;
         faces = children;
     }
@@ -133,54 +162,80 @@ pub(super) fn encode_levels(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>) 
     let levels = levels(h)?;
     let (nb, nbf) = (h.nv, h.starts.len() - 1);
     let nf = faces.count();
-    // Finest faces per base corner.
-    let per_corner = nf.checked_div(h.idx.len())?;
-    if per_corner == 0 || per_corner * h.idx.len() != nf || o.vertices.len() != faces.nv {
+    if o.vertices.len() != faces.nv {
         return None;
     }
-    let last = levels.last()?;
-    // The arrangement: the finest level's blocks by their first input numbers.
-    let (lnv, ne) = (last.nv, last.ne());
-    let first_of = |r: std::ops::Range<usize>| o.vertices.get(r).and_then(|v| v.iter().min().copied());
-    let mut firsts = [
-        (first_of(0..lnv)?, 0),
-        (first_of(lnv..lnv + ne)?, 1),
-        (first_of(lnv + ne..faces.nv)?, 2),
-    ];
-    firsts.sort_unstable();
-    let arrangement = ARRANGEMENTS
-        .iter()
-        .position(|a| *a == firsts.map(|(_, b)| b))?;
-    // The base vertices by input number; the base faces by their finest faces' first
-    // input number, each from the corner of that face.
+    let cc = h.family == Family::Cc;
+    // Each level's arrangement, finest first: its blocks by their first numbers (a
+    // sqrt(2) step's edge block is empty, taken as right after its old vertices); the
+    // old vertices' numbers less their block's start are the coarser level's.
+    let mut arrangement = vec![0usize; levels.len()];
+    let mut number: Vec<u32> = o.vertices.clone();
+    for (l, level) in levels.iter().enumerate().rev() {
+        let (lnv, ne) = (level.nv, if cc { level.ne() } else { 0 });
+        let first_of = |r: std::ops::Range<usize>| number.get(r).and_then(|v| v.iter().min().copied());
+        let old = first_of(0..lnv)?;
+        let mut firsts = [
+            (old, 0, 0),
+            (if cc { first_of(lnv..lnv + ne)? } else { old }, 1, 1),
+            (first_of(lnv + ne..number.len())?, 2, 2),
+        ];
+        firsts.sort_unstable();
+        arrangement[l] = ARRANGEMENTS
+            .iter()
+            .position(|a| *a == firsts.map(|(_, _, b)| b))?;
+        number = number[..lnv].iter().map(|&n| n.checked_sub(old)).collect::<Option<_>>()?;
+    }
+    // The base vertices by input number. The base faces: Catmull-Clark, by their finest
+    // faces' first input number, each from the corner of that face; sqrt(2), by their
+    // points' input numbers.
     let mut vertices: Vec<u32> = (0..nb as u32).collect();
-    vertices.sort_unstable_by_key(|&v| o.vertices[v as usize]);
+    vertices.sort_unstable_by_key(|&v| number[v as usize]);
     let mut face_first = vec![(u32::MAX, 0u32); nbf];
-    for (g, &pos) in o.faces.iter().enumerate() {
-        let corner = (g / per_corner) as u32;
-        let f = h.starts.partition_point(|&s| s <= corner) - 1;
-        if pos < face_first[f].0 {
-            face_first[f] = (pos, corner - h.starts[f]);
+    if cc {
+        // Finest faces per base corner.
+        let per_corner = nf.checked_div(h.idx.len())?;
+        if per_corner == 0 || per_corner * h.idx.len() != nf {
+            return None;
+        }
+        for (g, &pos) in o.faces.iter().enumerate() {
+            let corner = (g / per_corner) as u32;
+            let f = h.starts.partition_point(|&s| s <= corner) - 1;
+            if pos < face_first[f].0 {
+                face_first[f] = (pos, corner - h.starts[f]);
+            }
+        }
+    } else {
+        // The level after the base: its old vertices, then the base faces' points.
+        let points = o.vertices.get(nb..nb + nbf)?;
+        // Their input numbers order them as the finest level's do (every step keeps
+        // the order of what it refines).
+        for (f, &pos) in points.iter().enumerate() {
+            face_first[f] = (pos, 0);
         }
     }
     let mut base_faces: Vec<u32> = (0..nbf as u32).collect();
     base_faces.sort_unstable_by_key(|&f| face_first[f as usize].0);
     let base = Base {
-        arrangement,
+        arrangement: arrangement.clone(),
         vertices,
         faces: base_faces,
         first: face_first.iter().map(|&(_, c)| c).collect(),
     };
-    if produce(&levels, &base, faces.nv, nf)? != *o {
+    if produce(&levels, h.family, &base, faces.nv, nf)? != *o {
         return None;
     }
     let mut e = Encoder::new();
-    e.uniform(arrangement as u64, ARRANGEMENTS.len() as u64);
+    for &a in &arrangement {
+        e.uniform(a as u64, ARRANGEMENTS.len() as u64);
+    }
     put_perm(&mut e, &base.vertices);
     put_perm(&mut e, &base.faces);
-    let mut m = IntModel::new();
-    for &f in &base.faces {
-        e.int(&mut m, base.first[f as usize] as i64);
+    if cc {
+        let mut m = IntModel::new();
+        for &f in &base.faces {
+            e.int(&mut m, base.first[f as usize] as i64);
+        }
     }
     Some(e.finish())
 }
@@ -188,16 +243,20 @@ pub(super) fn encode_levels(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>) 
 /// Decodes method 4 (SPEC.md 7.5).
 pub(super) fn decode_levels(payload: &[u8], faces: Faces<'_>, h: Option<Hierarchy<'_>>) -> Result<InputOrder> {
     let corrupt = |what: &str| Error::corrupt(SECTION, what.to_string());
-    let h = h.ok_or_else(|| corrupt("method 4 without a Catmull-Clark hierarchy"))?;
+    let h = h.ok_or_else(|| corrupt("method 4 without a Catmull-Clark or sqrt(2) hierarchy"))?;
     let levels = levels(h).ok_or_else(|| corrupt("method 4 on a hierarchy it does not take"))?;
     let mut d = Decoder::new(payload, SECTION)?;
-    let arrangement = d.uniform(ARRANGEMENTS.len() as u64)? as usize;
+    let arrangement = (0..levels.len())
+        .map(|_| Ok(d.uniform(ARRANGEMENTS.len() as u64)? as usize))
+        .collect::<Result<Vec<usize>>>()?;
     let vertices = get_perm(&mut d, h.nv)?;
     let nbf = h.starts.len() - 1;
     let base_faces = get_perm(&mut d, nbf)?;
     let mut first = vec![0u32; nbf];
     let mut m = IntModel::new();
-    for &f in &base_faces {
+    // (A sqrt(2) hierarchy's base faces have no first corners: its finest faces come
+    // from edges.)
+    for &f in base_faces.iter().filter(|_| h.family == Family::Cc) {
         let k = h.starts[f as usize + 1] - h.starts[f as usize];
         let r = d.int(&mut m)?;
         if !(0..k as i64).contains(&r) {
@@ -211,32 +270,20 @@ pub(super) fn decode_levels(payload: &[u8], faces: Faces<'_>, h: Option<Hierarch
         faces: base_faces,
         first,
     };
-    produce(&levels, &base, faces.nv, faces.count())
+    produce(&levels, h.family, &base, faces.nv, faces.count())
         .ok_or_else(|| corrupt("method 4 on faces that are not the hierarchy's"))
 }
 
 #[cfg(test)]
 mod tests {
+    use super::super::elements::tests::hierarchy;
     use super::super::{decode, encode};
     use super::*;
-
-    /// A quad, a triangle and a pentagon side by side, refined `levels` times: the base
-    /// and the finest faces.
-    fn hierarchy(levels: u32) -> (Topo, Topo) {
-        let mut base = Topo::new(8);
-        base.idx = vec![0, 1, 2, 3, 1, 4, 2, 4, 5, 6, 7, 2];
-        base.starts = vec![0, 4, 7, 12];
-        let mut level = Level::new(&base).unwrap();
-        for _ in 1..levels {
-            level = level.next();
-        }
-        (base, level.fine())
-    }
 
     /// The order a tool refining the base in its own order produces, made from `seed`:
     /// a shuffle of the base's vertices and faces, each face's first corner, an
     /// arrangement of the blocks.
-    fn produced(levels: &[Level], base: &Topo, seed: u64, nv: usize, nf: usize) -> InputOrder {
+    fn produced(levels: &[Level], family: Family, base: &Topo, seed: u64, nv: usize, nf: usize) -> InputOrder {
         let mut x = seed | 1;
         let mut next = || {
             x ^= x << 13;
@@ -254,12 +301,12 @@ mod tests {
         }
         let first = (0..base.nf()).map(|f| (next() % base.face(f).len() as u64) as u32).collect();
         let b = Base {
-            arrangement: (next() % 6) as usize,
+            arrangement: levels.iter().map(|_| (next() % 6) as usize).collect(),
             vertices,
             faces,
             first,
         };
-        produce(levels, &b, nv, nf).unwrap()
+        produce(levels, family, &b, nv, nf).unwrap()
     }
 
     /// Every arrangement and base order round-trips by method 4, which the encoder
@@ -274,6 +321,7 @@ mod tests {
                 starts: &base.starts,
                 idx: &base.idx,
                 levels,
+                family: Family::Cc,
             };
             let faces = Faces {
                 nv: fine.nv,
@@ -283,7 +331,7 @@ mod tests {
             };
             let lv = super::levels(h).unwrap();
             for seed in 0..12u64 {
-                let o = produced(&lv, &base, seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) + 1, fine.nv, fine.nf());
+                let o = produced(&lv, Family::Cc, &base, seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) + 1, fine.nv, fine.nf());
                 let bytes = encode(&o, faces);
                 assert_eq!(bytes[0], 4, "levels {levels} seed {seed}: method {}", bytes[0]);
                 assert!(bytes.len() <= 16, "levels {levels}: {} B", bytes.len());
@@ -303,9 +351,47 @@ mod tests {
                 }
             }
             // One vertex pair swapped: no longer the refinement's order.
-            let mut o = produced(&lv, &base, 99, fine.nv, fine.nf());
+            let mut o = produced(&lv, Family::Cc, &base, 99, fine.nv, fine.nf());
             let (a, b) = (fine.nv - 1, fine.nv - 2);
             o.vertices.swap(a, b);
+            assert!(encode_levels(&o, faces, h).is_none());
+            assert_eq!(decode(&encode(&o, faces), faces).unwrap(), o);
+        }
+    }
+
+    /// A sqrt(2) hierarchy's order (a cube refined 1 to 4 times) round-trips by method 4
+    /// for its base's bytes; another order is not method 4's.
+    #[test]
+    fn sqrt2_refinement_orders_round_trip() {
+        let mut base = Topo::new(8);
+        for f in [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]] {
+            base.push(&f);
+        }
+        for levels in 1..=4u32 {
+            let h = Hierarchy {
+                nv: base.nv,
+                starts: &base.starts,
+                idx: &base.idx,
+                levels,
+                family: Family::Sqrt2,
+            };
+            let lv = super::levels(h).unwrap();
+            let fine = sqrt2::fine(lv.last().unwrap());
+            let faces = Faces {
+                nv: fine.nv,
+                starts: &fine.starts,
+                idx: &fine.idx,
+                hierarchy: Some(h),
+            };
+            for seed in 0..8u64 {
+                let o = produced(&lv, Family::Sqrt2, &base, seed * 7919 + 3, fine.nv, fine.nf());
+                let bytes = encode(&o, faces);
+                assert_eq!(bytes[0], 4, "levels {levels} seed {seed}");
+                assert!(bytes.len() <= 16, "levels {levels}: {} B", bytes.len());
+                assert_eq!(decode(&bytes, faces).unwrap(), o);
+            }
+            let mut o = produced(&lv, Family::Sqrt2, &base, 5, fine.nv, fine.nf());
+            o.rotations[0] ^= 2;
             assert!(encode_levels(&o, faces, h).is_none());
             assert_eq!(decode(&encode(&o, faces), faces).unwrap(), o);
         }

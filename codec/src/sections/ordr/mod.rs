@@ -8,9 +8,9 @@
 //! write (rows, grids, first use) cost little; or, on a Catmull-Clark hierarchy's finest
 //! level, as blocks of its base elements, each in the order of the last block of its
 //! shape turned (Blender's subdivision order), the vertices also by first use in those
-//! faces (Blender's PLY cut at UV seams), or as the order a refinement produces level
-//! by level from its base's order (a tool that writes each level's old vertices, edge
-//! points and face points as blocks).
+//! faces (Blender's PLY cut at UV seams), or as the order a Catmull-Clark or sqrt(2)
+//! refinement produces level by level from its base's order (a tool that writes each
+//! level's old vertices, edge points and face points as blocks).
 
 
 mod around;

@@ -165,6 +165,7 @@ fn element_places_follow_the_refinement() {
         starts: &base.starts,
         idx: &base.idx,
         levels: l,
+        family: crate::topology::Family::Cc,
     };
     let el = super::elements::tests_places(h, faces).expect("elements");
     for (w, place) in el {
