@@ -284,6 +284,15 @@ fn fail(file: &str, e: impl std::fmt::Display) -> Failure {
     }
 }
 
+/// Appends a formatted line to a `String` (text written to standard output in one go,
+/// so that a closed pipe ends the command quietly, not in a panic).
+macro_rules! put {
+    ($out:ident, $($arg:tt)*) => {{
+        $out.push_str(&format!($($arg)*));
+        $out.push('\n');
+    }};
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(&cli) {
@@ -966,7 +975,7 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
         Command::Info { file, json } => {
             let bytes = read_input(file)?;
             let info = subwave::inspect(&bytes, &Limits::default()).map_err(|e| fail(file, e))?;
-            print_info(&info, *json);
+            write_output("-", info_text(&info, *json).as_bytes())?;
             Ok(ExitCode::SUCCESS)
         }
         Command::Verify {
@@ -978,30 +987,34 @@ fn run(cli: &Cli) -> Result<ExitCode, Failure> {
     }
 }
 
-fn print_info(info: &subwave::Info, as_json: bool) {
+fn info_text(info: &subwave::Info, as_json: bool) -> String {
+    let mut out = String::new();
     let h = &info.header;
     let bits_per_vertex = subwave::json::bits_per_vertex(info.bytes, h.vertices);
     if as_json {
-        println!("{}", subwave::json::info(info));
-        return;
+        put!(out, "{}", subwave::json::info(info));
+        return out;
     }
-    println!("format version  {}", info.version);
-    println!("vertices        {}", h.vertices);
-    println!("faces           {} ({} corners)", h.faces, h.corners);
-    println!(
+    put!(out, "format version  {}", info.version);
+    put!(out, "vertices        {}", h.vertices);
+    put!(out, "faces           {} ({} corners)", h.faces, h.corners);
+    put!(
+        out,
         "base mesh       {} vertices, {} faces",
-        h.base_vertices, h.base_faces
+        h.base_vertices,
+        h.base_faces
     );
-    println!("levels          {}", h.levels);
-    println!("family          {}", h.family.name());
+    put!(out, "levels          {}", h.levels);
+    put!(out, "family          {}", h.family.name());
     if !h.poles.is_empty() {
         let list: Vec<String> = h.poles.iter().map(|p| (p + 1).to_string()).collect();
-        println!(
+        put!(
+            out,
             "poles           {} (base vertices {})",
             h.poles.len(),
             list.join(", ")
         );
-        println!("disc transform  {}", h.disc.name());
+        put!(out, "disc transform  {}", h.disc.name());
     }
     match h.transform {
         subwave::Transform::Fit { bits, .. } => {
@@ -1009,15 +1022,22 @@ fn print_info(info: &subwave::Info, as_json: bool) {
                 r if r.is_empty() => r,
                 r => format!(", {r}"),
             };
-            println!("transform       fit (control values with {bits} extra bits{rules})")
+            put!(
+                out,
+                "transform       fit (control values with {bits} extra bits{rules})"
+            )
         }
-        t => println!("transform       {}", t.name()),
+        t => put!(out, "transform       {}", t.name()),
     }
-    println!("quantisation    {}", h.quantization.describe());
+    put!(out, "quantisation    {}", h.quantization.describe());
     if h.has_value_map {
-        println!("value map       yes: coordinates coded as ranks of their axis's values");
+        put!(
+            out,
+            "value map       yes: coordinates coded as ranks of their axis's values"
+        );
     }
-    println!(
+    put!(
+        out,
         "vertex order    {}",
         if h.has_order {
             "input order (stored)"
@@ -1064,11 +1084,14 @@ fn print_info(info: &subwave::Info, as_json: bool) {
             },
         })
         .collect();
-    println!("sections        {}", secs.join(", "));
-    println!(
+    put!(out, "sections        {}", secs.join(", "));
+    put!(
+        out,
         "size            {} bytes, {:.3} bits per vertex",
-        info.bytes, bits_per_vertex
+        info.bytes,
+        bits_per_vertex
     );
+    out
 }
 
 /// The median of some timings (the upper one of an even count's middle two).
@@ -1162,9 +1185,13 @@ fn verify(
             "lossless": exact && grid_error.is_none(),
             "max_error": grid_error.map(|e| e.0),
         });
-        println!("{v}");
+        let mut out = String::new();
+        put!(out, "{v}");
+        write_output("-", out.as_bytes())?;
     } else {
-        println!(
+        let mut out = String::new();
+        put!(
+            out,
             "{}: {} vertices, {} faces -> {} bytes, {:.3} bits per vertex; encode {:.1} ms, decode {:.1} ms ({} threads each){}; {}",
             Path::new(input).file_name().map_or(input.into(), |f| f.to_string_lossy()),
             n,
@@ -1187,6 +1214,7 @@ fn verify(
                 ),
             }
         );
+        write_output("-", out.as_bytes())?;
     }
     if let Err(why) = check {
         return Err(fail(input, format!("round trip is not exact: {why}")));

@@ -107,6 +107,34 @@ fn pipes_work_both_ways() {
     assert_eq!(back.stdout, text);
 }
 
+/// A reader that stops early (`subwave info FILE | head -1`) closes the pipe: `info`
+/// and `verify` end quietly with success, not in a panic.
+#[test]
+fn a_closed_pipe_ends_info_and_verify_quietly() {
+    let swv = compressed(&corpus("mixed_cc2.obj"), "closed_pipe", &[]);
+    let swv = swv.to_str().unwrap();
+    let obj = corpus("mixed_cc2.obj");
+    let obj = obj.to_str().unwrap();
+    for args in [
+        vec!["info", swv],
+        vec!["info", swv, "--json"],
+        vec!["verify", obj],
+    ] {
+        let mut child = bin()
+            .args(&args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Close the reading end before the command writes.
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{args:?}: {:?} {err}", out.status);
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
 #[test]
 fn info_and_verify_json_have_their_keys() {
     let input = corpus("terrain_grid33.obj");

@@ -223,7 +223,7 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
     let by_elements = (h.has_order
         && level == h.levels
         && level > 0
-        && matches!(h.family, Family::Cc | Family::Sqrt2))
+        && matches!(h.family, Family::Cc | Family::Sqrt2 | Family::Polar))
     .then(|| {
         (
             base.vertex_count(),
@@ -282,6 +282,7 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
                         idx,
                         levels: h.levels as u32,
                         family: h.family,
+                        poles: &h.poles,
                     }),
             };
             let o = ordr::decode(s.payload, faces)?;

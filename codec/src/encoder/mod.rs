@@ -271,13 +271,19 @@ pub(crate) fn hierarchy_order(mesh: &Mesh, canon: &Canonical) -> Result<Vec<u8>>
         starts: &fine.starts,
         idx: &fine.idx,
         hierarchy: base
-            .filter(|_| matches!(canon.family, topology::Family::Cc | topology::Family::Sqrt2))
+            .filter(|_| {
+                matches!(
+                    canon.family,
+                    topology::Family::Cc | topology::Family::Sqrt2 | topology::Family::Polar
+                )
+            })
             .map(|b| ordr::Hierarchy {
                 nv: b.nv,
                 starts: &b.starts,
                 idx: &b.idx,
                 levels: canon.levels.len() as u32,
                 family: canon.family,
+                poles: &canon.poles,
             }),
     };
     Ok(order_section(&canon.order, faces, rotations, canonical))
@@ -798,7 +804,8 @@ fn best_hierarchy(
     if want_cc {
         let topo = input_topo();
         let mut canons = Vec::new();
-        for rec in topology::cc::recover_all(mesh.vertex_count(), &topo, max) {
+        let led = opts.keep_order;
+        for rec in topology::cc::recover_candidates(mesh.vertex_count(), &topo, max, led) {
             canons.push(topology::canonicalise(&rec, gates)?);
             // Every candidate but the one in hand waits with its levels stowed.
             canons.iter_mut().skip(1).for_each(Canonical::stow);

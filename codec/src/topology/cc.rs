@@ -56,7 +56,17 @@ pub fn recover(nv: usize, topo: &Topo, max_levels: usize) -> Option<Recovered> {
 /// Like [`recover`], also returning the equally deep alternative where every component
 /// that ties takes its other labeling (a mesh and its dual refine to the same mesh; which
 /// one codes smaller depends on the geometry). At most two results, preferred first.
+#[cfg(any(test, feature = "internals"))]
 pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Recovered> {
+    recover_candidates(nv, topo, max_levels, false)
+}
+
+/// Like [`recover_all`]; with `led`, first the candidate where every component takes
+/// the labeling (of the common depth) whose base vertices include its smallest input
+/// vertex number, when that differs from both: exporters that write a subdivision
+/// surface write its base vertices first, so the input's order then codes as blocks of
+/// base elements (SPEC.md 7.3) whichever labeling the geometry prefers.
+pub fn recover_candidates(nv: usize, topo: &Topo, max_levels: usize, led: bool) -> Vec<Recovered> {
     if max_levels == 0 || topo.nf() == 0 || !topo.all_quads() {
         return Vec::new();
     }
@@ -81,14 +91,42 @@ pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Recovered> 
             _ => (&ids[..], &c[0]),
         })
         .collect();
-    if alt
-        .iter()
-        .zip(&primary)
-        .any(|(a, p)| !std::ptr::eq(a.1, p.1))
-    {
+    let differs = |a: &[(&[u32], &Chain)], b: &[(&[u32], &Chain)]| {
+        a.iter().zip(b).any(|(a, b)| !std::ptr::eq(a.1, b.1))
+    };
+    if differs(&alt, &primary) {
         out.push(merge(nv, depth, &alt));
     }
+    if led {
+        let by_order: Vec<(&[u32], &Chain)> = per_comp
+            .iter()
+            .map(|(ids, c)| {
+                let first = ids.iter().copied().min().unwrap_or(0);
+                let chosen = c
+                    .iter()
+                    .filter(|ch| ch.steps.len() >= depth)
+                    .find(|ch| base_has(ids, ch, depth, first))
+                    .unwrap_or(&c[0]);
+                (&ids[..], chosen)
+            })
+            .collect();
+        if differs(&by_order, &primary) && differs(&by_order, &alt) {
+            out.insert(0, merge(nv, depth, &by_order));
+        } else if !differs(&by_order, &alt) && out.len() == 2 {
+            out.swap(0, 1);
+        }
+    }
     out
+}
+
+/// Whether input vertex `v` is a base vertex of `chain` cut to `depth` steps (the
+/// component's local vertices are input vertices `ids`).
+fn base_has(ids: &[u32], chain: &Chain, depth: usize, v: u32) -> bool {
+    let mut map = ids.to_vec();
+    for step in chain.steps.iter().take(depth) {
+        map = step.to_fine.iter().map(|&f| map[f as usize]).collect();
+    }
+    map.contains(&v)
 }
 
 /// Merges the components' chains, cut to the common depth, in input numbers.

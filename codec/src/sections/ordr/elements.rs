@@ -30,9 +30,19 @@ pub struct Hierarchy<'a> {
     pub idx: &'a [u32],
     /// Refinement levels (at least 1).
     pub levels: u32,
-    /// Catmull-Clark or sqrt(2).
+    /// Catmull-Clark, polar or sqrt(2).
     pub family: Family,
+    /// A polar hierarchy's poles (base vertices, SPEC.md 8.6); empty for the others.
+    pub poles: &'a [u32],
 }
+
+/// Ways of numbering the base edges (SPEC.md 7.3): as 8.1 numbers them, or by a face
+/// walk split into 1, 2, 4 or 8 parts.
+const WALKS: usize = 5;
+
+/// Faces of degree up to this have their turns coded with adaptive models; larger ones
+/// uniformly.
+const MAX_TURN_MODEL: usize = 16;
 
 /// Element kinds, in the order of their numbers.
 const KINDS: usize = 3;
@@ -63,6 +73,8 @@ struct Elements {
     side: i64,
     /// Base edges' ends, as first met.
     edges: Vec<[u32; 2]>,
+    /// Per base corner, its edge to the next corner.
+    face_edges: Vec<u32>,
     /// Per finest face, its place in its base face's block.
     face_place: Vec<u32>,
     /// Per base face block (from `base_starts[f] * per_corner`), its faces by place.
@@ -220,6 +232,7 @@ impl Elements {
             quarter,
             side: s,
             edges: base.edges.clone(),
+            face_edges: base.face_edges.clone(),
             face_place,
             face_at,
             face_low,
@@ -293,6 +306,60 @@ impl Elements {
         (((a / self.per_corner + r) % k) * self.per_corner + a % self.per_corner) as u32
     }
 
+    /// The places of a base face of degree `k`'s finest faces in the order Blender's
+    /// subdivision writes them (SPEC.md 7.3): a quad's inner cells row-major, then its
+    /// border from each corner; another face's quarters' inner cells, the cells along
+    /// each quarter's line to the next, the cells at the face point, then each
+    /// quarter's border cells along its edge and along the edge before.
+    fn blender_faces(&self, k: usize) -> Vec<u32> {
+        let s = self.side;
+        let mut order = Vec::with_capacity(k * self.per_corner);
+        if k == 4 {
+            for y in 1..s - 1 {
+                order.extend((1..s - 1).map(|x| y * s + x));
+            }
+            for c in 0..4 {
+                order.extend((0..s - 1).map(|i| match c {
+                    0 => i,
+                    1 => i * s + s - 1,
+                    2 => (s - 1) * s + s - 1 - i,
+                    _ => (s - 1 - i) * s,
+                }));
+            }
+        } else {
+            let h = s / 2;
+            let cell = |c: usize, x: i64, y: i64| c as i64 * h * h + y * h + x;
+            for c in 0..k {
+                for y in 1..h - 1 {
+                    order.extend((1..h).map(|x| cell(c, x, y)));
+                }
+            }
+            for c in 0..k {
+                order.extend((1..h - 1).map(|row| cell((c + 1) % k, row, h - 1)));
+            }
+            if h >= 2 {
+                order.extend((0..k).map(|c| cell(c, h - 1, h - 1)));
+            }
+            for c in 0..k {
+                order.extend((0..h).map(|i| cell(c, i, 0)));
+                order.extend((1..h).map(|i| cell(c, 0, i)));
+            }
+        }
+        order.into_iter().map(|a| a as u32).collect()
+    }
+
+    /// The first order of a face block of degree `k` starting at finest face `first`:
+    /// Blender's, every face from its corner at the lowest coordinates.
+    fn first_face_order(&self, k: usize, first: usize) -> Vec<(u32, u32)> {
+        self.blender_faces(k)
+            .into_iter()
+            .map(|a| {
+                let low = self.face_low[self.face_at[first + a as usize] as usize] as u32;
+                (a, (4 - low) % 4)
+            })
+            .collect()
+    }
+
     fn size(&self, elem: usize) -> usize {
         self.starts[elem + 1] - self.starts[elem]
     }
@@ -315,6 +382,15 @@ struct State {
     direction: AdaptiveModel,
     /// Per base vertex, when its element was met (`u32::MAX`: not yet).
     met_at: Vec<u32>,
+    /// Faces' turns per (element or block, degree), degrees up to [`MAX_TURN_MODEL`].
+    turns: HashMap<(usize, usize), AdaptiveModel>,
+    /// How the edges' numbers are predicted (SPEC.md 7.3): 0 as numbered, `m > 0` in
+    /// the order of a face walk split into `2^(m - 1)` parts by their lower ends.
+    edge_walk: usize,
+    /// Per edge, its number in that order, and per number its edge (made when the
+    /// first edge block comes).
+    edge_number: Vec<u32>,
+    edge_of_number: Vec<u32>,
 }
 
 /// The numbers of one kind's items in the order met, coded as a permutation's values
@@ -405,6 +481,10 @@ impl State {
             rot: std::array::from_fn(|_| AdaptiveModel::new(4)),
             direction: AdaptiveModel::new(2),
             met_at: vec![u32::MAX; el.count[V]],
+            turns: HashMap::new(),
+            edge_walk: 0,
+            edge_number: Vec::new(),
+            edge_of_number: Vec::new(),
         }
     }
 }
@@ -416,6 +496,30 @@ impl State {
         (self.met_at[a as usize] > self.met_at[b as usize]) as usize
     }
 
+    /// The model of a face's turn (`which`: 0 a face element's, 1 a face block's) of
+    /// degree `k`; `None` above [`MAX_TURN_MODEL`] (then uniform).
+    fn turn_model(&mut self, which: usize, k: usize) -> Option<&mut AdaptiveModel> {
+        (k <= MAX_TURN_MODEL).then(|| {
+            self.turns
+                .entry((which, k))
+                .or_insert_with(|| AdaptiveModel::new(k))
+        })
+    }
+
+    fn put_face_turn(&mut self, e: &mut Encoder, which: usize, k: usize, r: usize) {
+        match self.turn_model(which, k) {
+            Some(m) => e.symbol(m, r),
+            None => e.uniform(r as u64, k as u64),
+        }
+    }
+
+    fn get_face_turn(&mut self, d: &mut Decoder, which: usize, k: usize) -> Result<usize> {
+        match self.turn_model(which, k) {
+            Some(m) => d.symbol(m),
+            None => Ok(d.uniform(k as u64)? as usize),
+        }
+    }
+
     /// Codes an element's turn (an edge's against its prediction).
     fn put_turn(&mut self, e: &mut Encoder, el: &Elements, kind: usize, x: usize, r: usize, turns: usize) {
         match kind {
@@ -423,7 +527,7 @@ impl State {
                 let p = self.predicted(el, x);
                 e.symbol(&mut self.direction, r ^ p);
             }
-            _ => e.uniform(r as u64, turns as u64),
+            _ => self.put_face_turn(e, 0, turns, r),
         }
     }
 
@@ -433,8 +537,61 @@ impl State {
                 let p = self.predicted(el, x);
                 Ok(d.symbol(&mut self.direction)? ^ p)
             }
-            _ => Ok(d.uniform(turns as u64)? as usize),
+            _ => self.get_face_turn(d, 0, turns),
         }
+    }
+
+    /// The number an edge is coded as: its place in the walk `edge_walk` chooses
+    /// (SPEC.md 7.3), made from the base vertices met so far when first asked.
+    fn edge_numbers(&mut self, el: &Elements) {
+        if !self.edge_number.is_empty() || self.edge_walk == 0 {
+            return;
+        }
+        let mask = (1u32 << (self.edge_walk - 1)) - 1;
+        let ne = el.count[E];
+        // The faces' edges, each face from its last corner's edge, first met first;
+        // then split by the lower of the ends' meeting ranks.
+        let mut seen = vec![false; ne];
+        let mut walk = Vec::with_capacity(ne);
+        for f in 0..el.count[F] {
+            let (st, k) = (el.base_starts[f] as usize, el.degree(f));
+            for i in 0..k {
+                let e = el.face_edges[st + (i + k - 1) % k] as usize;
+                if !std::mem::replace(&mut seen[e], true) {
+                    walk.push(e as u32);
+                }
+            }
+        }
+        let part = |e: u32| {
+            let [a, b] = el.edges[e as usize];
+            self.met_at[a as usize].min(self.met_at[b as usize]) & mask
+        };
+        walk.sort_by_key(|&e| part(e));
+        let mut number = vec![0u32; ne];
+        for (n, &e) in walk.iter().enumerate() {
+            number[e as usize] = n as u32;
+        }
+        self.edge_number = number;
+        self.edge_of_number = walk;
+    }
+
+    /// The number element `x` of `kind` is coded as.
+    fn number(&mut self, el: &Elements, kind: usize, x: usize) -> usize {
+        if kind == E && self.edge_walk > 0 {
+            self.edge_numbers(el);
+            return self.edge_number[x] as usize;
+        }
+        x
+    }
+
+    /// Decodes the number of an element of `kind`.
+    fn get_id(&mut self, d: &mut Decoder, el: &Elements, kind: usize) -> Result<usize> {
+        let n = self.ids[kind].get(d)?;
+        if kind == E && self.edge_walk > 0 {
+            self.edge_numbers(el);
+            return Ok(self.edge_of_number[n] as usize);
+        }
+        Ok(n)
     }
 
     /// Notes when the element of kind `kind`, number `x`, just taken, was met.
@@ -464,7 +621,10 @@ pub(super) fn encode_by_elements(
     h: Hierarchy<'_>,
 ) -> Option<(u8, Vec<u8>)> {
     let el = Elements::new(h, faces)?;
-    let by_blocks = encode_elements(&el, o, faces).map(|b| (2, b));
+    let by_blocks = (0..WALKS)
+        .filter_map(|walk| encode_elements(&el, o, faces, walk))
+        .min_by_key(|b| b.len())
+        .map(|b| (2, b));
     let by_first_use = encode_first_use(&el, o, faces).map(|b| (3, b));
     match (by_blocks, by_first_use) {
         (Some(a), Some(b)) => Some(if b.1.len() < a.1.len() { b } else { a }),
@@ -474,7 +634,7 @@ pub(super) fn encode_by_elements(
 
 /// Codes the order by elements (method 2); `None` when the input's order is not one
 /// block per element, vertices and faces alike.
-fn encode_elements(el: &Elements, o: &InputOrder, faces: Faces<'_>) -> Option<Vec<u8>> {
+fn encode_elements(el: &Elements, o: &InputOrder, faces: Faces<'_>, walk: usize) -> Option<Vec<u8>> {
     let nv = faces.nv;
     let elements = el.starts.len() - 1;
     let mut of = vec![(0u32, 0u32); nv];
@@ -489,6 +649,8 @@ fn encode_elements(el: &Elements, o: &InputOrder, faces: Faces<'_>) -> Option<Ve
     }
     let mut e = Encoder::new();
     let mut st = State::new(el);
+    e.uniform(walk as u64, WALKS as u64);
+    st.edge_walk = walk;
     let mut face_rank = vec![0u32; el.count[F]];
     let mut pos = 0;
     while pos < nv {
@@ -504,7 +666,8 @@ fn encode_elements(el: &Elements, o: &InputOrder, faces: Faces<'_>) -> Option<Ve
             places.push(place);
         }
         let (kind, x) = el.kind(elem);
-        if st.ids[kind].met[x] {
+        let number = st.number(el, kind, x);
+        if st.ids[kind].met[number] {
             return None;
         }
         e.symbol(&mut st.kinds[st.prev_kind], kind);
@@ -512,7 +675,7 @@ fn encode_elements(el: &Elements, o: &InputOrder, faces: Faces<'_>) -> Option<Ve
         if kind == F {
             face_rank[x] = st.ids[F].taken as u32;
         }
-        st.ids[kind].put(&mut e, x);
+        st.ids[kind].put(&mut e, number);
         st.met(kind, x);
         if kind != V {
             let (key, turns) = el.shape(kind, x);
@@ -561,6 +724,7 @@ pub(super) fn decode_elements(
     h: Option<Hierarchy<'_>>,
 ) -> Result<InputOrder> {
     let (el, mut d, mut st) = start(2, payload, faces, h)?;
+    st.edge_walk = d.uniform(WALKS as u64)? as usize;
     let nv = faces.nv;
     let mut vertices = vec![0u32; nv];
     let mut face_of_rank = Vec::with_capacity(el.count[F]);
@@ -571,7 +735,7 @@ pub(super) fn decode_elements(
         if st.ids[kind].left() == 0 {
             return Err(Error::corrupt(SECTION, "more elements of a kind than the mesh has"));
         }
-        let x = st.ids[kind].get(&mut d)?;
+        let x = st.get_id(&mut d, &el, kind)?;
         st.met(kind, x);
         if kind == F {
             face_of_rank.push(x);
@@ -646,12 +810,15 @@ fn put_face_blocks(
             return None;
         }
         st.ids[KINDS].put(e, number(f));
+        st.faces
+            .entry(k)
+            .or_insert_with(|| el.first_face_order(k, first));
         let hit = turn_of(st.faces.get(&k), &seen, k, |(a, rot), r| {
             (el.turn_face(k, a, r), rot)
         });
         e.symbol(&mut st.same[KINDS], hit.is_some() as usize);
         match hit {
-            Some(r) => e.uniform(r as u64, k as u64),
+            Some(r) => st.put_face_turn(e, 1, k, r),
             None => {
                 let order: Vec<u32> = seen.iter().map(|s| s.0).collect();
                 put_perm(e, &order);
@@ -688,13 +855,13 @@ fn get_face_blocks(
         let k = el.degree(f);
         let first = el.base_starts[f] as usize * el.per_corner;
         let n = k * el.per_corner;
+        st.faces
+            .entry(k)
+            .or_insert_with(|| el.first_face_order(k, first));
         let seen: Vec<(u32, u32)> = if d.symbol(&mut st.same[KINDS])? == 1 {
-            let t = st
-                .faces
-                .get(&k)
-                .ok_or_else(|| Error::corrupt(SECTION, "a turn of no face order met"))?;
-            let r = d.uniform(k as u64)? as usize;
-            t.iter().map(|&(a, rot)| (el.turn_face(k, a, r), rot)).collect()
+            let r = st.get_face_turn(d, 1, k)?;
+            st.faces[&k]
+                .iter().map(|&(a, rot)| (el.turn_face(k, a, r), rot)).collect()
         } else {
             let order = get_perm(d, n)?;
             let mut s = Vec::with_capacity(n);
@@ -811,6 +978,126 @@ pub(super) mod tests {
         (base, level.fine())
     }
 
+    /// Blender's order of [`hierarchy`] (README of the shared Blender files, SPEC.md
+    /// 7.3): base vertices, base edges as its edge table lists them (the faces' edges,
+    /// each face from its last corner's, in two tables by the lower end's parity), each
+    /// from its lower end, base faces' insides, then the finest faces base face by base
+    /// face, a quad's inner cells row by row and then its border round from corner 0,
+    /// every face from its corner at the lowest coordinates.
+    fn blender_order(el: &Elements, fine: &Topo) -> InputOrder {
+        let mut edges: Vec<usize> = Vec::new();
+        for f in 0..el.count[F] {
+            let (st, k) = (el.base_starts[f] as usize, el.degree(f));
+            for i in 0..k {
+                let e = el.face_edges[st + (i + k - 1) % k] as usize;
+                if !edges.contains(&e) {
+                    edges.push(e);
+                }
+            }
+        }
+        edges.sort_by_key(|&e| el.edges[e][0].min(el.edges[e][1]) & 1);
+        let mut vertices = vec![u32::MAX; fine.nv];
+        let mut pos = 0;
+        let mut put = |elem: usize, turn: usize, kind: usize| {
+            for p in 0..el.size(elem) as u32 {
+                let p = if kind == E { el.turn(E, 0, p, turn) } else { p };
+                vertices[el.points[el.starts[elem] + p as usize] as usize] = pos;
+                pos += 1;
+            }
+        };
+        (0..el.count[V]).for_each(|v| put(el.element(V, v), 0, V));
+        for &e in &edges {
+            put(el.element(E, e), (el.edges[e][0] > el.edges[e][1]) as usize, E);
+        }
+        (0..el.count[F]).for_each(|f| put(el.element(F, f), 0, F));
+        let mut forder = vec![u32::MAX; fine.nf()];
+        let mut rotations = vec![0; fine.nf()];
+        let mut pos = 0;
+        let s = el.side;
+        for f in 0..el.count[F] {
+            let k = el.degree(f);
+            let first = el.base_starts[f] as usize * el.per_corner;
+            let places: Vec<u32> = if k == 4 {
+                let mut cells: Vec<i64> = (1..s - 1)
+                    .flat_map(|y| (1..s - 1).map(move |x| y * s + x))
+                    .collect();
+                // The border, walked from (0, 0) along +x, +y, -x, -y.
+                let (mut x, mut y) = (0i64, 0i64);
+                for (dx, dy) in [(1, 0), (0, 1), (-1, 0), (0, -1)] {
+                    for _ in 0..s - 1 {
+                        cells.push(y * s + x);
+                        (x, y) = (x + dx, y + dy);
+                    }
+                }
+                cells.into_iter().map(|c| c as u32).collect()
+            } else {
+                el.blender_faces(k)
+            };
+            for a in places {
+                let c = el.face_at[first + a as usize] as usize;
+                forder[c] = pos;
+                rotations[c] = (4 - el.face_low[c] as u32) % 4;
+                pos += 1;
+            }
+        }
+        assert!(!vertices.contains(&u32::MAX) && !forder.contains(&u32::MAX));
+        InputOrder {
+            vertices,
+            faces: forder,
+            rotations,
+        }
+    }
+
+    #[test]
+    fn blenders_order_costs_a_few_bytes() {
+        for levels in 1..=3u32 {
+            let (base, fine) = hierarchy(levels);
+            let h = view(&base, levels, Family::Cc, &[]);
+            let faces = faces_of(&fine, Some(h));
+            let el = Elements::new(h, faces).expect("the finest level's elements");
+            let o = blender_order(&el, &fine);
+            let sizes: Vec<usize> = (0..WALKS)
+                .map(|w| {
+                    let body = encode_elements(&el, &o, faces, w).expect("blocks");
+                    assert_eq!(decode_elements(&body, faces, Some(h)).unwrap(), o);
+                    body.len()
+                })
+                .collect();
+            eprintln!("{levels} levels: {sizes:?}");
+            // Two tables of edges (the walk's parts by parity) are Blender's; every
+            // face block is its order (nothing but the turns' symbols).
+            let least = sizes.iter().min().unwrap();
+            assert_eq!(sizes[2], *least, "{levels} levels: {sizes:?}");
+            assert!(sizes[2] <= 12, "{levels} levels: {sizes:?}");
+            let bytes = encode(&o, faces);
+            assert_eq!(decode(&bytes, faces).unwrap(), o);
+            assert_eq!(bytes[0], 2, "{levels} levels: method {}", bytes[0]);
+        }
+    }
+
+    /// The ORDR view of `base` refined `levels` times as a `family` hierarchy with
+    /// `poles`.
+    pub(in super::super) fn view<'a>(base: &'a Topo, levels: u32, family: Family, poles: &'a [u32]) -> Hierarchy<'a> {
+        Hierarchy {
+            nv: base.nv,
+            starts: &base.starts,
+            idx: &base.idx,
+            levels,
+            family,
+            poles,
+        }
+    }
+
+    /// The finest faces `fine` of `h`, as ORDR sees them.
+    pub(in super::super) fn faces_of<'a>(fine: &'a Topo, h: Option<Hierarchy<'a>>) -> Faces<'a> {
+        Faces {
+            nv: fine.nv,
+            starts: &fine.starts,
+            idx: &fine.idx,
+            hierarchy: h,
+        }
+    }
+
     /// A xorshift step.
     fn next(x: &mut u64) -> u64 {
         *x ^= *x << 13;
@@ -840,19 +1127,8 @@ pub(super) mod tests {
     fn check(levels: u32, seed: u64, sizes: bool) {
         {
             let (base, fine) = hierarchy(levels);
-            let h = Hierarchy {
-                nv: base.nv,
-                starts: &base.starts,
-                idx: &base.idx,
-                levels,
-                family: Family::Cc,
-            };
-            let faces = Faces {
-                nv: fine.nv,
-                starts: &fine.starts,
-                idx: &fine.idx,
-                hierarchy: Some(h),
-            };
+            let h = view(&base, levels, Family::Cc, &[]);
+            let faces = faces_of(&fine, Some(h));
             let el = Elements::new(h, faces).expect("the finest level's elements");
             let mut seed = seed | 1;
             // Elements in a shuffled order (kinds mixed), each block its shape's places
@@ -911,7 +1187,7 @@ pub(super) mod tests {
                 faces: forder,
                 rotations,
             };
-            let body = encode_elements(&el, &o, faces).expect("blocks of elements");
+            let body = encode_elements(&el, &o, faces, 0).expect("blocks of elements");
             assert_eq!(decode_elements(&body, faces, Some(h)).unwrap(), o);
             // Walks pay an escape at most blocks; here a block costs its number and
             // turn (and each shape's first order once), and the smallest is kept
@@ -964,7 +1240,7 @@ pub(super) mod tests {
             let (a, b) = (el.points[el.starts[edge]], el.points[el.starts[face] + 1]);
             shuffled.vertices.swap(a as usize, b as usize);
             // (With one level an edge and a quad hold one point each: still blocks.)
-            assert_eq!(encode_elements(&el, &shuffled, faces).is_none(), levels > 1);
+            assert_eq!(encode_elements(&el, &shuffled, faces, 1).is_none(), levels > 1);
             assert_eq!(decode(&encode(&shuffled, faces), faces).unwrap(), shuffled);
         }
     }

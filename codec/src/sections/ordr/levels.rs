@@ -28,6 +28,16 @@ const ARRANGEMENTS: [[usize; 3]; 6] = [
 /// Levels beyond which method 4 is not used.
 const MAX_LEVELS: u32 = 15;
 
+/// Which base vertices of `h` are poles (every level's, SPEC.md 8.6); `None` when a
+/// pole is no base vertex.
+fn pole_flags(h: Hierarchy<'_>) -> Option<Vec<bool>> {
+    let mut pole = vec![false; h.nv];
+    for &p in h.poles {
+        *pole.get_mut(p as usize)? = true;
+    }
+    Some(pole)
+}
+
 /// The coarse levels of `h` (the base mesh's, then each refinement's but the last),
 /// canonical numbering; `None` when `h` has no level or too many, or its base is no
 /// mesh (or, for sqrt(2), no closed one).
@@ -40,11 +50,13 @@ fn levels(h: Hierarchy<'_>) -> Option<Vec<Level>> {
         starts: h.starts.to_vec(),
         idx: h.idx.to_vec(),
     };
+    let pole = pole_flags(h)?;
     let mut out = vec![Level::new(&topo).ok()?];
     for _ in 1..h.levels {
         let last = out.last()?;
         let next = match h.family {
             Family::Cc => last.next(),
+            Family::Polar => Level::new(&last.fine_with(&pole)).ok()?,
             Family::Sqrt2 if sqrt2::closed(last) => sqrt2::next_level(last.clone(), true).ok()?,
             _ => return None,
         };
@@ -54,6 +66,20 @@ fn levels(h: Hierarchy<'_>) -> Option<Vec<Level>> {
         return None;
     }
     Some(out)
+}
+
+/// Per fine face of `level` (SPEC.md 8.1, 8.6), the coarse face and corner it lies at:
+/// each corner's one quad, or a pole's two triangles in a triangle (`pole[v]`).
+fn fine_faces(level: &Level, pole: &[bool]) -> Vec<(u32, u32)> {
+    let mut out = Vec::with_capacity(level.coarse.idx.len());
+    for f in 0..level.nf() {
+        let face = level.coarse.face(f);
+        for (i, &c) in face.iter().enumerate() {
+            let n = if face.len() == 3 && pole.get(c as usize) == Some(&true) { 2 } else { 1 };
+            out.extend(std::iter::repeat_n((f as u32, i as u32), n));
+        }
+    }
+    out
 }
 
 /// What the stream gives (SPEC.md 7.5): the blocks' arrangement, the base vertices in
@@ -69,7 +95,7 @@ struct Base {
 /// The order the refinement of `levels` produces from `base`, as an [`InputOrder`] of
 /// the finest level (`nv` vertices, `nf` faces); `None` when the finest level does not
 /// have these counts.
-fn produce(levels: &[Level], family: Family, base: &Base, nv: usize, nf: usize) -> Option<InputOrder> {
+fn produce(levels: &[Level], family: Family, pole: &[bool], base: &Base, nv: usize, nf: usize) -> Option<InputOrder> {
     // Per vertex of the current level, its number; the faces in order with their
     // first corners.
     let mut number = vec![0u32; levels[0].nv];
@@ -95,7 +121,7 @@ fn produce(levels: &[Level], family: Family, base: &Base, nv: usize, nf: usize) 
             })
             .collect();
         by_ends.sort_unstable();
-        let cc = family == Family::Cc;
+        let cc = family != Family::Sqrt2;
         // A sqrt(2) step has no edge points: its faces' points follow its old vertices.
         let sizes = [lnv, if cc { ne } else { 0 }, lnf];
         let mut offset = [0usize; 3];
@@ -116,14 +142,46 @@ fn produce(levels: &[Level], family: Family, base: &Base, nv: usize, nf: usize) 
             for (rank, &(_, _, e)) in by_ends.iter().enumerate() {
                 next[lnv + e as usize] = (offset[1] + rank) as u32;
             }
-            // Each face's children from its first corner on, each from its corner.
-            let mut children = Vec::with_capacity(level.coarse.idx.len());
+            // Each face's children from its first corner on, each from its corner; a
+            // pole's two triangles in a triangle from the pole, the triangle's other
+            // two quads from the edge point after the pole (the corner after it) or
+            // from the face point (the corner before it).
+            let fine = fine_faces(level, pole);
+            let mut first_child = vec![0u32; lnf + 1];
+            for &(f, _) in &fine {
+                first_child[f as usize + 1] += 1;
+            }
+            for f in 0..lnf {
+                first_child[f + 1] += first_child[f];
+            }
+            let is_pole = |v: u32| pole.get(v as usize) == Some(&true);
+            let mut children = Vec::with_capacity(fine.len());
             for &(f, r) in &faces {
-                let (start, k) = (
-                    level.coarse.starts[f as usize],
-                    level.coarse.face(f as usize).len() as u32,
-                );
-                children.extend((0..k).map(|i| (start + (r + i) % k, 0)));
+                let face = level.coarse.face(f as usize);
+                let k = face.len();
+                let fan = k == 3 && face.iter().any(|&v| is_pole(v));
+                // Per corner, where its faces start among the face's.
+                let mut at = first_child[f as usize];
+                let mut starts = [0u32; 3];
+                if fan {
+                    for (i, &c) in face.iter().enumerate() {
+                        starts[i] = at;
+                        at += 1 + is_pole(c) as u32;
+                    }
+                }
+                for j in 0..k {
+                    let i = (r as usize + j) % k;
+                    if !fan {
+                        children.push((first_child[f as usize] + i as u32, 0));
+                    } else if is_pole(face[i]) {
+                        children.push((starts[i], 0));
+                        children.push((starts[i] + 1, 0));
+                    } else if is_pole(face[(i + k - 1) % k]) {
+                        children.push((starts[i], 3));
+                    } else {
+                        children.push((starts[i], 2));
+                    }
+                }
             }
             children
         } else {
@@ -145,9 +203,11 @@ fn produce(levels: &[Level], family: Family, base: &Base, nv: usize, nf: usize) 
     }
     let mut forder = vec![0u32; nf];
     let mut rotations = vec![0u32; nf];
-    for (pos, &(g, r)) in faces.iter().enumerate() {
+    // A face whose first corner is its canonical corner c is rotated by (4 - c) mod
+    // 4 (a finest triangle's is corner 0).
+    for (pos, &(g, c)) in faces.iter().enumerate() {
         forder[g as usize] = pos as u32;
-        rotations[g as usize] = r;
+        rotations[g as usize] = (4 - c) % 4;
     }
     Some(InputOrder {
         vertices: number,
@@ -160,12 +220,14 @@ fn produce(levels: &[Level], family: Family, base: &Base, nv: usize, nf: usize) 
 /// `None` when it is not (or the faces are not the hierarchy's finest level).
 pub(super) fn encode_levels(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>) -> Option<Vec<u8>> {
     let levels = levels(h)?;
+    let pole = pole_flags(h)?;
     let (nb, nbf) = (h.nv, h.starts.len() - 1);
     let nf = faces.count();
     if o.vertices.len() != faces.nv {
         return None;
     }
-    let cc = h.family == Family::Cc;
+    // Catmull-Clark and polar levels have edge points (and base faces' first corners).
+    let cc = h.family != Family::Sqrt2;
     // Each level's arrangement, finest first: its blocks by their first numbers (a
     // sqrt(2) step's edge block is empty, taken as right after its old vertices); the
     // old vertices' numbers less their block's start are the coarser level's.
@@ -193,13 +255,19 @@ pub(super) fn encode_levels(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>) 
     vertices.sort_unstable_by_key(|&v| number[v as usize]);
     let mut face_first = vec![(u32::MAX, 0u32); nbf];
     if cc {
-        // Finest faces per base corner.
-        let per_corner = nf.checked_div(h.idx.len())?;
-        if per_corner == 0 || per_corner * h.idx.len() != nf {
+        // Per finest face, the base corner it lies at, level by level.
+        let mut root: Vec<u32> = fine_faces(&levels[0], &pole)
+            .iter()
+            .map(|&(f, i)| h.starts[f as usize] + i)
+            .collect();
+        for level in &levels[1..] {
+            root = fine_faces(level, &pole).iter().map(|&(f, _)| root[f as usize]).collect();
+        }
+        if root.len() != nf {
             return None;
         }
         for (g, &pos) in o.faces.iter().enumerate() {
-            let corner = (g / per_corner) as u32;
+            let corner = root[g];
             let f = h.starts.partition_point(|&s| s <= corner) - 1;
             if pos < face_first[f].0 {
                 face_first[f] = (pos, corner - h.starts[f]);
@@ -222,7 +290,7 @@ pub(super) fn encode_levels(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>) 
         faces: base_faces,
         first: face_first.iter().map(|&(_, c)| c).collect(),
     };
-    if produce(&levels, h.family, &base, faces.nv, nf)? != *o {
+    if produce(&levels, h.family, &pole, &base, faces.nv, nf)? != *o {
         return None;
     }
     let mut e = Encoder::new();
@@ -256,7 +324,7 @@ pub(super) fn decode_levels(payload: &[u8], faces: Faces<'_>, h: Option<Hierarch
     let mut m = IntModel::new();
     // (A sqrt(2) hierarchy's base faces have no first corners: its finest faces come
     // from edges.)
-    for &f in base_faces.iter().filter(|_| h.family == Family::Cc) {
+    for &f in base_faces.iter().filter(|_| h.family != Family::Sqrt2) {
         let k = h.starts[f as usize + 1] - h.starts[f as usize];
         let r = d.int(&mut m)?;
         if !(0..k as i64).contains(&r) {
@@ -270,20 +338,21 @@ pub(super) fn decode_levels(payload: &[u8], faces: Faces<'_>, h: Option<Hierarch
         faces: base_faces,
         first,
     };
-    produce(&levels, h.family, &base, faces.nv, faces.count())
+    let pole = pole_flags(h).ok_or_else(|| corrupt("a pole that is no base vertex"))?;
+    produce(&levels, h.family, &pole, &base, faces.nv, faces.count())
         .ok_or_else(|| corrupt("method 4 on faces that are not the hierarchy's"))
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::elements::tests::hierarchy;
+    use super::super::elements::tests::{faces_of, hierarchy, view};
     use super::super::{decode, encode};
     use super::*;
 
     /// The order a tool refining the base in its own order produces, made from `seed`:
     /// a shuffle of the base's vertices and faces, each face's first corner, an
     /// arrangement of the blocks.
-    fn produced(levels: &[Level], family: Family, base: &Topo, seed: u64, nv: usize, nf: usize) -> InputOrder {
+    fn produced(levels: &[Level], family: Family, pole: &[bool], base: &Topo, seed: u64, nv: usize, nf: usize) -> InputOrder {
         let mut x = seed | 1;
         let mut next = || {
             x ^= x << 13;
@@ -306,7 +375,7 @@ mod tests {
             faces,
             first,
         };
-        produce(levels, family, &b, nv, nf).unwrap()
+        produce(levels, family, pole, &b, nv, nf).unwrap()
     }
 
     /// Every arrangement and base order round-trips by method 4, which the encoder
@@ -316,22 +385,11 @@ mod tests {
     fn refinement_orders_round_trip_for_the_bases_bytes() {
         for levels in 1..=3u32 {
             let (base, fine) = hierarchy(levels);
-            let h = Hierarchy {
-                nv: base.nv,
-                starts: &base.starts,
-                idx: &base.idx,
-                levels,
-                family: Family::Cc,
-            };
-            let faces = Faces {
-                nv: fine.nv,
-                starts: &fine.starts,
-                idx: &fine.idx,
-                hierarchy: Some(h),
-            };
+            let h = view(&base, levels, Family::Cc, &[]);
+            let faces = faces_of(&fine, Some(h));
             let lv = super::levels(h).unwrap();
             for seed in 0..12u64 {
-                let o = produced(&lv, Family::Cc, &base, seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) + 1, fine.nv, fine.nf());
+                let o = produced(&lv, Family::Cc, &[], &base, seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) + 1, fine.nv, fine.nf());
                 let bytes = encode(&o, faces);
                 assert_eq!(bytes[0], 4, "levels {levels} seed {seed}: method {}", bytes[0]);
                 assert!(bytes.len() <= 16, "levels {levels}: {} B", bytes.len());
@@ -351,7 +409,7 @@ mod tests {
                 }
             }
             // One vertex pair swapped: no longer the refinement's order.
-            let mut o = produced(&lv, Family::Cc, &base, 99, fine.nv, fine.nf());
+            let mut o = produced(&lv, Family::Cc, &[], &base, 99, fine.nv, fine.nf());
             let (a, b) = (fine.nv - 1, fine.nv - 2);
             o.vertices.swap(a, b);
             assert!(encode_levels(&o, faces, h).is_none());
@@ -368,32 +426,62 @@ mod tests {
             base.push(&f);
         }
         for levels in 1..=4u32 {
-            let h = Hierarchy {
-                nv: base.nv,
-                starts: &base.starts,
-                idx: &base.idx,
-                levels,
-                family: Family::Sqrt2,
-            };
+            let h = view(&base, levels, Family::Sqrt2, &[]);
             let lv = super::levels(h).unwrap();
             let fine = sqrt2::fine(lv.last().unwrap());
-            let faces = Faces {
-                nv: fine.nv,
-                starts: &fine.starts,
-                idx: &fine.idx,
-                hierarchy: Some(h),
-            };
+            let faces = faces_of(&fine, Some(h));
             for seed in 0..8u64 {
-                let o = produced(&lv, Family::Sqrt2, &base, seed * 7919 + 3, fine.nv, fine.nf());
+                let o = produced(&lv, Family::Sqrt2, &[], &base, seed * 7919 + 3, fine.nv, fine.nf());
                 let bytes = encode(&o, faces);
                 assert_eq!(bytes[0], 4, "levels {levels} seed {seed}");
                 assert!(bytes.len() <= 16, "levels {levels}: {} B", bytes.len());
                 assert_eq!(decode(&bytes, faces).unwrap(), o);
             }
-            let mut o = produced(&lv, Family::Sqrt2, &base, 5, fine.nv, fine.nf());
+            let mut o = produced(&lv, Family::Sqrt2, &[], &base, 5, fine.nv, fine.nf());
             o.rotations[0] ^= 2;
             assert!(encode_levels(&o, faces, h).is_none());
             assert_eq!(decode(&encode(&o, faces), faces).unwrap(), o);
+        }
+    }
+
+    /// A polar hierarchy's order (a pyramid whose apex is a pole, its fan triangles
+    /// split at every level, SPEC.md 8.6) round-trips by method 4 for its base's bytes;
+    /// the same faces as a Catmull-Clark hierarchy's do not decode.
+    #[test]
+    fn polar_refinement_orders_round_trip() {
+        let mut base = Topo::new(5);
+        for f in [[4, 0, 1], [4, 1, 2], [4, 2, 3], [4, 3, 0]] {
+            base.push(&f);
+        }
+        base.push(&[0, 3, 2, 1]);
+        let poles = [4u32];
+        let pole = [false, false, false, false, true];
+        for levels in 1..=3u32 {
+            let h = view(&base, levels, Family::Polar, &poles);
+            let lv = super::levels(h).unwrap();
+            let fine = lv.last().unwrap().fine_with(&pole);
+            // The pole's valence doubles per level: its fan has 4 * 2^levels triangles.
+            let fans = (0..fine.nf()).filter(|&g| fine.face(g).len() == 3).count();
+            assert_eq!(fans, 4 << levels);
+            let faces = faces_of(&fine, Some(h));
+            for seed in 0..8u64 {
+                let o = produced(&lv, Family::Polar, &pole, &base, seed * 104_729 + 5, fine.nv, fine.nf());
+                // A fan's quads start at an edge point or a face point.
+                assert!(o.rotations.contains(&1) && o.rotations.contains(&2));
+                let bytes = encode(&o, faces);
+                assert_eq!(bytes[0], 4, "levels {levels} seed {seed}");
+                assert!(bytes.len() <= 16, "levels {levels}: {} B", bytes.len());
+                assert_eq!(decode(&bytes, faces).unwrap(), o);
+                let cc = Faces {
+                    hierarchy: Some(Hierarchy {
+                        family: Family::Cc,
+                        poles: &[],
+                        ..h
+                    }),
+                    ..faces
+                };
+                assert!(decode(&bytes, cc).is_err());
+            }
         }
     }
 

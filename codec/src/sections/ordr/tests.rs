@@ -154,19 +154,8 @@ fn element_places_follow_the_refinement() {
         }
     }
     let fine = level.fine();
-    let faces = Faces {
-        nv: fine.nv,
-        starts: &fine.starts,
-        idx: &fine.idx,
-        hierarchy: None,
-    };
-    let h = Hierarchy {
-        nv: 4,
-        starts: &base.starts,
-        idx: &base.idx,
-        levels: l,
-        family: crate::topology::Family::Cc,
-    };
+    let faces = super::elements::tests::faces_of(&fine, None);
+    let h = super::elements::tests::view(&base, l, crate::topology::Family::Cc, &[]);
     let el = super::elements::tests_places(h, faces).expect("elements");
     for (w, place) in el {
         let [x, y] = pos[w as usize];
