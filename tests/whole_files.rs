@@ -203,7 +203,15 @@ fn shared_corpus_objs_come_back_byte_for_byte() {
     // Meshes written in the order their refinement produces, level by level (ORDR
     // method 4, SPEC.md 7.5): Catmull-Clark, sqrt(2) and polar; the order costs the
     // base's alone (at most 2 % of the container; walks cost 29 % on bunny_polar2).
-    let produced = ["bunny_cc4.obj", "armadillo_sqrt2_8.obj", "bunny_polar2.obj"];
+    // spot_sqrt2_6 and bumpy_cube_polar3 were made from the base whose labeling the
+    // recovery does not prefer: the encoder, keeping the order, tries the others.
+    let produced = [
+        "bunny_cc4.obj",
+        "armadillo_sqrt2_8.obj",
+        "bunny_polar2.obj",
+        "spot_sqrt2_6.obj",
+        "bumpy_cube_polar3.obj",
+    ];
     let mut failures = Vec::new();
     for f in &files {
         match round_trip(&f.display().to_string(), &std::fs::read(f).unwrap()) {

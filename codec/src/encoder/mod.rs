@@ -811,14 +811,18 @@ fn best_hierarchy(
             canons.iter_mut().skip(1).for_each(Canonical::stow);
         }
         // Polar levels take the Catmull-Clark transforms (SPEC.md 8.6).
-        canons.extend(topology::polar::recover_all(
-            mesh.vertex_count(),
-            &topo,
-            max,
-            gates,
-        ));
-        canons.iter_mut().skip(1).for_each(Canonical::stow);
+        let keep = match opts.keep_order {
+            true => topology::polar::KEEP_FOR_ORDER,
+            false => topology::polar::KEEP,
+        };
+        for canon in topology::polar::recover_all(mesh.vertex_count(), &topo, max, gates, keep) {
+            canons.push(canon);
+            canons.iter_mut().skip(1).for_each(Canonical::stow);
+        }
         drop(topo);
+        if opts.keep_order {
+            canons = by_order_cost(mesh, canons)?;
+        }
         // The subdivision fit, on each candidate whose finest level is near a
         // subdivision (every candidate when asked for by name).
         let try_fit = match opts.transform {
@@ -864,10 +868,17 @@ fn best_hierarchy(
             FamilyJob::Ready(canons, first, others) => (canons, first, others),
             FamilyJob::Sqrt2 => {
                 let topo = input_topo();
-                let canons: Vec<Canonical> = topology::sqrt2::recover(&topo, max)
-                    .and_then(|rec| topology::sqrt2::canonicalise(rec, &topo, gates).ok())
-                    .into_iter()
-                    .collect();
+                let mut canons: Vec<Canonical> = Vec::new();
+                for rec in topology::sqrt2::recover_candidates(&topo, max, opts.keep_order) {
+                    if let Ok(canon) = topology::sqrt2::canonicalise(rec, &topo, gates) {
+                        canons.push(canon);
+                        canons.iter_mut().skip(1).for_each(Canonical::stow);
+                    }
+                }
+                drop(topo);
+                if opts.keep_order {
+                    canons = by_order_cost(mesh, canons)?;
+                }
                 (canons, Wavelet::Sqrt2Lazy, &Wavelet::SQRT2[..])
             }
         };
@@ -889,6 +900,33 @@ fn best_hierarchy(
         }
     }
     Ok(best)
+}
+
+/// `canons` (the first with its levels, the others stowed) with the one whose ORDR
+/// section codes the input's order smallest first, the others in their order after it,
+/// when it saves more than a bit per vertex on the first's (less is below what the
+/// candidates' geometry may differ by): of a mesh and its dual, or a polar grid's
+/// labelings, only the one its producer made predicts its order (SPEC.md 7.5).
+fn by_order_cost(mesh: &Mesh, mut canons: Vec<Canonical>) -> Result<Vec<Canonical>> {
+    if canons.len() < 2 {
+        return Ok(canons);
+    }
+    let mut costs = Vec::with_capacity(canons.len());
+    for (i, canon) in canons.iter_mut().enumerate() {
+        if i > 0 {
+            canon.unstow()?;
+        }
+        costs.push(hierarchy_order(mesh, canon)?.len());
+        canon.stow();
+    }
+    let mut best = (0..canons.len()).min_by_key(|&i| costs[i]).unwrap_or(0);
+    if costs[0] - costs[best] <= mesh.vertex_count() / 8 {
+        best = 0;
+    }
+    let first = canons.remove(best);
+    canons.insert(0, first);
+    canons[0].unstow()?;
+    Ok(canons)
 }
 
 /// A family's candidate hierarchies for [`best_hierarchy`]: recovered, with the

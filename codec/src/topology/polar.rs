@@ -20,16 +20,17 @@ use super::{canonicalise, Canonical, FaceIndex, PairMap, Recovered, Topo};
 /// no polar level.
 #[cfg(any(test, feature = "internals"))]
 pub fn recover(nv: usize, topo: &Topo, max_levels: usize) -> Option<Canonical> {
-    recover_all(nv, topo, max_levels, true).into_iter().next()
+    recover_all(nv, topo, max_levels, true, KEEP).into_iter().next()
 }
 
 /// Like [`recover`], also returning the equally deep alternatives where every component
 /// that ties takes its second, third or fourth coarsening (a regular polar grid coarsens
-/// in several ways; which codes smaller depends on the geometry). At most [`KEEP`]
-/// results, preferred first.
+/// in several ways; which codes smaller depends on the geometry). At most `keep`
+/// results ([`KEEP`], or [`KEEP_FOR_ORDER`] when the input's order is kept: the one its
+/// producer made may be any of them), preferred first.
 /// `gates` as [`super::canonicalise`] takes it.
-pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize, gates: bool) -> Vec<Canonical> {
-    let recs = recover_raw(nv, topo, max_levels);
+pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize, gates: bool, keep: usize) -> Vec<Canonical> {
+    let recs = recover_raw(nv, topo, max_levels, keep);
     if recs.is_empty() {
         return Vec::new();
     }
@@ -44,7 +45,7 @@ pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize, gates: bool) -> Ve
 }
 
 /// [`recover_all`] before canonicalisation.
-fn recover_raw(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Recovered> {
+fn recover_raw(nv: usize, topo: &Topo, max_levels: usize, keep: usize) -> Vec<Recovered> {
     if max_levels == 0 || topo.nf() == 0 {
         return Vec::new();
     }
@@ -72,7 +73,7 @@ fn recover_raw(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Recovered> {
     let mut depth = max_levels;
     for (ids, local) in cc::components(nv, topo) {
         let local_pole: Vec<bool> = ids.iter().map(|&i| pole[i as usize]).collect();
-        let chains = chains(&local, &local_pole, max_levels);
+        let chains = chains(&local, &local_pole, max_levels, keep);
         depth = depth.min(chains[0].steps.len());
         if depth == 0 {
             return Vec::new();
@@ -81,7 +82,7 @@ fn recover_raw(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Recovered> {
     }
     let poles: Vec<u32> = (0..nv as u32).filter(|&v| pole[v as usize]).collect();
     let mut out = Vec::new();
-    for alternative in 0..KEEP {
+    for alternative in 0..keep {
         let mut differs = false;
         let refs: Vec<(&[u32], &Chain)> = parts
             .iter()
@@ -105,12 +106,16 @@ fn recover_raw(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Recovered> {
 
 /// How many equally deep chains a component keeps: a polar grid coarsens in up to four
 /// ways (two pairings of the fans' triangles, two labelings of the merged quads).
-const KEEP: usize = 4;
+pub const KEEP: usize = 4;
+
+/// How many a component keeps when the input's order is kept (the encoder then puts
+/// first the candidate whose order codes smallest).
+pub const KEEP_FOR_ORDER: usize = 16;
 
 /// The best chains of polar coarsenings of a component whose poles are `pole`.
-fn chains(t: &Topo, pole: &[bool], max_levels: usize) -> Vec<Chain> {
+fn chains(t: &Topo, pole: &[bool], max_levels: usize, keep: usize) -> Vec<Chain> {
     if max_levels == 0 {
-        return cc::best(Vec::new(), t.nv, KEEP);
+        return cc::best(Vec::new(), t.nv, keep);
     }
     if t.all_quads() {
         return cc::chains(t, max_levels);
@@ -122,11 +127,11 @@ fn chains(t: &Topo, pole: &[bool], max_levels: usize) -> Vec<Chain> {
                 continue;
             }
             let coarse_pole: Vec<bool> = cand.to_fine.iter().map(|&f| pole[f as usize]).collect();
-            let rests = chains(&cand.coarse, &coarse_pole, max_levels - 1);
+            let rests = chains(&cand.coarse, &coarse_pole, max_levels - 1, keep);
             all.extend(rests.into_iter().map(|rest| rest.after(&cand)));
         }
     }
-    cc::best(all, t.nv, KEEP)
+    cc::best(all, t.nv, keep)
 }
 
 /// The all-quad meshes made by merging the poles' triangles in pairs (at most two, one per

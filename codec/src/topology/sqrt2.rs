@@ -167,6 +167,7 @@ impl Recovered {
 }
 
 /// One coarsening: the coarse faces and, per coarse face, its point.
+#[derive(Clone)]
 struct Coarse {
     topo: Topo,
     points: Vec<u32>,
@@ -321,50 +322,89 @@ fn used(t: &Topo) -> usize {
         .count()
 }
 
-/// The deepest chain of coarsenings of `t` (finest first), at most `max` long.
-fn search(t: &Topo, max: usize) -> Vec<Coarse> {
+/// The deepest chains of coarsenings of `t` (finest first), at most `max` long: the
+/// best (deepest, then fewest base vertices, then the first side) and, when another is
+/// as deep, the best of the others (at most two).
+fn search(t: &Topo, max: usize) -> Vec<Vec<Coarse>> {
     if max == 0 || t.nf() == 0 || !t.all_quads() {
         return Vec::new();
     }
     let Some(colours) = colour(t) else {
         return Vec::new();
     };
-    let mut best: Vec<Coarse> = Vec::new();
-    let mut best_base = usize::MAX;
+    // (depth, base vertices, chain), in the order found.
+    let mut found: Vec<(usize, usize, Vec<Coarse>)> = Vec::new();
     for side in 0..2 {
         let Some(c) = coarsen(t, &colours, side) else {
             continue;
         };
-        let rest = search(&c.topo, max - 1);
-        let base = used(rest.last().map_or(&c.topo, |r| &r.topo));
-        let depth = rest.len() + 1;
-        if depth > best.len() || (depth == best.len() && base < best_base) {
-            best_base = base;
-            best = std::iter::once(c).chain(rest).collect();
+        let rests = search(&c.topo, max - 1);
+        if rests.is_empty() {
+            found.push((1, used(&c.topo), vec![c]));
+            continue;
+        }
+        for rest in rests {
+            let base = used(rest.last().map_or(&c.topo, |r| &r.topo));
+            let chain: Vec<Coarse> = std::iter::once(c.clone()).chain(rest).collect();
+            found.push((chain.len(), base, chain));
         }
     }
-    best
+    // Stable: a tie keeps the first found.
+    found.sort_by_key(|&(depth, base, _)| (std::cmp::Reverse(depth), base));
+    let depth = found.first().map_or(0, |f| f.0);
+    found
+        .into_iter()
+        .filter(|f| f.0 == depth)
+        .take(2)
+        .map(|f| f.2)
+        .collect()
 }
 
 /// Finds the deepest sqrt(2) hierarchy of `topo` (at most `max_levels` steps); `None`
 /// when there is none (no step can be undone).
+#[cfg(any(test, feature = "internals"))]
 pub fn recover(topo: &Topo, max_levels: usize) -> Option<Recovered> {
+    recover_candidates(topo, max_levels, false).into_iter().next()
+}
+
+/// Like [`recover`]; with `alternatives`, also the hierarchy where every component
+/// that has an equally deep other chain takes it (a coarse mesh and its dual give the
+/// same sqrt(2) step: which one a file was made from shows in its order only).
+pub fn recover_candidates(topo: &Topo, max_levels: usize, alternatives: bool) -> Vec<Recovered> {
     let n = topo.nv;
     if topo.nf() == 0 || !topo.all_quads() {
-        return None;
+        return Vec::new();
     }
     let mut comps = crate::topology::cc::components(n, topo);
-    let mut chains = Vec::with_capacity(comps.len());
+    let mut per_comp = Vec::with_capacity(comps.len());
     let mut depth = max_levels;
     for (verts, t) in &mut comps {
         t.nv = verts.len();
-        let chain = search(t, depth);
-        depth = depth.min(chain.len());
+        let chains = search(t, depth);
+        depth = depth.min(chains.first().map_or(0, Vec::len));
         if depth == 0 {
-            return None;
+            return Vec::new();
         }
-        chains.push(chain);
+        per_comp.push(chains);
     }
+    let pick = |alt: bool| -> Vec<&[Coarse]> {
+        per_comp
+            .iter()
+            .map(|c| match c.get(1) {
+                Some(a) if alt && a.len() >= depth => &a[..],
+                _ => &c[0][..],
+            })
+            .collect()
+    };
+    let mut out = vec![merge(n, &comps, &pick(false), depth)];
+    if alternatives && per_comp.iter().any(|c| c.get(1).is_some_and(|a| a.len() >= depth)) {
+        out.push(merge(n, &comps, &pick(true), depth));
+    }
+    out
+}
+
+/// The hierarchy of the components' `chains`, cut to `depth` steps, in input numbers.
+fn merge(n: usize, comps: &[(Vec<u32>, Topo)], chains: &[&[Coarse]], depth: usize) -> Recovered {
     let mut base = Topo::new(n);
     // Level l's map holds each of its coarse faces by its key.
     let mut face_points: Vec<PairMap> = (1..=depth)
@@ -373,7 +413,7 @@ pub fn recover(topo: &Topo, max_levels: usize) -> Option<Recovered> {
             PairMap::with_capacity(n)
         })
         .collect();
-    for ((verts, _), chain) in comps.iter().zip(&chains) {
+    for ((verts, _), chain) in comps.iter().zip(chains) {
         let b = &chain[depth - 1].topo;
         for f in 0..b.nf() {
             let face: Vec<u32> = b.face(f).iter().map(|&v| verts[v as usize]).collect();
@@ -389,7 +429,7 @@ pub fn recover(topo: &Topo, max_levels: usize) -> Option<Recovered> {
             }
         }
     }
-    Some(Recovered { base, face_points })
+    Recovered { base, face_points }
 }
 
 /// Canonicalises a recovered sqrt(2) hierarchy (SPEC.md 8.5) and checks that its finest
@@ -581,6 +621,12 @@ mod tests {
             if perm.iter().collect::<std::collections::HashSet<_>>().len() != n {
                 continue;
             }
+            // Asked for alternatives, the recovery also gives the prism itself (10
+            // vertices, 8 faces): the other base, as deep.
+            let all = recover_candidates(&s, 16, true);
+            assert_eq!(all.len(), 2, "depth {depth}");
+            assert_eq!(all[1].levels(), depth);
+            assert_eq!((used(&all[1].base), all[1].base.nf()), (10, 8), "depth {depth}");
             let rec = recover(&s, 16).expect("a hierarchy");
             assert_eq!(rec.levels(), depth, "depth");
             // The prism (10 vertices, 8 faces) or, with fewer base vertices, its dual.

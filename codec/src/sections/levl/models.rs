@@ -277,14 +277,12 @@ pub(super) fn slot_bins(level: &Level, mags: &[[u8; 3]], family: Family, i: usiz
     if w == 0 {
         return [SLOT_BINS - 1; 3];
     }
-    sum.map(|s| match (s + w / 2) / w {
-        0 => 0,
-        1..=2 => 1,
-        3..=4 => 2,
-        5..=6 => 3,
-        7..=9 => 4,
-        _ => 5,
-    })
+    // The bin of the rounded mean `m = [(s + w/2) / w]`: how many of the thresholds 1,
+    // 3, 5, 7, 10 it reaches (`m >= t` exactly when `s + w/2 >= t w`), without a
+    // division per component.
+    let h = w / 2;
+    let steps = [w, 3 * w, 5 * w, 7 * w, 10 * w];
+    sum.map(|s| steps.iter().map(|&t| (s + h >= t) as usize).sum())
 }
 
 /// Detail `i`'s class, the neighbour bins of its three coded values ([`slot_bins`]) and
