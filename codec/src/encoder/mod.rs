@@ -815,13 +815,18 @@ fn best_hierarchy(
             true => topology::polar::KEEP_FOR_ORDER,
             false => topology::polar::KEEP,
         };
+        let cc_count = canons.len();
         for canon in topology::polar::recover_all(mesh.vertex_count(), &topo, max, gates, keep) {
             canons.push(canon);
             canons.iter_mut().skip(1).for_each(Canonical::stow);
         }
         drop(topo);
         if opts.keep_order {
+            // The one that codes the order best first, then as many as are coded
+            // without the order (the search's time stays what it was).
+            let polar = (canons.len() - cc_count).min(topology::polar::KEEP);
             canons = by_order_cost(mesh, canons)?;
+            canons.truncate(cc_count + polar);
         }
         // The subdivision fit, on each candidate whose finest level is near a
         // subdivision (every candidate when asked for by name).

@@ -221,19 +221,36 @@ fn produce(levels: &[Level], family: Family, pole: &[bool], base: &Base, nv: usi
 pub(super) fn encode_levels(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>) -> Option<Vec<u8>> {
     let levels = levels(h)?;
     let pole = pole_flags(h)?;
-    let (nb, nbf) = (h.nv, h.starts.len() - 1);
+    // From the base if it can, else from the first level that can (a file refined from
+    // a mesh that is itself a refinement): the smallest start costs least.
+    (0..levels.len()).find_map(|start| encode_from(o, faces, h.family, &levels, &pole, start))
+}
+
+/// Method 4 from level `start` of `levels` (its coarse mesh as the base whose order is
+/// coded); `None` when `o` is not the order refining it produces.
+fn encode_from(
+    o: &InputOrder,
+    faces: Faces<'_>,
+    family: Family,
+    levels: &[Level],
+    pole: &[bool],
+    start: usize,
+) -> Option<Vec<u8>> {
+    let produced = &levels[start..];
+    let coarse = &produced[0].coarse;
+    let (nb, nbf) = (coarse.nv, coarse.nf());
     let nf = faces.count();
     if o.vertices.len() != faces.nv {
         return None;
     }
     // Catmull-Clark and polar levels have edge points (and base faces' first corners).
-    let cc = h.family != Family::Sqrt2;
+    let cc = family != Family::Sqrt2;
     // Each level's arrangement, finest first: its blocks by their first numbers (a
     // sqrt(2) step's edge block is empty, taken as right after its old vertices); the
     // old vertices' numbers less their block's start are the coarser level's.
-    let mut arrangement = vec![0usize; levels.len()];
+    let mut arrangement = vec![0usize; produced.len()];
     let mut number: Vec<u32> = o.vertices.clone();
-    for (l, level) in levels.iter().enumerate().rev() {
+    for (l, level) in produced.iter().enumerate().rev() {
         let (lnv, ne) = (level.nv, if cc { level.ne() } else { 0 });
         let first_of = |r: std::ops::Range<usize>| number.get(r).and_then(|v| v.iter().min().copied());
         let old = first_of(0..lnv)?;
@@ -256,21 +273,21 @@ pub(super) fn encode_levels(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>) 
     let mut face_first = vec![(u32::MAX, 0u32); nbf];
     if cc {
         // Per finest face, the base corner it lies at, level by level.
-        let mut root: Vec<u32> = fine_faces(&levels[0], &pole)
+        let mut root: Vec<u32> = fine_faces(&produced[0], pole)
             .iter()
-            .map(|&(f, i)| h.starts[f as usize] + i)
+            .map(|&(f, i)| coarse.starts[f as usize] + i)
             .collect();
-        for level in &levels[1..] {
-            root = fine_faces(level, &pole).iter().map(|&(f, _)| root[f as usize]).collect();
+        for level in &produced[1..] {
+            root = fine_faces(level, pole).iter().map(|&(f, _)| root[f as usize]).collect();
         }
         if root.len() != nf {
             return None;
         }
         for (g, &pos) in o.faces.iter().enumerate() {
             let corner = root[g];
-            let f = h.starts.partition_point(|&s| s <= corner) - 1;
+            let f = coarse.starts.partition_point(|&s| s <= corner) - 1;
             if pos < face_first[f].0 {
-                face_first[f] = (pos, corner - h.starts[f]);
+                face_first[f] = (pos, corner - coarse.starts[f]);
             }
         }
     } else {
@@ -290,10 +307,11 @@ pub(super) fn encode_levels(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>) 
         faces: base_faces,
         first: face_first.iter().map(|&(_, c)| c).collect(),
     };
-    if produce(&levels, h.family, &pole, &base, faces.nv, nf)? != *o {
+    if produce(produced, family, pole, &base, faces.nv, nf)? != *o {
         return None;
     }
     let mut e = Encoder::new();
+    e.uniform(start as u64, levels.len() as u64);
     for &a in &arrangement {
         e.uniform(a as u64, ARRANGEMENTS.len() as u64);
     }
@@ -314,18 +332,21 @@ pub(super) fn decode_levels(payload: &[u8], faces: Faces<'_>, h: Option<Hierarch
     let h = h.ok_or_else(|| corrupt("method 4 without a Catmull-Clark or sqrt(2) hierarchy"))?;
     let levels = levels(h).ok_or_else(|| corrupt("method 4 on a hierarchy it does not take"))?;
     let mut d = Decoder::new(payload, SECTION)?;
-    let arrangement = (0..levels.len())
+    let start = d.uniform(levels.len() as u64)? as usize;
+    let produced = &levels[start..];
+    let coarse = &produced[0].coarse;
+    let arrangement = (0..produced.len())
         .map(|_| Ok(d.uniform(ARRANGEMENTS.len() as u64)? as usize))
         .collect::<Result<Vec<usize>>>()?;
-    let vertices = get_perm(&mut d, h.nv)?;
-    let nbf = h.starts.len() - 1;
+    let vertices = get_perm(&mut d, coarse.nv)?;
+    let nbf = coarse.nf();
     let base_faces = get_perm(&mut d, nbf)?;
     let mut first = vec![0u32; nbf];
     let mut m = IntModel::new();
     // (A sqrt(2) hierarchy's base faces have no first corners: its finest faces come
     // from edges.)
     for &f in base_faces.iter().filter(|_| h.family != Family::Sqrt2) {
-        let k = h.starts[f as usize + 1] - h.starts[f as usize];
+        let k = coarse.starts[f as usize + 1] - coarse.starts[f as usize];
         let r = d.int(&mut m)?;
         if !(0..k as i64).contains(&r) {
             return Err(corrupt("a base face's first corner out of range"));
@@ -339,7 +360,7 @@ pub(super) fn decode_levels(payload: &[u8], faces: Faces<'_>, h: Option<Hierarch
         first,
     };
     let pole = pole_flags(h).ok_or_else(|| corrupt("a pole that is no base vertex"))?;
-    produce(&levels, h.family, &pole, &base, faces.nv, faces.count())
+    produce(produced, h.family, &pole, &base, faces.nv, faces.count())
         .ok_or_else(|| corrupt("method 4 on faces that are not the hierarchy's"))
 }
 
@@ -407,6 +428,15 @@ mod tests {
                         assert_eq!(p.vertices.len(), fine.nv);
                     }
                 }
+            }
+            // A tool that refined level 1 (a mesh that is itself a refinement): method 4
+            // from level 1, its orders coded.
+            if levels >= 2 {
+                let o = produced(&lv[1..], Family::Cc, &[], &lv[1].coarse, 77, fine.nv, fine.nf());
+                assert!(encode_from(&o, faces, Family::Cc, &lv, &[], 0).is_none());
+                let bytes = encode(&o, faces);
+                assert_eq!(bytes[0], 4, "levels {levels}: method {}", bytes[0]);
+                assert_eq!(decode(&bytes, faces).unwrap(), o);
             }
             // One vertex pair swapped: no longer the refinement's order.
             let mut o = produced(&lv, Family::Cc, &[], &base, 99, fine.nv, fine.nf());
