@@ -202,7 +202,8 @@ fn shared_corpus_objs_come_back_byte_for_byte() {
     assert!(files.len() >= 20);
     // Meshes written in the order their refinement produces, level by level (ORDR
     // method 4, SPEC.md 7.5): Catmull-Clark, sqrt(2) and polar; the order costs the
-    // base's alone (at most 2 % of the container; walks cost 29 % on bunny_polar2).
+    // base's alone (at most 2 % of the container; walks cost 20-32 % of it on the polar
+    // and sqrt(2) meshes).
     // spot_sqrt2_6 and bumpy_cube_polar3 were made from the base whose labeling the
     // recovery does not prefer: the encoder, keeping the order, tries the others.
     let produced = [
