@@ -323,9 +323,9 @@ fn used(t: &Topo) -> usize {
 }
 
 /// The deepest chains of coarsenings of `t` (finest first), at most `max` long: the
-/// best (deepest, then fewest base vertices, then the first side) and, when another is
-/// as deep, the best of the others (at most two).
-fn search(t: &Topo, max: usize) -> Vec<Vec<Coarse>> {
+/// best (deepest, then fewest base vertices, then the first side) and, with `keep` 2,
+/// when another is as deep, the best of the others (at most `keep`).
+fn search(t: &Topo, max: usize, keep: usize) -> Vec<Vec<Coarse>> {
     if max == 0 || t.nf() == 0 || !t.all_quads() {
         return Vec::new();
     }
@@ -338,14 +338,20 @@ fn search(t: &Topo, max: usize) -> Vec<Vec<Coarse>> {
         let Some(c) = coarsen(t, &colours, side) else {
             continue;
         };
-        let rests = search(&c.topo, max - 1);
+        let rests = search(&c.topo, max - 1, keep);
         if rests.is_empty() {
             found.push((1, used(&c.topo), vec![c]));
             continue;
         }
-        for rest in rests {
-            let base = used(rest.last().map_or(&c.topo, |r| &r.topo));
-            let chain: Vec<Coarse> = std::iter::once(c.clone()).chain(rest).collect();
+        // The coarsening heads each deeper chain: copied for all but the last.
+        let last = rests.len() - 1;
+        let mut c = Some(c);
+        for (i, rest) in rests.into_iter().enumerate() {
+            let Some(head) = (if i == last { c.take() } else { c.clone() }) else {
+                break;
+            };
+            let base = used(rest.last().map_or(&head.topo, |r| &r.topo));
+            let chain: Vec<Coarse> = std::iter::once(head).chain(rest).collect();
             found.push((chain.len(), base, chain));
         }
     }
@@ -355,7 +361,7 @@ fn search(t: &Topo, max: usize) -> Vec<Vec<Coarse>> {
     found
         .into_iter()
         .filter(|f| f.0 == depth)
-        .take(2)
+        .take(keep)
         .map(|f| f.2)
         .collect()
 }
@@ -380,7 +386,7 @@ pub fn recover_candidates(topo: &Topo, max_levels: usize, alternatives: bool) ->
     let mut depth = max_levels;
     for (verts, t) in &mut comps {
         t.nv = verts.len();
-        let chains = search(t, depth);
+        let chains = search(t, depth, if alternatives { 2 } else { 1 });
         depth = depth.min(chains.first().map_or(0, Vec::len));
         if depth == 0 {
             return Vec::new();

@@ -18,8 +18,9 @@ use crate::topology::{Family, Level, Topo};
 /// far inside `u32`).
 const MAX_LEVELS: u32 = 15;
 
-/// The base mesh of the Catmull-Clark (SPEC.md 8.1) or sqrt(2) (8.4) hierarchy whose
-/// finest level the canonical faces are (methods 2 and 3 take Catmull-Clark ones only).
+/// The base mesh of the Catmull-Clark (SPEC.md 8.1), sqrt(2) (8.4) or polar (8.6)
+/// hierarchy whose finest level the canonical faces are (methods 2 and 3 take
+/// Catmull-Clark ones only).
 #[derive(Debug, Clone, Copy)]
 pub struct Hierarchy<'a> {
     /// Base vertices.

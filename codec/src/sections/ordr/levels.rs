@@ -146,40 +146,31 @@ fn produce(levels: &[Level], family: Family, pole: &[bool], base: &Base, nv: usi
             // pole's two triangles in a triangle from the pole, the triangle's other
             // two quads from the edge point after the pole (the corner after it) or
             // from the face point (the corner before it).
-            let fine = fine_faces(level, pole);
-            let mut first_child = vec![0u32; lnf + 1];
-            for &(f, _) in &fine {
-                first_child[f as usize + 1] += 1;
-            }
-            for f in 0..lnf {
-                first_child[f + 1] += first_child[f];
+            // Per coarse corner (numbered as the coarse faces' corners), its first fine
+            // face (SPEC.md 8.1, 8.6).
+            let mut corner_first = vec![0u32; level.coarse.idx.len()];
+            for (g, &(f, i)) in fine_faces(level, pole).iter().enumerate().rev() {
+                corner_first[(level.coarse.starts[f as usize] + i) as usize] = g as u32;
             }
             let is_pole = |v: u32| pole.get(v as usize) == Some(&true);
-            let mut children = Vec::with_capacity(fine.len());
+            let mut children = Vec::with_capacity(corner_first.len());
             for &(f, r) in &faces {
                 let face = level.coarse.face(f as usize);
+                let st = level.coarse.starts[f as usize] as usize;
                 let k = face.len();
                 let fan = k == 3 && face.iter().any(|&v| is_pole(v));
-                // Per corner, where its faces start among the face's.
-                let mut at = first_child[f as usize];
-                let mut starts = [0u32; 3];
-                if fan {
-                    for (i, &c) in face.iter().enumerate() {
-                        starts[i] = at;
-                        at += 1 + is_pole(c) as u32;
-                    }
-                }
                 for j in 0..k {
                     let i = (r as usize + j) % k;
+                    let g = corner_first[st + i];
                     if !fan {
-                        children.push((first_child[f as usize] + i as u32, 0));
+                        children.push((g, 0));
                     } else if is_pole(face[i]) {
-                        children.push((starts[i], 0));
-                        children.push((starts[i] + 1, 0));
+                        children.push((g, 0));
+                        children.push((g + 1, 0));
                     } else if is_pole(face[(i + k - 1) % k]) {
-                        children.push((starts[i], 3));
+                        children.push((g, 3));
                     } else {
-                        children.push((starts[i], 2));
+                        children.push((g, 2));
                     }
                 }
             }
@@ -219,6 +210,9 @@ fn produce(levels: &[Level], family: Family, pole: &[bool], base: &Base, nv: usi
 /// Codes `o` by method 4 if it is the order the refinement of the hierarchy produces;
 /// `None` when it is not (or the faces are not the hierarchy's finest level).
 pub(super) fn encode_levels(o: &InputOrder, faces: Faces<'_>, h: Hierarchy<'_>) -> Option<Vec<u8>> {
+    if o.vertices.len() != faces.nv {
+        return None;
+    }
     let levels = levels(h)?;
     let pole = pole_flags(h)?;
     // From the base if it can, else from the first level that can (a file refined from
@@ -240,9 +234,6 @@ fn encode_from(
     let coarse = &produced[0].coarse;
     let (nb, nbf) = (coarse.nv, coarse.nf());
     let nf = faces.count();
-    if o.vertices.len() != faces.nv {
-        return None;
-    }
     // Catmull-Clark and polar levels have edge points (and base faces' first corners).
     let cc = family != Family::Sqrt2;
     // Each level's arrangement, finest first: its blocks by their first numbers (a
@@ -329,7 +320,7 @@ fn encode_from(
 /// Decodes method 4 (SPEC.md 7.5).
 pub(super) fn decode_levels(payload: &[u8], faces: Faces<'_>, h: Option<Hierarchy<'_>>) -> Result<InputOrder> {
     let corrupt = |what: &str| Error::corrupt(SECTION, what.to_string());
-    let h = h.ok_or_else(|| corrupt("method 4 without a Catmull-Clark or sqrt(2) hierarchy"))?;
+    let h = h.ok_or_else(|| corrupt("method 4 without a Catmull-Clark, sqrt(2) or polar hierarchy"))?;
     let levels = levels(h).ok_or_else(|| corrupt("method 4 on a hierarchy it does not take"))?;
     let mut d = Decoder::new(payload, SECTION)?;
     let start = d.uniform(levels.len() as u64)? as usize;
