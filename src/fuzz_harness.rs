@@ -181,7 +181,7 @@ pub fn roundtrip_mesh(data: &[u8]) {
 
 /// Attribute channels of every domain on `mesh` (SPEC.md 11.4): per-vertex values,
 /// a per-corner table of three-decimal triples (as normals are) with arbitrary corner
-/// entries, per-face names with faces of none.
+/// entries, per-face names with faces of none, per-file vertex numbers.
 fn arbitrary_channels(b: &mut Bytes<'_>, mesh: &mut Mesh) {
     use subwave_codec::{Attribute, Domain, ValueType};
     let small = |b: &mut Bytes<'_>| b.below(2001) as i64 - 1000;
@@ -233,7 +233,23 @@ fn arbitrary_channels(b: &mut Bytes<'_>, mesh: &mut Mesh) {
         indices: Vec::new(),
         labels: vec!["a".into(), "b c".into()],
     };
-    mesh.attributes = vec![vertex, corner, face];
+    // Per file: an element's vertex numbers (some past the mesh), renumbered with the
+    // vertices in canonical order.
+    let n = mesh.vertex_count().max(1);
+    let edge = Attribute {
+        name: "edge/vertex1 vertex2".into(),
+        domain: Domain::File,
+        value_type: ValueType::I32,
+        width: 2,
+        values: (0..b.below(5))
+            .map(|_| [b.below(n + 1) as i64, b.below(n) as i64, 0])
+            .collect(),
+        floats: Vec::new(),
+        quantization: Quantization::Decimal { decimals: 0 },
+        indices: Vec::new(),
+        labels: Vec::new(),
+    };
+    mesh.attributes = vec![vertex, corner, face, edge];
 }
 
 /// Every transform's synthesis undoes its analysis exactly on any refinable topology

@@ -267,6 +267,20 @@ fn compare_channels(
             }
         }
     }
+    // Per-file entries in their order, vertex numbers as the vertices are numbered.
+    for (a, b) in original.attributes.iter().zip(&decoded.attributes) {
+        if a.domain != ChannelDomain::File {
+            continue;
+        }
+        let mut a = a.clone();
+        a.values = a.renumbered(order);
+        let (mut x, mut y) = (Vec::new(), Vec::new());
+        (0..a.entry_count()).for_each(|e| entry(&a, e, &mut x));
+        (0..b.entry_count()).for_each(|e| entry(b, e, &mut y));
+        if x != y {
+            return Err(format!("'{}' decoded with other entries", a.name));
+        }
+    }
     let faces = |m: &Mesh, vertex: &dyn Fn(u32) -> u32| -> Vec<Vec<Vec<String>>> {
         let mut all: Vec<Vec<Vec<String>>> = (0..m.face_count())
             .map(|f| {
@@ -283,7 +297,7 @@ fn compare_channels(
                                 ChannelDomain::Corner => {
                                     entry(a, a.indices[s + j] as usize, &mut c)
                                 }
-                                ChannelDomain::Face => {}
+                                ChannelDomain::Face | ChannelDomain::File => {}
                             }
                         }
                         c

@@ -144,7 +144,7 @@ fn faces_with_values(m: &Mesh, vertex: &dyn Fn(u32) -> u32) -> Vec<Vec<i64>> {
                     match a.domain {
                         Domain::Vertex => entry(a, face[j] as usize, &mut key),
                         Domain::Corner => entry(a, a.indices[s + j] as usize, &mut key),
-                        Domain::Face => {}
+                        Domain::Face | Domain::File => {}
                     }
                 }
             }
@@ -289,6 +289,20 @@ fn same_up_to_order(name: &str, input: &Mesh, dec: &Mesh, order: &[u32]) {
         faces_with_values(dec, &|v| order[v as usize]) == faces_with_values(input, &|v| v),
         "{name}: faces or their values differ"
     );
+    // Per-file entries in their order, vertex numbers renumbered with the vertices.
+    for (a, b) in input.attributes.iter().zip(&dec.attributes) {
+        if a.domain != Domain::File {
+            continue;
+        }
+        let mut a = a.clone();
+        a.values = a.renumbered(order);
+        for e in 0..a.entry_count() {
+            let (mut x, mut y) = (Vec::new(), Vec::new());
+            entry(&a, e, &mut x);
+            entry(b, e, &mut y);
+            assert_eq!(x, y, "{name}: {} entry {e}", a.name);
+        }
+    }
 }
 
 /// Every value of the written file's channels is the decoded one's.
@@ -376,8 +390,8 @@ fn textured_obj_keeps_its_uvs_normals_and_names_in_canonical_order() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/textured_cc3.obj");
     let bytes = std::fs::read(path).unwrap();
     let (channels, _) = canonical_round_trip(path, &bytes);
-    // object, smoothing, material, uv, normal.
-    assert_eq!(channels, 5);
+    // object, smoothing, material, lines (comments and mtllib), uv, normal.
+    assert_eq!(channels, 6);
 }
 
 #[test]
@@ -388,7 +402,36 @@ fn every_bit_flip_or_cut_of_a_channel_is_an_error_or_a_valid_mesh() {
     use subwave_container::{Container, ContainerWriter, SectionKind};
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/mixed_cc2.obj");
     let input = subwave::load(&std::fs::read(path).unwrap(), None).unwrap();
-    let mesh = with_channels(input.mesh);
+    let mut mesh = with_channels(input.mesh);
+    // And per file: lines (their names listed) and an element's vertex numbers.
+    let file =
+        |name: &str, value_type, width, values: Vec<[i64; 3]>, labels: Vec<String>| Attribute {
+            name: name.into(),
+            domain: Domain::File,
+            value_type,
+            width,
+            values,
+            floats: Vec::new(),
+            quantization: Quantization::Decimal { decimals: 0 },
+            indices: Vec::new(),
+            labels,
+        };
+    let lines = vec!["# a comment".to_string(), "mtllib x.mtl".to_string()];
+    mesh.attributes.push(file(
+        "lines",
+        ValueType::Text,
+        1,
+        vec![[0, 0, 0], [1, 0, 0], [0, 0, 0]],
+        lines,
+    ));
+    let ends = (0..5).map(|i| [i, i + 3, 0]).collect();
+    mesh.attributes.push(file(
+        "edge/vertex1 vertex2",
+        ValueType::I32,
+        2,
+        ends,
+        Vec::new(),
+    ));
     let enc =
         subwave::encode_to_vec(&mesh, &input.quantization, &EncodeOptions::default()).unwrap();
     let limits = subwave::Limits::default();
@@ -572,4 +615,191 @@ fn ply_texcoord_lists_are_corner_channels_in_canonical_order() {
         let (channels, _) = canonical_round_trip(&name, &bytes);
         assert_eq!(channels, 1, "{name}");
     }
+}
+
+/// A binary or ASCII PLY of a 4 x 4 grid of quads with header comments and two other
+/// elements: `edge` (its ends' vertex numbers and a crease) and `material` (a colour).
+fn grid_with_other_elements(binary: bool) -> Vec<u8> {
+    let n = 4u32;
+    let v = |i: u32, j: u32| j * (n + 1) + i;
+    let mut faces = Vec::new();
+    for y in 0..n {
+        for x in 0..n {
+            faces.push([v(x, y), v(x + 1, y), v(x + 1, y + 1), v(x, y + 1)]);
+        }
+    }
+    let edges: Vec<(u32, u32, f32)> = (0..n)
+        .map(|i| (v(i, 0), v(i + 1, 0), 0.25 * i as f32))
+        .collect();
+    let mut out = format!(
+        "ply\nformat {} 1.0\ncomment made by a test\nobj_info a grid\n\
+         element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         element face {}\nproperty list uchar int vertex_indices\n\
+         element edge {}\nproperty int vertex1\nproperty int vertex2\nproperty float crease\n\
+         element material 2\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
+         comment after the elements\nend_header\n",
+        if binary {
+            "binary_little_endian"
+        } else {
+            "ascii"
+        },
+        (n + 1) * (n + 1),
+        faces.len(),
+        edges.len()
+    )
+    .into_bytes();
+    for i in 0..(n + 1) * (n + 1) {
+        let p = [
+            (i % (n + 1)) as f32,
+            (i / (n + 1)) as f32,
+            ((i * 7) % 5) as f32 * 0.5,
+        ];
+        match binary {
+            true => p.iter().for_each(|c| out.extend(c.to_le_bytes())),
+            false => out.extend(format!("{} {} {}\n", p[0], p[1], p[2]).bytes()),
+        }
+    }
+    for face in &faces {
+        match binary {
+            true => {
+                out.push(4);
+                face.iter().for_each(|i| out.extend(i.to_le_bytes()));
+            }
+            false => {
+                out.extend(format!("4 {} {} {} {}\n", face[0], face[1], face[2], face[3]).bytes())
+            }
+        }
+    }
+    for &(a, b, c) in &edges {
+        match binary {
+            true => {
+                out.extend(a.to_le_bytes());
+                out.extend(b.to_le_bytes());
+                out.extend(c.to_le_bytes());
+            }
+            false => out.extend(format!("{a} {b} {c}\n").bytes()),
+        }
+    }
+    for rgb in [[200u8, 10, 0], [7, 255, 128]] {
+        match binary {
+            true => out.extend(rgb),
+            false => out.extend(format!("{} {} {}\n", rgb[0], rgb[1], rgb[2]).bytes()),
+        }
+    }
+    out
+}
+
+#[test]
+fn ply_comments_and_other_elements_come_back_in_canonical_order() {
+    for binary in [false, true] {
+        let bytes = grid_with_other_elements(binary);
+        let name = format!("grid with edges, binary {binary}");
+        let input = subwave::load(&bytes, None).unwrap();
+        assert!(input.dropped.is_empty(), "{name}: {:?}", input.dropped);
+        let names: Vec<&str> = input
+            .mesh
+            .attributes
+            .iter()
+            .map(|a| a.name.as_str())
+            .collect();
+        assert_eq!(
+            names,
+            [
+                "edge/vertex1 vertex2",
+                "edge/crease",
+                "material/red green blue",
+                "header"
+            ],
+            "{name}"
+        );
+        assert_eq!(
+            input.mesh.attributes[0].vertex_components(),
+            [true, true, false]
+        );
+        // The input is shuffled so that canonical order renumbers the vertices.
+        let mut mesh = input.mesh.clone();
+        let n = mesh.vertex_count() as u32;
+        let perm: Vec<u32> = (0..n).map(|i| (i * 7 + 3) % n).collect();
+        let mut shuffled = mesh.positions.clone();
+        for (i, &p) in perm.iter().enumerate() {
+            shuffled[p as usize] = mesh.positions[i];
+        }
+        mesh.positions = shuffled;
+        mesh.faces.iter_mut().for_each(|v| *v = perm[*v as usize]);
+        for v in &mut mesh.attributes[0].values {
+            v[0] = perm[v[0] as usize] as i64;
+            v[1] = perm[v[1] as usize] as i64;
+        }
+        let opts = EncodeOptions {
+            keep_order: false,
+            ..Default::default()
+        };
+        let enc = subwave::encode_to_vec(&mesh, &input.quantization, &opts).unwrap();
+        let dec = subwave::decode_slice(&enc.bytes).unwrap();
+        assert!(!dec.input_order, "{name}");
+        same_up_to_order(&name, &mesh, &dec.mesh, &enc.order);
+        subwave::compare_up_to_order(&mesh, &dec.mesh, &enc.order).unwrap();
+        // Each edge's ends are the same points.
+        let ends = |m: &Mesh| -> Vec<[[i64; 3]; 2]> {
+            m.attributes[0]
+                .values
+                .iter()
+                .map(|v| [m.positions[v[0] as usize], m.positions[v[1] as usize]])
+                .collect()
+        };
+        assert_eq!(ends(&dec.mesh), ends(&mesh), "{name}");
+        // Written again: the header lines and elements as they were, every value read back.
+        let mut file = Vec::new();
+        let format = subwave::default_output_format(input.source());
+        subwave::write_mesh(&mut file, &dec.mesh, &dec.quantization, format).unwrap();
+        let head = String::from_utf8_lossy(
+            &file[..file.windows(10).position(|w| w == b"end_header").unwrap()],
+        )
+        .to_string();
+        for line in ["comment made by a test\nobj_info a grid\ncomment after the elements\n", "element edge 4\nproperty int vertex1\nproperty int vertex2\nproperty float crease\nelement material 2\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"] {
+            assert!(head.contains(line), "{name}: {head}");
+        }
+        let again = subwave::load(&file, None).unwrap();
+        assert!(again.dropped.is_empty(), "{name}: {:?}", again.dropped);
+        same_values(&name, &dec.mesh, &again.mesh);
+    }
+}
+
+#[test]
+fn obj_comments_and_material_libraries_come_back_in_canonical_order() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/textured_cc3.obj");
+    let body = std::fs::read_to_string(path).unwrap();
+    let head = "# made by a test\nmtllib a.mtl b.mtl\n#\nlod 2\n";
+    let bytes = format!("{head}{body}# the end\nmtllib a.mtl b.mtl\n");
+    let input = subwave::load(bytes.as_bytes(), None).unwrap();
+    assert!(input.dropped.is_empty(), "{:?}", input.dropped);
+    // The lines that name no vertex or face, in the file's order.
+    let kept: Vec<&str> = bytes
+        .lines()
+        .filter(|l| l.starts_with('#') || l.starts_with("mtllib") || l.starts_with("lod"))
+        .collect();
+    assert!(kept.len() > 6);
+    let lines = input.mesh.attribute("lines").expect("a lines channel");
+    assert_eq!(lines.domain, Domain::File);
+    assert_eq!(lines.entry_count(), kept.len());
+    let opts = EncodeOptions {
+        keep_order: false,
+        ..Default::default()
+    };
+    let enc = subwave::encode_to_vec(&input.mesh, &input.quantization, &opts).unwrap();
+    let dec = subwave::decode_slice(&enc.bytes).unwrap();
+    same_up_to_order(path, &input.mesh, &dec.mesh, &enc.order);
+    let mut file = Vec::new();
+    subwave::write_mesh(
+        &mut file,
+        &dec.mesh,
+        &dec.quantization,
+        subwave::Format::Obj,
+    )
+    .unwrap();
+    let text = String::from_utf8(file).unwrap();
+    let want = kept.join("\n") + "\nv ";
+    assert!(text.starts_with(&want), "{}", &text[..200]);
+    let again = subwave::load(text.as_bytes(), None).unwrap();
+    same_values(path, &dec.mesh, &again.mesh);
 }

@@ -59,9 +59,11 @@ enum Command {
         keep_order: bool,
         /// Canonical order: positions, faces and the attribute channels (texture
         /// coordinates, normals, vertex colours, an OBJ's objects, groups, smoothing
-        /// groups and materials, PLY vertex and face properties), every
-        /// value exact, written back by subwave's writers; drops what else the file
-        /// holds (`mtllib` lines, comments, number styles; a warning names it).
+        /// groups and materials, its comments and `mtllib` lines; PLY vertex, face and
+        /// other elements' properties and header comments), every value exact, written
+        /// back by subwave's writers; drops number styles, line order and what else the
+        /// file holds (OBJ `l`, `p` and free-form statements, PLY lists other than
+        /// per-corner face lists; a warning names them).
         #[arg(long)]
         canonical: bool,
         #[command(flatten)]
@@ -680,8 +682,17 @@ fn compress(
     let keep_order = match order {
         Order::Keep => true,
         Order::Canonical => false,
-        // Nothing the file holds is left out by default.
-        Order::Auto => !loaded.dropped.is_empty() || !loaded.mesh.attributes.is_empty(),
+        // Nothing the file holds is left out by default: a file with more than
+        // positions, faces and lines of its own (comments, `mtllib`, which canonical
+        // order keeps at its head) keeps its order and bytes.
+        Order::Auto => {
+            !loaded.dropped.is_empty()
+                || loaded
+                    .mesh
+                    .attributes
+                    .iter()
+                    .any(|a| a.domain != subwave::Domain::File || a.labels.is_empty())
+        }
     };
     if !keep_order {
         warn_dropped(

@@ -346,7 +346,7 @@ fn canonical_warns_what_it_drops_and_q_silences_it() {
     let p = tmp("attrs.obj");
     std::fs::write(
         &p,
-        b"mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0.5\ng side\nusemtl red\nf 1/1/1 2/1/1 3/1/1\n",
+        b"mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0.5\ng side\nusemtl red\nf 1/1/1 2/1/1 3/1/1\nl 1 2\n",
     )
     .unwrap();
     let o = run(&[
@@ -357,10 +357,13 @@ fn canonical_warns_what_it_drops_and_q_silences_it() {
     ]);
     assert!(o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
-    // UVs, normals, the group and the material are channels, kept; the material
-    // library is not.
+    // UVs, normals, the group, the material and the material library are channels,
+    // kept; the line element is not.
     assert!(
-        err.contains("mtllib") && !err.contains("group") && !err.contains("normals"),
+        err.contains("line elements")
+            && !err.contains("mtllib")
+            && !err.contains("group")
+            && !err.contains("normals"),
         "{err}"
     );
     let back = tmp("attrs_back.obj");
@@ -373,7 +376,8 @@ fn canonical_warns_what_it_drops_and_q_silences_it() {
     assert!(o.status.success() && o.stderr.is_empty(), "{o:?}");
     let text = std::fs::read_to_string(&back).unwrap();
     assert!(
-        text.contains("vt 0.0 0.5\n")
+        text.starts_with("mtllib a.mtl\nv ")
+            && text.contains("vt 0.0 0.5\n")
             && text.contains("vn 0 0 1\n")
             && text.contains("/1/1 ")
             && text.contains("g side\nusemtl red\nf "),
@@ -388,7 +392,7 @@ fn canonical_warns_what_it_drops_and_q_silences_it() {
     ]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        o.status.success() && err.contains("group, material, uv, normal"),
+        o.status.success() && err.contains("group, material, lines, uv, normal"),
         "{err}"
     );
     let o = run(&[

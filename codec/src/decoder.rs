@@ -408,6 +408,14 @@ fn channel(payload: &[u8], limits: &Limits, mesh: &Mesh) -> Result<crate::mesh::
     if head.coding == chan::NORMALS {
         return predicted_normals(head, nested, mesh);
     }
+    if head.coding == chan::LISTED {
+        if head.labels.is_empty() {
+            return Err(bad("listed values of a channel without names"));
+        }
+        let values = chan::decode_listed(nested, head.labels.len())?;
+        let q = Quantization::Decimal { decimals: 0 };
+        return channel_of(head, (values, Vec::new(), q), Vec::new(), mesh);
+    }
     let opts = DecodeOptions {
         limits: limits.clone(),
         ..DecodeOptions::default()
@@ -433,6 +441,7 @@ fn channel(payload: &[u8], limits: &Limits, mesh: &Mesh) -> Result<crate::mesh::
     let fits = match head.domain {
         Domain::Vertex => m.positions.len() == mesh.vertex_count() && m.faces == mesh.faces,
         Domain::Face => m.positions.len() == mesh.face_count() && m.faces.is_empty(),
+        Domain::File => m.faces.is_empty(),
         Domain::Corner => m.face_starts == mesh.face_starts,
     } && (m.face_starts == mesh.face_starts || m.faces.is_empty());
     if !fits {

@@ -122,12 +122,17 @@ fn channel_info(payload: &[u8], limits: &Limits) -> Option<AttributeInfo> {
         crate::mesh::Domain::Vertex => "vertex",
         crate::mesh::Domain::Face => "face",
         crate::mesh::Domain::Corner => "corner",
+        crate::mesh::Domain::File => "file",
     }
     .to_string();
     let (entries, transform, rules) = match head.coding {
         chan::NORMALS => {
             let n = chan::decode_normals(rest).ok()?;
             (n.entries, "predicted normals".to_string(), String::new())
+        }
+        chan::LISTED => {
+            let n = chan::decode_listed(rest, head.labels.len()).ok()?.len();
+            (n as u64, "listed".to_string(), String::new())
         }
         _ => {
             let c = Container::parse(rest, limits).ok()?;

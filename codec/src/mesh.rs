@@ -46,6 +46,10 @@ pub enum Domain {
     /// A table of entries and, per face corner, the entry it uses
     /// ([`Attribute::indices`]): an OBJ's `vt` or `vn` with the faces' `v/vt/vn`.
     Corner,
+    /// Entries of the file as a whole, any number of them: an OBJ's lines that name
+    /// no vertex (comments, `mtllib`), a PLY's header comments and the records of its
+    /// other elements.
+    File,
 }
 
 /// The type an attribute's values are written as (a PLY property's type; `Text` for a
@@ -183,6 +187,53 @@ impl Attribute {
         }
     }
 
+    /// Which of a per-file channel's values number vertices (from 0), by the PLY
+    /// convention of its name: `ELEMENT/PROPERTIES` whose property is `vertex1`,
+    /// `vertex2` or `vertex_index` (an `edge` element's ends), of an integer type. The
+    /// encoder renumbers them with the vertices when it reorders them.
+    pub fn vertex_components(&self) -> [bool; 3] {
+        let mut out = [false; 3];
+        let props = match (self.domain, self.value_type.int_range(), self.name.split_once('/')) {
+            (Domain::File, Some(_), Some((_, props))) if self.labels.is_empty() => props,
+            _ => return out,
+        };
+        let words: Vec<&str> = props.split_ascii_whitespace().collect();
+        if words.len() == self.width as usize {
+            for (k, w) in words.iter().enumerate() {
+                out[k] = matches!(*w, "vertex1" | "vertex2" | "vertex_index");
+            }
+        }
+        out
+    }
+
+    /// Its values with those that number vertices ([`Attribute::vertex_components`])
+    /// renumbered for vertices in the order `order` (new vertex `i` is old `order[i]`),
+    /// as the encoder codes them in canonical order: each that is an old vertex's
+    /// number and whose new number fits the channel's type (the others as they are).
+    pub fn renumbered(&self, order: &[u32]) -> Vec<[i64; 3]> {
+        let ks = self.vertex_components();
+        if !ks.iter().any(|&k| k) {
+            return self.values.clone();
+        }
+        let mut new = vec![0i64; order.len()];
+        for (i, &o) in order.iter().enumerate() {
+            if let Some(n) = new.get_mut(o as usize) {
+                *n = i as i64;
+            }
+        }
+        let hi = self.value_type.int_range().map_or(0, |r| r.1);
+        let mut out = self.values.clone();
+        for v in &mut out {
+            for k in (0..3).filter(|&k| ks[k]) {
+                match usize::try_from(v[k]).ok().and_then(|i| new.get(i)) {
+                    Some(&n) if n <= hi => v[k] = n,
+                    _ => {}
+                }
+            }
+        }
+        out
+    }
+
     /// Checks the channel against `mesh`: its width, its entries per domain, its
     /// indices in range, its values within [`MAX_COORD`].
     pub(crate) fn validate(&self, mesh: &Mesh) -> Result<()> {
@@ -199,7 +250,7 @@ impl Attribute {
         let want = match self.domain {
             Domain::Vertex => Some((mesh.vertex_count(), "vertices")),
             Domain::Face => Some((mesh.face_count(), "faces")),
-            Domain::Corner => None,
+            Domain::Corner | Domain::File => None,
         };
         if let Some((n, what)) = want {
             if self.values.len() != n {
@@ -207,6 +258,10 @@ impl Attribute {
             }
             if !self.indices.is_empty() {
                 return bad("corner indices on a per-vertex or per-face attribute".into());
+            }
+        } else if self.domain == Domain::File {
+            if !self.indices.is_empty() {
+                return bad("corner indices on a per-file attribute".into());
             }
         } else {
             if self.indices.len() != mesh.corner_count() {

@@ -310,6 +310,7 @@ fn domain_name(d: Domain) -> &'static str {
         Domain::Vertex => "vertex",
         Domain::Face => "face",
         Domain::Corner => "corner",
+        Domain::File => "file",
     }
 }
 
@@ -376,9 +377,10 @@ fn channels(given: Vec<(GivenChannel<'_>, u8)>) -> PyResult<Vec<Attribute>> {
                 "vertex" => Domain::Vertex,
                 "face" => Domain::Face,
                 "corner" => Domain::Corner,
+                "file" => Domain::File,
                 d => {
                     return Err(bad(format!(
-                        "attribute '{name}': domain '{d}' (vertex, face or corner)"
+                        "attribute '{name}': domain '{d}' (vertex, face, corner or file)"
                     )))
                 }
             };

@@ -67,15 +67,18 @@ _DTYPE_TYPES = {
 
 class Attribute:
     """A named attribute channel: texture coordinates, normals, colours, any per-vertex,
-    per-face or per-corner values, kept exactly (integers as integers, floats bit for
-    bit, decimals read from text on their own grid).
+    per-face, per-corner or per-file values, kept exactly (integers as integers, floats
+    bit for bit, decimals read from text on their own grid).
 
     Attributes:
         values: ``(entries, width)`` array, ``width`` 1 to 3, in the type the values
             came in (as ``Mesh.vertices``).
         domain: ``"vertex"`` (an entry per vertex), ``"face"`` (per face) or
             ``"corner"`` (a table of entries, ``indices`` naming one per face corner:
-            an OBJ's ``vt`` with its faces' ``v/vt``).
+            an OBJ's ``vt`` with its faces' ``v/vt``) or ``"file"`` (any number of
+            entries of the file as a whole: an OBJ's comment and ``mtllib`` lines as
+            ``lines``, a PLY's header comments as ``header`` and its other elements'
+            properties as ``element/properties``).
         indices: for ``"corner"``, the entry of each face corner (in the order of
             ``Mesh.flat_faces``); else ``None``.
         type: how the values are written to a file: ``"text"``, ``"f32"``, ``"f64"``,
@@ -84,7 +87,7 @@ class Attribute:
         quantization: how the coded integers map to values (``subwave info``'s JSON),
             for values decoded or read.
         labels: for a channel of names (an OBJ's ``object``, ``group``, ``smoothing``
-            and ``material`` per face), the names its integer values stand for (value
+            and ``material`` per face, its ``lines``), the names its integer values stand for (value
             ``i`` is ``labels[i]``, -1 none); else empty.
     """
 
@@ -102,8 +105,8 @@ class Attribute:
             v = v.reshape(-1, 1)
         if v.ndim != 2 or not 1 <= v.shape[1] <= 3:
             raise ValueError(f"attribute values must have shape (n, 1..3), not {v.shape}")
-        if domain not in ("vertex", "face", "corner"):
-            raise ValueError(f"domain must be vertex, face or corner, not {domain!r}")
+        if domain not in ("vertex", "face", "corner", "file"):
+            raise ValueError(f"domain must be vertex, face, corner or file, not {domain!r}")
         if (indices is None) != (domain != "corner"):
             raise ValueError("indices are given for a corner attribute, and only for one")
         if type is None:

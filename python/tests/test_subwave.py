@@ -300,7 +300,9 @@ def test_attribute_channels_come_back_exactly_in_canonical_order():
     # A textured OBJ's uv and normal channels, read, coded in canonical order and
     # decoded: every value, at every face corner, is the one read.
     mesh = subwave.read(CORPUS / "textured_cc3.obj")
-    assert set(mesh.attributes) == {"object", "smoothing", "material", "uv", "normal"}
+    assert set(mesh.attributes) == {
+        "object", "smoothing", "material", "lines", "uv", "normal"
+    }
     assert mesh.attributes["material"].labels == [f"Side{i}" for i in range(6)]
     uv = mesh.attributes["uv"]
     assert uv.domain == "corner" and uv.values.shape[1] == 2
@@ -316,7 +318,13 @@ def test_attribute_channels_come_back_exactly_in_canonical_order():
     back = subwave.decompress(data)
     assert back.order == "canonical"
     assert list(back.attributes) == [
-        "object", "smoothing", "material", "uv", "normal", "weight", "colour"
+        "object", "smoothing", "material", "lines", "uv", "normal", "weight", "colour"
+    ]
+    # The comments and mtllib line, per file, in their order.
+    lines = back.attributes["lines"]
+    assert lines.domain == "file" and lines.indices is None
+    assert [lines.labels[int(v)] for v in lines.values[:, 0]] == [
+        "# subwave-corpus OBJ File", "# made by to_obj_textured", "mtllib textured.mtl"
     ]
     mat = back.attributes["material"]
     assert mat.domain == "face" and mat.labels == mesh.attributes["material"].labels

@@ -393,6 +393,14 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
                 m.faces = out.faces.clone();
             }
             crate::mesh::Domain::Face => faces.iter().for_each(|&(g, _)| pick(g, &mut m)),
+            crate::mesh::Domain::File => {
+                // Vertex numbers in a file's other records follow the vertices.
+                m.positions = match identity {
+                    true => a.values.clone(),
+                    false => a.renumbered(&enc.order),
+                };
+                m.floats = a.floats.clone();
+            }
             crate::mesh::Domain::Corner => {
                 m.positions = a.values.clone();
                 m.floats = a.floats.clone();
@@ -461,6 +469,14 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
             head.pad = 0;
             head.coding = chan::NORMALS;
             payload = chan::encode(&head, &body);
+        }
+        // A file's lines: their numbers listed where that is smaller.
+        if a.domain == crate::mesh::Domain::File && !a.labels.is_empty() && a.width == 1 {
+            let body = chan::encode_listed(&m.positions);
+            if body.len() < nested.bytes.len() {
+                head.coding = chan::LISTED;
+                payload = chan::encode(&head, &body);
+            }
         }
         chans.push(payload);
     }

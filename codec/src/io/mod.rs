@@ -176,6 +176,37 @@ pub struct RawAttribute {
 }
 
 impl RawAttribute {
+    /// A channel of names ([`crate::Attribute::labels`]) with value `values[e]` per
+    /// entry: `labels[v]`, or none for -1.
+    pub(crate) fn names(name: &str, domain: Domain, values: &[i64], labels: Vec<String>) -> Self {
+        let zero = crate::quant::Decimal {
+            mantissa: 0,
+            decimals: 0,
+        };
+        let values = values
+            .iter()
+            .map(|&m| {
+                [
+                    crate::quant::Decimal {
+                        mantissa: m,
+                        decimals: 0,
+                    },
+                    zero,
+                    zero,
+                ]
+            })
+            .collect();
+        RawAttribute {
+            name: name.to_string(),
+            domain,
+            value_type: ValueType::Text,
+            width: 1,
+            values: RawCoords::Decimal(values),
+            indices: Vec::new(),
+            labels,
+        }
+    }
+
     /// The channel with its values as integers, exactly ([`crate::integerize`]).
     pub fn integerize(&self) -> Result<Attribute> {
         let (values, quantization, floats) = crate::quant::integerize(&self.values, None)?;
@@ -190,6 +221,32 @@ impl RawAttribute {
             indices: self.indices.clone(),
             labels: self.labels.clone(),
         })
+    }
+}
+
+/// A file's lines that the writers put back as they were (an OBJ's comments and
+/// `mtllib`, a PLY's header comments): a per-file channel of names, equal lines once.
+#[derive(Default)]
+pub(crate) struct FileLines {
+    labels: Vec<String>,
+    index: std::collections::HashMap<String, i64>,
+    values: Vec<i64>,
+}
+
+impl FileLines {
+    pub(crate) fn push(&mut self, line: &str) {
+        let next = self.labels.len() as i64;
+        let v = *self.index.entry(line.to_string()).or_insert(next);
+        if v == next {
+            self.labels.push(line.to_string());
+        }
+        self.values.push(v);
+    }
+
+    /// The channel `name`, if any line was kept.
+    pub(crate) fn finish(self, name: &str) -> Option<RawAttribute> {
+        (!self.values.is_empty())
+            .then(|| RawAttribute::names(name, Domain::File, &self.values, self.labels))
     }
 }
 
@@ -290,7 +347,7 @@ pub(crate) fn text_values(rows: &[[&str; 3]]) -> Option<crate::quant::Integers> 
 pub fn writes_attribute(format: Format, a: &Attribute) -> bool {
     match format {
         Format::Obj => obj::writes(a),
-        f if f.is_ply() => true,
+        f if f.is_ply() => ply::writes(a),
         _ => false,
     }
 }

@@ -4,29 +4,16 @@ use std::collections::BTreeSet;
 use std::io::Write;
 
 use super::template::{Attribute as FileAttribute, Builder, Form};
-use super::{coords_line, syntax, Format, RawAttribute, RawMesh};
+use super::{coords_line, syntax, FileLines, Format, RawAttribute, RawMesh};
 use crate::error::Result;
 use crate::mesh::{Attribute, Domain, Mesh, ValueType};
-use crate::quant::{Decimal, Quantization, RawCoords, TextCoords};
+use crate::quant::{Quantization, TextCoords};
 use crate::sections::nrml::Component;
 
 /// The OBJ statements (Wavefront's specification and common extensions) besides those
-/// read above, kept as dropped: a line that starts with none of them is not OBJ.
-const OTHER_KEYWORDS: [&str; 27] = [
-    "cstype",
-    "deg",
-    "bmat",
-    "step",
-    "curv",
-    "curv2",
-    "surf",
-    "parm",
-    "trim",
-    "hole",
-    "scrv",
-    "sp",
-    "end",
-    "con",
+/// read above that name no vertex: kept as lines of the file (with comments and
+/// `mtllib`; [`LINES`]).
+const OTHER_KEYWORDS: [&str; 13] = [
     "mg",
     "bevel",
     "c_interp",
@@ -41,6 +28,18 @@ const OTHER_KEYWORDS: [&str; 27] = [
     "call",
     "csh",
 ];
+
+/// Wavefront's free-form geometry statements, which name vertices by their numbers:
+/// noted as dropped (the file's own bytes keep them). A line that starts with none of
+/// these or the statements above is not OBJ.
+const FREE_FORM: [&str; 14] = [
+    "cstype", "deg", "bmat", "step", "curv", "curv2", "surf", "parm", "trim", "hole", "scrv", "sp",
+    "end", "con",
+];
+
+/// The name of the per-file channel of an OBJ's lines that name nothing the mesh holds
+/// (comments, `mtllib`, [`OTHER_KEYWORDS`]), which its writer puts first.
+pub(crate) const LINES: &str = "lines";
 
 pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
@@ -63,6 +62,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     let mut refs: Vec<(Option<i64>, Option<i64>)> = Vec::new();
     // Objects, groups, smoothing groups and materials: channels of names per face.
     let mut names = NAMED.map(|(kw, _)| Names::new(kw));
+    let mut kept = FileLines::default();
     while let Some((n, raw)) = lines.next() {
         let lineno = n + 1;
         let mut line: &str = raw;
@@ -71,6 +71,11 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             join_continued(raw, &mut lines, &mut joined);
             line = &joined;
         }
+        if line.trim_start().starts_with('#') {
+            kept.push(line);
+            continue;
+        }
+        let whole = line;
         let line = line.split('#').next().unwrap_or("");
         let mut tok = line.split_ascii_whitespace();
         let Some(kw) = tok.next() else { continue };
@@ -136,10 +141,9 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                     n.set(tok);
                 }
             }
-            "mtllib" => {
-                dropped.insert("material libraries (mtllib)".to_string());
-            }
-            other if OTHER_KEYWORDS.contains(&other) => {
+            "mtllib" => kept.push(whole),
+            other if OTHER_KEYWORDS.contains(&other) => kept.push(whole),
+            other if FREE_FORM.contains(&other) => {
                 dropped.insert(format!("'{other}' statements"));
             }
             other => {
@@ -150,6 +154,10 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                     format!("'{other}' is no OBJ statement: not an OBJ file (subwave reads OBJ, PLY, OFF and STL)"),
                 ));
             }
+        }
+        // A kept line keeps its comment; the statements the mesh holds do not.
+        if line.len() < whole.len() && kw != "mtllib" && !OTHER_KEYWORDS.contains(&kw) {
+            dropped.insert("comments after statements".to_string());
         }
     }
     let mut attributes = Vec::new();
@@ -171,6 +179,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             attributes.push(a);
         }
     }
+    attributes.extend(kept.finish(LINES));
     for (t, name) in [(uv, "uv"), (nrm, "normal")] {
         if let Some(a) = t.finish(name, topo.corner_count(), &mut dropped) {
             attributes.push(a);
@@ -240,33 +249,8 @@ impl Names {
 
     /// The channel `name` of the faces' names, if the statement stood in the file.
     fn finish(self, name: &str) -> Option<RawAttribute> {
-        let zero = Decimal {
-            mantissa: 0,
-            decimals: 0,
-        };
-        self.seen.then(|| RawAttribute {
-            name: name.to_string(),
-            domain: Domain::Face,
-            value_type: ValueType::Text,
-            width: 1,
-            values: RawCoords::Decimal(
-                self.faces
-                    .iter()
-                    .map(|&m| {
-                        [
-                            Decimal {
-                                mantissa: m,
-                                decimals: 0,
-                            },
-                            zero,
-                            zero,
-                        ]
-                    })
-                    .collect(),
-            ),
-            indices: Vec::new(),
-            labels: self.labels,
-        })
+        self.seen
+            .then(|| RawAttribute::names(name, Domain::Face, &self.faces, self.labels))
     }
 }
 
@@ -494,7 +478,8 @@ fn line_of(bytes: &[u8], offset: usize) -> usize {
 pub(crate) fn writes(a: &Attribute) -> bool {
     match a.name.as_str() {
         "color" => a.domain == Domain::Vertex && a.width == 3,
-        "uv" | "normal" => a.domain != Domain::Face,
+        "uv" | "normal" => matches!(a.domain, Domain::Vertex | Domain::Corner),
+        LINES => a.domain == Domain::File && !a.labels.is_empty(),
         n if NAMED.iter().any(|(_, c)| *c == n) => {
             a.domain == Domain::Face
                 && a.width == 1
@@ -509,6 +494,13 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
     let find = |name: &str| mesh.attributes.iter().find(|a| a.name == name && writes(a));
     let (colour, uv, normal) = (find("color"), find("uv"), find("normal"));
     let mut line = String::with_capacity(128);
+    if let Some(a) = find(LINES) {
+        for v in &a.values {
+            if let Some(l) = a.labels.get(v[0] as usize).filter(|_| v[0] >= 0) {
+                writeln!(out, "{l}")?;
+            }
+        }
+    }
     let table = |a: &Attribute, keyword: &str, out: &mut W, line: &mut String| -> Result<()> {
         for e in 0..a.entry_count() {
             line.clear();

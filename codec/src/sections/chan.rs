@@ -33,6 +33,36 @@ pub(crate) const NESTED: u8 = 0;
 /// their values predicted from the decoded geometry in an NRML stream.
 pub(crate) const NORMALS: u8 = 1;
 
+/// Coding 2: a per-file channel of names, its values listed (SPEC.md 11.4).
+pub(crate) const LISTED: u8 = 2;
+
+/// Coding 2's body: the entries' values (-1 for none), each a varint of the value
+/// plus one after their count.
+pub(crate) fn encode_listed(values: &[[i64; 3]]) -> Vec<u8> {
+    let mut w = ByteWriter::new();
+    w.varint(values.len() as u64);
+    for v in values {
+        w.varint((v[0] + 1) as u64);
+    }
+    w.out
+}
+
+/// Coding 2's values from its body, for a channel of `names` names.
+pub(crate) fn decode_listed(body: &[u8], names: usize) -> Result<Vec<[i64; 3]>> {
+    let mut r = ByteReader::new(body, 0);
+    // Each entry takes at least a byte.
+    let n = r.varint_max("entries", r.remaining() as u64)?;
+    let mut out = Vec::with_capacity(n as usize);
+    for _ in 0..n {
+        let v = r.varint_max("value", names as u64)?;
+        out.push([v as i64 - 1, 0, 0]);
+    }
+    if r.remaining() != 0 {
+        return Err(Error::corrupt(SECTION, "bytes after the listed values"));
+    }
+    Ok(out)
+}
+
 /// Coding 1's body: the values' decimals, the entries, and the two streams.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Normals<'a> {
@@ -77,6 +107,7 @@ fn domain_code(d: Domain) -> u8 {
         Domain::Vertex => 0,
         Domain::Face => 1,
         Domain::Corner => 2,
+        Domain::File => 3,
     }
 }
 
@@ -123,6 +154,7 @@ pub(crate) fn decode(payload: &[u8]) -> Result<(Head, &[u8])> {
         0 => Domain::Vertex,
         1 => Domain::Face,
         2 => Domain::Corner,
+        3 => Domain::File,
         _ => return Err(bad(format!("domain {d}"))),
     };
     let value_type = ValueType::from_code(t).ok_or_else(|| bad(format!("value type {t}")))?;
@@ -132,7 +164,14 @@ pub(crate) fn decode(payload: &[u8]) -> Result<(Head, &[u8])> {
     if pad > 2 {
         return Err(bad(format!("{pad} padding entries")));
     }
-    if coding > NORMALS || (coding == NORMALS && (pad != 0 || width != 3 || domain != Domain::Corner)) {
+    let fits = match coding {
+        NESTED => true,
+        NORMALS => pad == 0 && width == 3 && domain == Domain::Corner,
+        // Names per file (checked below: the channel has names).
+        LISTED => pad == 0 && width == 1 && domain == Domain::File,
+        _ => false,
+    };
+    if !fits {
         return Err(bad(format!("coding {coding} of a {domain:?} channel")));
     }
     let body = &rest[n + 5..];
@@ -178,7 +217,7 @@ mod tests {
         let p = encode(&h, b"nested");
         let (back, nested) = decode(&p).unwrap();
         assert_eq!((back, nested), (h, &b"nested"[..]));
-        for (i, v) in [(15, 3), (16, 9), (17, 0), (17, 4), (18, 3), (19, 2), (19, 1)] {
+        for (i, v) in [(15, 4), (16, 9), (17, 0), (17, 4), (18, 3), (19, 2), (19, 1)] {
             let mut q = p.clone();
             q[i] = v;
             assert!(decode(&q).is_err(), "byte {i} = {v}");
@@ -194,5 +233,31 @@ mod tests {
         assert_eq!(decode_normals(&encode_normals(&n)).unwrap(), n);
         assert!(decode_normals(&encode_normals(&n)[..4]).is_err());
         assert!(decode(&[]).is_err());
+    }
+
+    #[test]
+    fn listed_names_round_trip_within_their_names() {
+        let values = [[1, 0, 0], [-1, 0, 0], [0, 0, 0], [1, 0, 0]];
+        let body = encode_listed(&values);
+        assert_eq!(body, [4, 2, 0, 1, 2]);
+        assert_eq!(decode_listed(&body, 2).unwrap(), values);
+        // A value past the names, a cut, bytes after the values, a count past the body.
+        assert!(decode_listed(&body, 1).is_err());
+        assert!(decode_listed(&body[..4], 2).is_err());
+        assert!(decode_listed(&[body.clone(), vec![0]].concat(), 2).is_err());
+        assert!(decode_listed(&[200, 1], 2).is_err());
+        // Only a per-file channel of one value per entry is listed.
+        let h = |domain, width| Head {
+            name: "lines".into(),
+            domain,
+            value_type: ValueType::Text,
+            width,
+            pad: 0,
+            coding: LISTED,
+            labels: vec!["# a".into()],
+        };
+        assert!(decode(&encode(&h(Domain::File, 1), &body)).is_ok());
+        assert!(decode(&encode(&h(Domain::Face, 1), &body)).is_err());
+        assert!(decode(&encode(&h(Domain::File, 2), &body)).is_err());
     }
 }

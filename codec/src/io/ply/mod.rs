@@ -4,7 +4,7 @@
 use std::collections::{BTreeSet, HashMap};
 use std::io::Write;
 
-use super::{value_f32, value_f64, write_counted_text, Format, RawAttribute, RawMesh};
+use super::{value_f32, value_f64, write_counted_text, FileLines, Format, RawAttribute, RawMesh};
 
 mod walk;
 use crate::error::{Error, Result};
@@ -104,6 +104,16 @@ fn run_name(props: &[Prop], first: usize, len: usize) -> String {
         .join(" ")
 }
 
+/// The name of the per-file channel of a PLY's `comment` and `obj_info` header lines,
+/// which its writer puts after the format line.
+pub(crate) const HEADER: &str = "header";
+
+/// The name of the per-file channel of properties `props` (space-separated) of an
+/// element `element` other than vertex and face: `element/props`.
+fn extra_channel(element: &str, props: &str) -> String {
+    format!("{element}/{props}")
+}
+
 /// The attribute channels of a vertex or face element as they are read: per run of
 /// properties ([`runs`]), its values as text (ASCII) or numbers.
 struct Columns<'a> {
@@ -173,7 +183,10 @@ impl<'a> Columns<'a> {
         dropped: &mut BTreeSet<String>,
     ) -> Result<()> {
         for (r, &(first, len, ty)) in self.runs.iter().enumerate() {
-            let name = run_name(&el.props, first, len);
+            let mut name = run_name(&el.props, first, len);
+            if domain == Domain::File {
+                name = extra_channel(&el.name, &name);
+            }
             let values = match mode {
                 Mode::Ascii => {
                     let mut t = TextCoords::default();
@@ -489,7 +502,11 @@ impl<'a> Body<'a> {
     }
 }
 
-fn parse_header(bytes: &[u8]) -> Result<(Mode, Vec<Element>, usize)> {
+/// A PLY header: its format, its elements, where its body starts, and its `comment`
+/// and `obj_info` lines.
+type Header = (Mode, Vec<Element>, usize, Vec<String>);
+
+fn parse_header(bytes: &[u8]) -> Result<Header> {
     let end = bytes
         .windows(10)
         .position(|w| w == b"end_header")
@@ -507,6 +524,7 @@ fn parse_header(bytes: &[u8]) -> Result<(Mode, Vec<Element>, usize)> {
     let head = std::str::from_utf8(&bytes[..end]).map_err(|_| err("header is not text"))?;
     let mut mode = None;
     let mut elements: Vec<Element> = Vec::new();
+    let mut comments = Vec::new();
     for (n, line) in head.lines().enumerate() {
         let mut t = line.split_ascii_whitespace();
         let Some(kw) = t.next() else { continue };
@@ -521,7 +539,7 @@ fn parse_header(bytes: &[u8]) -> Result<(Mode, Vec<Element>, usize)> {
                     _ => return Err(bad("unknown format")),
                 });
             }
-            "comment" | "obj_info" => {}
+            "comment" | "obj_info" => comments.push(line.to_string()),
             "element" => {
                 let name = t.next().ok_or_else(|| bad("element without a name"))?;
                 let count = t
@@ -564,17 +582,21 @@ fn parse_header(bytes: &[u8]) -> Result<(Mode, Vec<Element>, usize)> {
             other => return Err(bad(&format!("unknown keyword '{other}'"))),
         }
     }
-    Ok((mode.ok_or_else(|| err("no format line"))?, elements, body))
+    let mode = mode.ok_or_else(|| err("no format line"))?;
+    Ok((mode, elements, body, comments))
 }
 
 /// Checks an element's header against the file: its records fit in the `remaining`
 /// bytes, a vertex element (the only one, unless `have_vertices`) has x, y and z, a face
-/// element a vertex index list. Notes what subwave does not keep as dropped.
+/// element a vertex index list. Notes what subwave does not keep as dropped: another
+/// element's lists, and the whole element unless it is `extra` (kept as per-file
+/// channels, [`extra_channel`]).
 fn check_element(
     el: &Element,
     mode: Mode,
     remaining: usize,
     have_vertices: bool,
+    extra: bool,
     dropped: &mut BTreeSet<String>,
 ) -> Result<()> {
     // Every record needs at least this many bytes; refuse counts the file cannot hold
@@ -616,18 +638,18 @@ fn check_element(
         ) {
             return Err(err("face element has no vertex_indices list"));
         }
-    } else {
+    } else if !extra {
         dropped.insert(format!("'{}' elements", el.name));
+        return Ok(());
     }
     for p in &el.props {
         let name = match p {
             Prop::Scalar(n, _) | Prop::List(n, _, _) => n,
         };
-        // Scalar properties of both are attribute channels.
+        // Scalar properties are attribute channels, per vertex, per face or per file.
         // So are a face's other lists: per corner channels when they hold as many
         // values for each corner (decided once read, [`Lists::finish`]).
-        let used = is_face || (is_vertex && matches!(p, Prop::Scalar(..)));
-        if (is_vertex || is_face) && !used {
+        if !is_face && matches!(p, Prop::List(..)) {
             dropped.insert(format!("{} property '{name}'", el.name));
         }
     }
@@ -635,7 +657,7 @@ fn check_element(
 }
 
 pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
-    let (mode, elements, body_start) = parse_header(bytes)?;
+    let (mode, elements, body_start, comments) = parse_header(bytes)?;
     let mut body = Body {
         data: bytes,
         pos: body_start,
@@ -648,13 +670,23 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     let mut topo = Mesh::new();
     let mut face = Vec::new();
     let mut attributes = Vec::new();
+    let mut extras = BTreeSet::new();
     for el in &elements {
-        check_element(el, mode, body.remaining(), have_vertices, &mut dropped)?;
         let is_vertex = el.name == "vertex";
         let is_face = el.name == "face";
+        // Another element's scalar properties are per-file channels, once per name.
+        let extra = !is_vertex && !is_face && !el.name.contains('/') && extras.insert(&el.name);
+        check_element(
+            el,
+            mode,
+            body.remaining(),
+            have_vertices,
+            extra,
+            &mut dropped,
+        )?;
         let mut columns = Columns::new(el, is_vertex);
         let mut lists = Lists::default();
-        let channels = (is_vertex || is_face) && !columns.runs.is_empty();
+        let channels = (is_vertex || is_face || extra) && !columns.runs.is_empty();
         let axis_of = |name: &str| ["x", "y", "z"].iter().position(|a| *a == name);
         if is_vertex {
             have_vertices = true;
@@ -714,10 +746,10 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             }
         }
         if channels {
-            let domain = if is_vertex {
-                Domain::Vertex
-            } else {
-                Domain::Face
+            let domain = match (is_vertex, is_face) {
+                (true, _) => Domain::Vertex,
+                (_, true) => Domain::Face,
+                _ => Domain::File,
             };
             columns.finish(el, domain, mode, &mut attributes, &mut dropped)?;
         }
@@ -725,6 +757,9 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             lists.finish(el, &topo, &mut attributes, &mut dropped)?;
         }
     }
+    let mut header = FileLines::default();
+    comments.iter().for_each(|c| header.push(c));
+    attributes.extend(header.finish(HEADER));
     // A file without a vertex element is an empty mesh (its header says so); a face
     // element then refers to vertices that are not there, which check_faces reports.
     let (coords, inexact) = if mode == Mode::Ascii {
@@ -915,6 +950,11 @@ pub(crate) fn write<W: Write>(
         mesh.attributes.iter().filter(|a| a.domain == d).collect()
     };
     let (vchan, fchan, cchan) = (of(Domain::Vertex), of(Domain::Face), of(Domain::Corner));
+    let header = mesh
+        .attributes
+        .iter()
+        .find(|a| a.domain == Domain::File && a.name == HEADER && !a.labels.is_empty());
+    let extras = extra_elements(mesh);
     // A corner channel is a list per face: its values for each corner in turn.
     let longest = mesh.iter_faces().map(<[u32]>::len).max().unwrap_or(0);
     let ltys: Vec<&str> = cchan
@@ -924,16 +964,19 @@ pub(crate) fn write<W: Write>(
             false => "uint",
         })
         .collect();
-    write!(
-        out,
-        "ply\nformat {} 1.0\ncomment written by subwave\nelement vertex {}\n",
-        if binary {
-            "binary_little_endian"
-        } else {
-            "ascii"
-        },
-        mesh.vertex_count()
-    )?;
+    let format = match binary {
+        true => "binary_little_endian",
+        false => "ascii",
+    };
+    writeln!(out, "ply\nformat {format} 1.0")?;
+    if let Some(a) = header {
+        for v in &a.values {
+            if let Some(l) = a.labels.get(v[0] as usize).filter(|_| v[0] >= 0) {
+                writeln!(out, "{l}")?;
+            }
+        }
+    }
+    writeln!(out, "element vertex {}", mesh.vertex_count())?;
     let fty = if f32_out || (!binary && q.prefers_f32()) {
         "float"
     } else {
@@ -961,8 +1004,16 @@ pub(crate) fn write<W: Write>(
         let name = a.name.replace(|c: char| c.is_ascii_whitespace(), "_");
         writeln!(out, "property list {lty} {} {name}", property_type(a))?;
     }
+    for (element, group) in &extras {
+        writeln!(out, "element {element} {}", group[0].entry_count())?;
+        for a in group {
+            for n in property_names(a) {
+                writeln!(out, "property {} {n}", property_type(a))?;
+            }
+        }
+    }
     writeln!(out, "end_header")?;
-    if !binary && vchan.is_empty() && fchan.is_empty() && cchan.is_empty() {
+    if !binary && vchan.is_empty() && fchan.is_empty() && cchan.is_empty() && extras.is_empty() {
         return write_counted_text(out, mesh, q);
     }
     let mut buf = Vec::with_capacity(1 << 16);
@@ -1023,6 +1074,55 @@ pub(crate) fn write<W: Write>(
         }
         end_record(binary, &line, &mut buf, out)?;
     }
+    for (_, group) in &extras {
+        for e in 0..group[0].entry_count() {
+            line.clear();
+            for a in group {
+                put_values(a, e, binary, &mut buf, &mut line);
+            }
+            // Values are written each after a space.
+            let record = line.get(1..).unwrap_or("");
+            end_record(binary, record, &mut buf, out)?;
+        }
+    }
     out.write_all(&buf)?;
     Ok(())
+}
+
+/// Whether the PLY writer writes channel `a`: every per-vertex, per-face and
+/// per-corner channel, the header's lines ([`HEADER`]) and another element's
+/// properties ([`extra_channel`]).
+pub(crate) fn writes(a: &Attribute) -> bool {
+    match a.domain {
+        Domain::File => match a.labels.is_empty() {
+            true => a.name.split_once('/').is_some_and(|(e, p)| {
+                !e.is_empty() && !e.contains(char::is_whitespace) && !p.is_empty()
+            }),
+            false => a.name == HEADER,
+        },
+        _ => true,
+    }
+}
+
+/// The elements of the per-file channels besides the header's, in their order: the
+/// consecutive channels of one element name and entry count ([`extra_channel`]), each
+/// named by what follows the `/`.
+fn extra_elements(mesh: &Mesh) -> Vec<(&str, Vec<Attribute>)> {
+    let mut out: Vec<(&str, Vec<Attribute>)> = Vec::new();
+    for a in mesh
+        .attributes
+        .iter()
+        .filter(|a| a.domain == Domain::File && a.labels.is_empty())
+    {
+        let Some((element, props)) = a.name.split_once('/').filter(|_| writes(a)) else {
+            continue;
+        };
+        let mut a = a.clone();
+        a.name = props.to_string();
+        match out.last_mut() {
+            Some((e, g)) if *e == element && g[0].entry_count() == a.entry_count() => g.push(a),
+            _ => out.push((element, vec![a])),
+        }
+    }
+    out
 }

@@ -120,7 +120,7 @@ fn axes(el: &Element, is_vertex: bool) -> Option<Vec<Option<usize>>> {
 /// are. `None` where the walk cannot follow the file (coordinates out of order, integer
 /// coordinates in a binary file, index lists of other than 32-bit items).
 pub(in crate::io) fn template(bytes: &[u8], b: &mut Builder<'_>) -> Option<()> {
-    let (mode, elements, body_start) = parse_header(bytes).ok()?;
+    let (mode, elements, body_start, _) = parse_header(bytes).ok()?;
     let places = attributes(bytes, mode, &elements, body_start, b).unwrap_or_default();
     b.literal(&bytes[..body_start]);
     let mut pos = body_start;
