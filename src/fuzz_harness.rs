@@ -181,7 +181,7 @@ pub fn roundtrip_mesh(data: &[u8]) {
 
 /// Attribute channels of every domain on `mesh` (SPEC.md 11.4): per-vertex values,
 /// a per-corner table of three-decimal triples (as normals are) with arbitrary corner
-/// entries, per-face names with faces of none, per-file vertex numbers.
+/// entries, per-face names with faces of none, per-file vertex numbers, lists per face.
 fn arbitrary_channels(b: &mut Bytes<'_>, mesh: &mut Mesh) {
     use subwave_codec::{Attribute, Domain, ValueType};
     let small = |b: &mut Bytes<'_>| b.below(2001) as i64 - 1000;
@@ -249,7 +249,22 @@ fn arbitrary_channels(b: &mut Bytes<'_>, mesh: &mut Mesh) {
         indices: Vec::new(),
         labels: Vec::new(),
     };
-    mesh.attributes = vec![vertex, corner, face, edge];
+    // A list per face, of 0 to 3 values.
+    let lengths: Vec<u32> = (0..mesh.face_count()).map(|_| b.below(4) as u32).collect();
+    let lists = Attribute {
+        name: "flags".into(),
+        domain: Domain::Face,
+        value_type: ValueType::I16,
+        width: 1,
+        values: (0..lengths.iter().sum::<u32>())
+            .map(|_| [small(b), 0, 0])
+            .collect(),
+        floats: Vec::new(),
+        quantization: Quantization::Decimal { decimals: 0 },
+        indices: lengths,
+        labels: Vec::new(),
+    };
+    mesh.attributes = vec![vertex, corner, face, edge, lists];
 }
 
 /// Every transform's synthesis undoes its analysis exactly on any refinable topology

@@ -249,15 +249,36 @@ fn compare_channels(
             out.push(format!("{:x}", a.value_f64(e, k).to_bits()));
         }
     }
+    // A vertex's, face's or record's values: its entry, or its list's.
+    // (`lists`: a list channel's records, [`subwave_codec::Attribute::list`].)
+    type Lists = [std::ops::Range<usize>];
+    fn record(a: &subwave_codec::Attribute, lists: &Lists, r: usize, out: &mut Vec<String>) {
+        if !a.is_list() {
+            return entry(a, r, out);
+        }
+        if let Some(items) = lists.get(r) {
+            out.push(items.len().to_string());
+            items.clone().for_each(|e| entry(a, e, out));
+        }
+    }
+    let lists = |m: &Mesh| -> Vec<Vec<std::ops::Range<usize>>> {
+        m.attributes.iter().map(|a| a.list().collect()).collect()
+    };
+    let (lists_a, lists_b) = (lists(original), lists(decoded));
     // Per-vertex values at every vertex (those no face uses too).
-    for (a, b) in original.attributes.iter().zip(&decoded.attributes) {
+    for (k, (a, b)) in original
+        .attributes
+        .iter()
+        .zip(&decoded.attributes)
+        .enumerate()
+    {
         if a.domain != ChannelDomain::Vertex {
             continue;
         }
         for (i, &o) in order.iter().enumerate() {
             let (mut x, mut y) = (Vec::new(), Vec::new());
-            entry(a, o as usize, &mut x);
-            entry(b, i, &mut y);
+            record(a, &lists_a[k], o as usize, &mut x);
+            record(b, &lists_b[k], i, &mut y);
             if x != y {
                 return Err(format!(
                     "'{}' of vertex {} decoded as {y:?}, expected {x:?}",
@@ -274,7 +295,10 @@ fn compare_channels(
         }
         let mut a = a.clone();
         a.values = a.renumbered(order);
-        let (mut x, mut y) = (Vec::new(), Vec::new());
+        let (mut x, mut y) = (
+            vec![format!("{:?}", a.indices)],
+            vec![format!("{:?}", b.indices)],
+        );
         (0..a.entry_count()).for_each(|e| entry(&a, e, &mut x));
         (0..b.entry_count()).for_each(|e| entry(b, e, &mut y));
         if x != y {
@@ -282,6 +306,7 @@ fn compare_channels(
         }
     }
     let faces = |m: &Mesh, vertex: &dyn Fn(u32) -> u32| -> Vec<Vec<Vec<String>>> {
+        let ranges = lists(m);
         let mut all: Vec<Vec<Vec<String>>> = (0..m.face_count())
             .map(|f| {
                 let s = m.face_starts[f] as usize;
@@ -291,9 +316,9 @@ fn compare_channels(
                     .enumerate()
                     .map(|(j, &v)| {
                         let mut c = vec![vertex(v).to_string()];
-                        for a in &m.attributes {
+                        for (a, l) in m.attributes.iter().zip(&ranges) {
                             match a.domain {
-                                ChannelDomain::Vertex => entry(a, v as usize, &mut c),
+                                ChannelDomain::Vertex => record(a, l, v as usize, &mut c),
                                 ChannelDomain::Corner => {
                                     entry(a, a.indices[s + j] as usize, &mut c)
                                 }
@@ -305,12 +330,11 @@ fn compare_channels(
                     .collect();
                 let mut best = smallest_rotation(&corners);
                 let mut own = Vec::new();
-                for a in m
-                    .attributes
-                    .iter()
-                    .filter(|a| a.domain == ChannelDomain::Face)
-                {
-                    entry(a, f, &mut own);
+                for (a, l) in m.attributes.iter().zip(&ranges) {
+                    if a.domain != ChannelDomain::Face {
+                        continue;
+                    }
+                    record(a, l, f, &mut own);
                 }
                 best.push(own);
                 best

@@ -128,6 +128,16 @@ fn entry(a: &Attribute, e: usize, key: &mut Vec<i64>) {
     }
 }
 
+/// Record `r` (a vertex or face) of `a`: its entry, or its list's entries after its length.
+fn record(a: &Attribute, r: usize, key: &mut Vec<i64>) {
+    if !a.is_list() {
+        return entry(a, r, key);
+    }
+    let items = a.list().nth(r).unwrap();
+    key.push(items.len() as i64);
+    items.for_each(|e| entry(a, e, key));
+}
+
 /// Each face as its vertices (input numbers, from its smallest) with every channel's
 /// values at its corners and its own: what must come back whatever the order.
 fn faces_with_values(m: &Mesh, vertex: &dyn Fn(u32) -> u32) -> Vec<Vec<i64>> {
@@ -142,14 +152,14 @@ fn faces_with_values(m: &Mesh, vertex: &dyn Fn(u32) -> u32) -> Vec<Vec<i64>> {
                 key.push(vertex(face[j]) as i64);
                 for a in &m.attributes {
                     match a.domain {
-                        Domain::Vertex => entry(a, face[j] as usize, &mut key),
+                        Domain::Vertex => record(a, face[j] as usize, &mut key),
                         Domain::Corner => entry(a, a.indices[s + j] as usize, &mut key),
                         Domain::Face | Domain::File => {}
                     }
                 }
             }
             for a in m.attributes.iter().filter(|a| a.domain == Domain::Face) {
-                entry(a, f, &mut key);
+                record(a, f, &mut key);
             }
             key
         })
@@ -279,8 +289,8 @@ fn same_up_to_order(name: &str, input: &Mesh, dec: &Mesh, order: &[u32]) {
         for (a, b) in input.attributes.iter().zip(&dec.attributes) {
             if a.domain == Domain::Vertex {
                 let (mut x, mut y) = (Vec::new(), Vec::new());
-                entry(a, o as usize, &mut x);
-                entry(b, i, &mut y);
+                record(a, o as usize, &mut x);
+                record(b, i, &mut y);
                 assert_eq!(x, y, "{name}: {} of vertex {o}", a.name);
             }
         }
@@ -296,6 +306,7 @@ fn same_up_to_order(name: &str, input: &Mesh, dec: &Mesh, order: &[u32]) {
         }
         let mut a = a.clone();
         a.values = a.renumbered(order);
+        assert_eq!(a.indices, b.indices, "{name}: {}", a.name);
         for e in 0..a.entry_count() {
             let (mut x, mut y) = (Vec::new(), Vec::new());
             entry(&a, e, &mut x);
@@ -424,6 +435,17 @@ fn every_bit_flip_or_cut_of_a_channel_is_an_error_or_a_valid_mesh() {
         vec![[0, 0, 0], [1, 0, 0], [0, 0, 0]],
         lines,
     ));
+    // And a list per vertex, of 0 to 2 values.
+    let n = mesh.vertex_count();
+    let lengths: Vec<u32> = (0..n).map(|v| (v % 3) as u32).collect();
+    let values = (0..lengths.iter().sum::<u32>() as i64)
+        .map(|i| [i * 7 % 50, 0, 0])
+        .collect();
+    mesh.attributes.push(Attribute {
+        indices: lengths,
+        domain: Domain::Vertex,
+        ..file("weights", ValueType::I16, 1, values, Vec::new())
+    });
     let ends = (0..5).map(|i| [i, i + 3, 0]).collect();
     mesh.attributes.push(file(
         "edge/vertex1 vertex2",
@@ -592,12 +614,11 @@ fn ply_texcoord_lists_are_corner_channels_in_canonical_order() {
         let (bytes, corners) = grid_with_texcoords(binary);
         let name = format!("grid, binary {binary}");
         let input = subwave::load(&bytes, None).unwrap();
-        // The list of one value per face is no corner channel: noted, the file read.
-        assert!(
-            input.dropped.iter().any(|d| d.contains("'flags'")),
-            "{name}: {:?}",
-            input.dropped
-        );
+        // The list of one value per face is no corner channel: a list per face.
+        assert!(input.dropped.is_empty(), "{name}: {:?}", input.dropped);
+        let flags = input.mesh.attribute("flags").expect("a flags channel");
+        assert!(flags.is_list() && flags.domain == Domain::Face, "{name}");
+        assert_eq!(flags.indices, vec![1; 25], "{name}");
         let tex = input
             .mesh
             .attribute("texcoord")
@@ -613,7 +634,7 @@ fn ply_texcoord_lists_are_corner_channels_in_canonical_order() {
         // the seams, fewer than the 100 corners.
         assert!(tex.entry_count() < corners.len(), "{name}");
         let (channels, _) = canonical_round_trip(&name, &bytes);
-        assert_eq!(channels, 1, "{name}");
+        assert_eq!(channels, 2, "{name}");
     }
 }
 
@@ -634,9 +655,11 @@ fn grid_with_other_elements(binary: bool) -> Vec<u8> {
     let mut out = format!(
         "ply\nformat {} 1.0\ncomment made by a test\nobj_info a grid\n\
          element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         property list uchar float weights\n\
          element face {}\nproperty list uchar int vertex_indices\n\
          element edge {}\nproperty int vertex1\nproperty int vertex2\nproperty float crease\n\
          element material 2\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
+         element loop 2\nproperty list uchar int vertex_indices\n\
          comment after the elements\nend_header\n",
         if binary {
             "binary_little_endian"
@@ -654,9 +677,20 @@ fn grid_with_other_elements(binary: bool) -> Vec<u8> {
             (i / (n + 1)) as f32,
             ((i * 7) % 5) as f32 * 0.5,
         ];
+        // A list of 0 to 2 weights per vertex.
+        let w: Vec<f32> = (0..i % 3).map(|k| 0.1 * (i + k) as f32).collect();
         match binary {
-            true => p.iter().for_each(|c| out.extend(c.to_le_bytes())),
-            false => out.extend(format!("{} {} {}\n", p[0], p[1], p[2]).bytes()),
+            true => {
+                p.iter().for_each(|c| out.extend(c.to_le_bytes()));
+                out.push(w.len() as u8);
+                w.iter().for_each(|c| out.extend(c.to_le_bytes()));
+            }
+            false => {
+                let ws: Vec<String> = w.iter().map(f32::to_string).collect();
+                out.extend(
+                    format!("{} {} {} {} {}\n", p[0], p[1], p[2], w.len(), ws.join(" ")).bytes(),
+                )
+            }
         }
     }
     for face in &faces {
@@ -686,6 +720,19 @@ fn grid_with_other_elements(binary: bool) -> Vec<u8> {
             false => out.extend(format!("{} {} {}\n", rgb[0], rgb[1], rgb[2]).bytes()),
         }
     }
+    // Two loops of vertices around the first and the last quad.
+    for l in [faces[0].to_vec(), faces[faces.len() - 1][..3].to_vec()] {
+        match binary {
+            true => {
+                out.push(l.len() as u8);
+                l.iter().for_each(|i| out.extend(i.to_le_bytes()));
+            }
+            false => {
+                let t: Vec<String> = l.iter().map(u32::to_string).collect();
+                out.extend(format!("{} {}\n", l.len(), t.join(" ")).bytes())
+            }
+        }
+    }
     out
 }
 
@@ -705,16 +752,23 @@ fn ply_comments_and_other_elements_come_back_in_canonical_order() {
         assert_eq!(
             names,
             [
+                "weights",
                 "edge/vertex1 vertex2",
                 "edge/crease",
                 "material/red green blue",
+                "loop/vertex_indices",
                 "header"
             ],
             "{name}"
         );
+        let a = &input.mesh.attributes;
+        assert!(a[0].is_list() && a[0].domain == Domain::Vertex, "{name}");
+        assert_eq!(a[0].indices, (0..25).map(|i| i % 3).collect::<Vec<u32>>());
+        assert_eq!(a[1].vertex_components(), [true, true, false]);
+        assert!(a[4].is_list() && a[4].domain == Domain::File, "{name}");
         assert_eq!(
-            input.mesh.attributes[0].vertex_components(),
-            [true, true, false]
+            (&a[4].indices[..], a[4].vertex_components()[0]),
+            (&[4, 3][..], true)
         );
         // The input is shuffled so that canonical order renumbers the vertices.
         let mut mesh = input.mesh.clone();
@@ -726,9 +780,34 @@ fn ply_comments_and_other_elements_come_back_in_canonical_order() {
         }
         mesh.positions = shuffled;
         mesh.faces.iter_mut().for_each(|v| *v = perm[*v as usize]);
-        for v in &mut mesh.attributes[0].values {
-            v[0] = perm[v[0] as usize] as i64;
-            v[1] = perm[v[1] as usize] as i64;
+        // The weights' lists move with their vertices.
+        let w = &mesh.attributes[0];
+        let lists: Vec<_> = w.list().collect();
+        let mut from = vec![0; n as usize];
+        perm.iter()
+            .enumerate()
+            .for_each(|(i, &p)| from[p as usize] = i);
+        let (mut indices, mut values) = (Vec::new(), Vec::new());
+        for &i in &from {
+            indices.push(w.indices[i]);
+            values.extend(&w.values[lists[i].clone()]);
+        }
+        let floats = from
+            .iter()
+            .flat_map(|&i| w.floats.get(lists[i].clone()).unwrap_or(&[]).to_vec())
+            .collect();
+        (
+            mesh.attributes[0].indices,
+            mesh.attributes[0].values,
+            mesh.attributes[0].floats,
+        ) = (indices, values, floats);
+        for k in [1, 4] {
+            let width = mesh.attributes[k].width as usize;
+            for v in &mut mesh.attributes[k].values {
+                for c in 0..width {
+                    v[c] = perm[v[c] as usize] as i64;
+                }
+            }
         }
         let opts = EncodeOptions {
             keep_order: false,
@@ -739,12 +818,16 @@ fn ply_comments_and_other_elements_come_back_in_canonical_order() {
         assert!(!dec.input_order, "{name}");
         same_up_to_order(&name, &mesh, &dec.mesh, &enc.order);
         subwave::compare_up_to_order(&mesh, &dec.mesh, &enc.order).unwrap();
-        // Each edge's ends are the same points.
-        let ends = |m: &Mesh| -> Vec<[[i64; 3]; 2]> {
-            m.attributes[0]
+        // Each edge's ends and each loop's vertices are the same points.
+        let ends = |m: &Mesh| -> Vec<Vec<[i64; 3]>> {
+            let edge = &m.attributes[1].values;
+            let loops = m.attributes[4]
                 .values
                 .iter()
-                .map(|v| [m.positions[v[0] as usize], m.positions[v[1] as usize]])
+                .map(|v| vec![m.positions[v[0] as usize]]);
+            edge.iter()
+                .map(|v| vec![m.positions[v[0] as usize], m.positions[v[1] as usize]])
+                .chain(loops)
                 .collect()
         };
         assert_eq!(ends(&dec.mesh), ends(&mesh), "{name}");
@@ -753,10 +836,16 @@ fn ply_comments_and_other_elements_come_back_in_canonical_order() {
         let format = subwave::default_output_format(input.source());
         subwave::write_mesh(&mut file, &dec.mesh, &dec.quantization, format).unwrap();
         let head = String::from_utf8_lossy(
-            &file[..file.windows(10).position(|w| w == b"end_header").unwrap()],
+            &file[..file.windows(10).position(|w| w == b"end_header").unwrap() + 3],
         )
         .to_string();
-        for line in ["comment made by a test\nobj_info a grid\ncomment after the elements\n", "element edge 4\nproperty int vertex1\nproperty int vertex2\nproperty float crease\nelement material 2\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"] {
+        for line in [
+            "comment made by a test\nobj_info a grid\ncomment after the elements\n",
+            "property list uchar float weights\nelement face 16\n",
+            "element edge 4\nproperty int vertex1\nproperty int vertex2\nproperty float crease\n\
+             element material 2\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
+             element loop 2\nproperty list uchar int vertex_indices\nend",
+        ] {
             assert!(head.contains(line), "{name}: {head}");
         }
         let again = subwave::load(&file, None).unwrap();
@@ -766,11 +855,26 @@ fn ply_comments_and_other_elements_come_back_in_canonical_order() {
 }
 
 #[test]
+fn obj_lines_of_other_than_two_vertices_are_noted_as_dropped() {
+    for l in ["l 1 2 3", "l 1/1 2/2", "l 1 99", "l 1"] {
+        let obj = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 1\nf 1 2 3\nl 2 3\n{l}\n");
+        let input = subwave::load(obj.as_bytes(), None).unwrap();
+        assert!(
+            input.dropped.contains("line elements"),
+            "{l}: {:?}",
+            input.dropped
+        );
+        assert!(input.mesh.attributes.is_empty(), "{l}");
+    }
+}
+
+#[test]
 fn obj_comments_and_material_libraries_come_back_in_canonical_order() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/textured_cc3.obj");
     let body = std::fs::read_to_string(path).unwrap();
     let head = "# made by a test\nmtllib a.mtl b.mtl\n#\nlod 2\n";
-    let bytes = format!("{head}{body}# the end\nmtllib a.mtl b.mtl\n");
+    // And two loose edges (`l` lines as Blender writes them, one counted back).
+    let bytes = format!("{head}{body}# the end\nmtllib a.mtl b.mtl\nl 1 2\nl -1 3\n");
     let input = subwave::load(bytes.as_bytes(), None).unwrap();
     assert!(input.dropped.is_empty(), "{:?}", input.dropped);
     // The lines that name no vertex or face, in the file's order.
@@ -782,6 +886,12 @@ fn obj_comments_and_material_libraries_come_back_in_canonical_order() {
     let lines = input.mesh.attribute("lines").expect("a lines channel");
     assert_eq!(lines.domain, Domain::File);
     assert_eq!(lines.entry_count(), kept.len());
+    let nv = input.mesh.vertex_count() as i64;
+    let edges = input
+        .mesh
+        .attribute("edge/vertex1 vertex2")
+        .expect("an edge channel");
+    assert_eq!(edges.values, [[0, 1, 0], [nv - 1, 2, 0]]);
     let opts = EncodeOptions {
         keep_order: false,
         ..Default::default()
@@ -789,6 +899,15 @@ fn obj_comments_and_material_libraries_come_back_in_canonical_order() {
     let enc = subwave::encode_to_vec(&input.mesh, &input.quantization, &opts).unwrap();
     let dec = subwave::decode_slice(&enc.bytes).unwrap();
     same_up_to_order(path, &input.mesh, &dec.mesh, &enc.order);
+    // The edges' ends are the same points in canonical order.
+    let ends = |m: &Mesh| -> Vec<[[i64; 3]; 2]> {
+        let e = m.attribute("edge/vertex1 vertex2").unwrap();
+        e.values
+            .iter()
+            .map(|v| [m.positions[v[0] as usize], m.positions[v[1] as usize]])
+            .collect()
+    };
+    assert_eq!(ends(&dec.mesh), ends(&input.mesh));
     let mut file = Vec::new();
     subwave::write_mesh(
         &mut file,
@@ -800,6 +919,7 @@ fn obj_comments_and_material_libraries_come_back_in_canonical_order() {
     let text = String::from_utf8(file).unwrap();
     let want = kept.join("\n") + "\nv ";
     assert!(text.starts_with(&want), "{}", &text[..200]);
+    assert_eq!(text.matches("\nl ").count(), 2);
     let again = subwave::load(text.as_bytes(), None).unwrap();
     same_values(path, &dec.mesh, &again.mesh);
 }

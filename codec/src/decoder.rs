@@ -408,6 +408,28 @@ fn channel(payload: &[u8], limits: &Limits, mesh: &Mesh) -> Result<crate::mesh::
     if head.coding == chan::NORMALS {
         return predicted_normals(head, nested, mesh);
     }
+    if head.coding == chan::LISTS {
+        if !head.labels.is_empty() {
+            return Err(bad("lists of names"));
+        }
+        let (counts, total, body) = chan::decode_lists(nested)?;
+        let opts = DecodeOptions {
+            limits: limits.clone(),
+            ..DecodeOptions::default()
+        };
+        let d = decode_nested(body, &opts).map_err(|e| bad(&format!("nested container: {e}")))?;
+        if !d.input_order && d.mesh.vertex_count() > 1 {
+            return Err(bad("the nested container has no order"));
+        }
+        let m = d.mesh;
+        if total != m.vertex_count() as u64 || !m.faces.is_empty() || counts.is_empty() {
+            return Err(bad("its lists do not fit their values"));
+        }
+        if m.positions.iter().any(|p| p[1] != 0 || p[2] != 0) {
+            return Err(bad("values past the channel's width"));
+        }
+        return channel_of(head, (m.positions, m.floats, d.quantization), counts, mesh);
+    }
     if head.coding == chan::LISTED {
         if head.labels.is_empty() {
             return Err(bad("listed values of a channel without names"));

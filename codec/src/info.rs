@@ -130,6 +130,16 @@ fn channel_info(payload: &[u8], limits: &Limits) -> Option<AttributeInfo> {
             let n = chan::decode_normals(rest).ok()?;
             (n.entries, "predicted normals".to_string(), String::new())
         }
+        chan::LISTS => {
+            let (_, total, body) = chan::decode_lists(rest).ok()?;
+            let c = Container::parse(body, limits).ok()?;
+            let h = layout(&c, limits, true).ok()?;
+            (
+                total,
+                format!("lists, {}", h.transform.name()),
+                fit_rules(&h),
+            )
+        }
         chan::LISTED => {
             let n = chan::decode_listed(rest, head.labels.len()).ok()?.len();
             (n as u64, "listed".to_string(), String::new())

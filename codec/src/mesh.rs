@@ -150,7 +150,10 @@ pub struct Attribute {
     /// How the integers map to values.
     pub quantization: Quantization,
     /// [`Domain::Corner`]: per face corner (in the order of [`Mesh::faces`]), its
-    /// entry. Empty for the other domains.
+    /// entry. For the other domains, empty, or for a *list channel* (a PLY list
+    /// property of any length per record, one value per entry) per vertex, face or
+    /// record its number of entries: the entries hold every record's list in turn
+    /// ([`Attribute::list`]).
     pub indices: Vec<u32>,
     /// A channel of names (an OBJ's materials, groups, objects, smoothing groups): the
     /// names its values (one per entry, integers) stand for, value `i` for
@@ -159,6 +162,23 @@ pub struct Attribute {
 }
 
 impl Attribute {
+    /// Whether it is a list channel: a list of values per vertex, face or record
+    /// ([`Attribute::indices`]).
+    pub fn is_list(&self) -> bool {
+        self.domain != Domain::Corner && !self.indices.is_empty()
+    }
+
+    /// A list channel's records (vertices, faces or the file's records), each the
+    /// range of its entries.
+    pub fn list(&self) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+        let mut start = 0usize;
+        self.indices.iter().map(move |&n| {
+            let r = start..start + n as usize;
+            start = r.end;
+            r
+        })
+    }
+
     /// Number of entries.
     pub fn entry_count(&self) -> usize {
         self.values.len()
@@ -189,7 +209,8 @@ impl Attribute {
 
     /// Which of a per-file channel's values number vertices (from 0), by the PLY
     /// convention of its name: `ELEMENT/PROPERTIES` whose property is `vertex1`,
-    /// `vertex2` or `vertex_index` (an `edge` element's ends), of an integer type. The
+    /// `vertex2`, `vertex_index` (an `edge` element's ends) or `vertex_indices` (a
+    /// list), of an integer type. The
     /// encoder renumbers them with the vertices when it reorders them.
     pub fn vertex_components(&self) -> [bool; 3] {
         let mut out = [false; 3];
@@ -200,7 +221,7 @@ impl Attribute {
         let words: Vec<&str> = props.split_ascii_whitespace().collect();
         if words.len() == self.width as usize {
             for (k, w) in words.iter().enumerate() {
-                out[k] = matches!(*w, "vertex1" | "vertex2" | "vertex_index");
+                out[k] = matches!(*w, "vertex1" | "vertex2" | "vertex_index" | "vertex_indices");
             }
         }
         out
@@ -252,18 +273,22 @@ impl Attribute {
             Domain::Face => Some((mesh.face_count(), "faces")),
             Domain::Corner | Domain::File => None,
         };
-        if let Some((n, what)) = want {
+        if self.is_list() {
+            if let Some((n, what)) = want.filter(|&(n, _)| n != self.indices.len()) {
+                return bad(format!("{} lists for {n} {what}", self.indices.len()));
+            }
+            let total: u64 = self.indices.iter().map(|&n| n as u64).sum();
+            if total != self.values.len() as u64 {
+                return bad(format!("lists of {total} values in all, {} entries", self.values.len()));
+            }
+            if self.width != 1 || !self.labels.is_empty() {
+                return bad("a list channel needs one value per entry and no names".into());
+            }
+        } else if let Some((n, what)) = want {
             if self.values.len() != n {
                 return bad(format!("{} entries for {n} {what}", self.values.len()));
             }
-            if !self.indices.is_empty() {
-                return bad("corner indices on a per-vertex or per-face attribute".into());
-            }
-        } else if self.domain == Domain::File {
-            if !self.indices.is_empty() {
-                return bad("corner indices on a per-file attribute".into());
-            }
-        } else {
+        } else if self.domain == Domain::Corner {
             if self.indices.len() != mesh.corner_count() {
                 return bad(format!("{} corner indices for {} corners", self.indices.len(), mesh.corner_count()));
             }

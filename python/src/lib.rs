@@ -331,9 +331,10 @@ fn parts<'py>(py: Python<'py>, mesh: &Mesh, q: &Quantization) -> PyResult<MeshPa
     let mut channels = Vec::with_capacity(mesh.attributes.len());
     for a in &mesh.attributes {
         let values = value_array(py, &a.values, &a.floats, &a.quantization, a.width as usize)?;
-        let indices = match a.domain {
-            Domain::Corner => Some(a.indices.clone().into_pyarray(py).into_any()),
-            _ => None,
+        // A corner channel's entries per corner; a list channel's lengths.
+        let indices = match a.domain == Domain::Corner || a.is_list() {
+            true => Some(a.indices.clone().into_pyarray(py).into_any()),
+            false => None,
         };
         channels.push((
             a.name.clone(),

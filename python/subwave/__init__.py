@@ -80,7 +80,10 @@ class Attribute:
             ``lines``, a PLY's header comments as ``header`` and its other elements'
             properties as ``element/properties``).
         indices: for ``"corner"``, the entry of each face corner (in the order of
-            ``Mesh.flat_faces``); else ``None``.
+            ``Mesh.flat_faces``); for a *list channel* of another domain (a PLY list
+            property: any number of values per vertex, face or record, one per row of
+            ``values``, each record's in turn), the number of values of each; else
+            ``None``.
         type: how the values are written to a file: ``"text"``, ``"f32"``, ``"f64"``,
             ``"i8"``, ``"u8"``, ``"i16"``, ``"u16"``, ``"i32"``, ``"u32"`` (a PLY
             property's type); ``None`` chooses from the array's dtype.
@@ -107,8 +110,8 @@ class Attribute:
             raise ValueError(f"attribute values must have shape (n, 1..3), not {v.shape}")
         if domain not in ("vertex", "face", "corner", "file"):
             raise ValueError(f"domain must be vertex, face, corner or file, not {domain!r}")
-        if (indices is None) != (domain != "corner"):
-            raise ValueError("indices are given for a corner attribute, and only for one")
+        if indices is None and domain == "corner":
+            raise ValueError("a corner attribute needs indices")
         if type is None:
             type = _DTYPE_TYPES.get(v.dtype, "text")
         if type not in _TYPES:

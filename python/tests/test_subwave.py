@@ -353,3 +353,43 @@ def test_attribute_channels_come_back_exactly_in_canonical_order():
         return sorted(out)
 
     assert corners(back) == corners(mesh)
+
+
+def test_ply_lists_and_other_elements_are_channels(tmp_path):
+    # A PLY with a list per vertex and another element: channels of the vertex and
+    # of the file, each list's values and length kept, through canonical order too.
+    header = (
+        "ply\nformat ascii 1.0\ncomment a test\nelement vertex 4\n"
+        "property float x\nproperty float y\nproperty float z\n"
+        "property list uchar int ids\nelement face 1\n"
+        "property list uchar int vertex_indices\nelement edge 1\n"
+        "property int vertex1\nproperty int vertex2\nend_header\n"
+    )
+    body = "0 0 0 0\n1 0 0 1 7\n1 1 0 2 8 9\n0 1 0 3 1 2 3\n4 0 1 2 3\n3 0\n"
+    path = tmp_path / "lists.ply"
+    path.write_text(header + body)
+    mesh = subwave.read(path)
+    ids = mesh.attributes["ids"]
+    assert ids.domain == "vertex" and list(ids.indices) == [0, 1, 2, 3]
+    assert ids.values[:, 0].tolist() == [7, 8, 9, 1, 2, 3]
+    edge = mesh.attributes["edge/vertex1 vertex2"]
+    assert edge.domain == "file" and edge.values.tolist() == [[3, 0]]
+    assert mesh.attributes["header"].labels == ["comment a test"]
+    data = subwave.compress(
+        mesh.vertices, mesh.flat_faces, face_offsets=mesh.face_offsets,
+        attributes=mesh.attributes,
+    )
+    back = subwave.decompress(data)
+
+    def lists(m):
+        # Each vertex's position with its list, and the edge's ends' positions.
+        a = m.attributes["ids"]
+        starts = np.concatenate([[0], np.cumsum(a.indices)]).astype(np.int64)
+        per_vertex = sorted(
+            (tuple(m.vertices[v].tolist()), tuple(a.values[starts[v]:starts[v + 1], 0].tolist()))
+            for v in range(len(m.vertices))
+        )
+        e = m.attributes["edge/vertex1 vertex2"].values[0]
+        return per_vertex, [tuple(m.vertices[int(i)].tolist()) for i in e]
+
+    assert lists(back) == lists(mesh)

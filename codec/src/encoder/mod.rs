@@ -379,6 +379,46 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
     };
     let mut chans = Vec::with_capacity(mesh.attributes.len());
     for a in &mesh.attributes {
+        if a.is_list() {
+            // Each decoded vertex's, face's or record's list, in turn.
+            let lists: Vec<std::ops::Range<usize>> = a.list().collect();
+            let records: Vec<usize> = match a.domain {
+                crate::mesh::Domain::Vertex => (0..out.vertex_count()).map(vertex_of).collect(),
+                crate::mesh::Domain::Face => faces.iter().map(|&(g, _)| g).collect(),
+                _ => (0..lists.len()).collect(),
+            };
+            let values = match (a.domain, identity) {
+                (crate::mesh::Domain::File, false) => a.renumbered(&enc.order),
+                _ => a.values.clone(),
+            };
+            let mut m = Mesh::new();
+            let mut counts = Vec::with_capacity(records.len());
+            for &r in &records {
+                counts.push(a.indices[r]);
+                m.positions.extend(&values[lists[r].clone()]);
+                if !a.floats.is_empty() {
+                    m.floats.extend(&a.floats[lists[r].clone()]);
+                }
+            }
+            let mut o = opts.clone();
+            o.keep_order = true;
+            o.progress = Progress::default();
+            let nested = encode_inner(&m, &a.quantization, &o, None)?;
+            let head = chan::Head {
+                name: a.name.clone(),
+                domain: a.domain,
+                value_type: a.value_type,
+                width: 1,
+                pad: 0,
+                coding: chan::LISTS,
+                labels: Vec::new(),
+            };
+            chans.push(chan::encode(
+                &head,
+                &chan::encode_lists(&counts, &nested.bytes),
+            ));
+            continue;
+        }
         let mut m = Mesh::new();
         let pick = |e: usize, m: &mut Mesh| {
             m.positions.push(a.values[e]);

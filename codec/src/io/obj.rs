@@ -1,4 +1,6 @@
-//! Wavefront OBJ: `v` and `f` statements; everything else is reported as dropped.
+//! Wavefront OBJ: `v` and `f` statements; `vt`, `vn`, vertex colours, `o`, `g`, `s`,
+//! `usemtl`, comments, `mtllib` and two-vertex `l` lines as attribute channels; what
+//! else the file holds is reported as dropped.
 
 use std::collections::BTreeSet;
 use std::io::Write;
@@ -63,6 +65,8 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     // Objects, groups, smoothing groups and materials: channels of names per face.
     let mut names = NAMED.map(|(kw, _)| Names::new(kw));
     let mut kept = FileLines::default();
+    // `l` lines of two vertices each (Blender's loose edges), until one is not.
+    let mut edges: Option<Vec<[i64; 2]>> = Some(Vec::new());
     while let Some((n, raw)) = lines.next() {
         let lineno = n + 1;
         let mut line: &str = raw;
@@ -130,9 +134,13 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             "vp" => {
                 dropped.insert("parameter-space vertices".to_string());
             }
-            "l" => {
-                dropped.insert("line elements".to_string());
-            }
+            "l" => match edge(tok, coords.len()) {
+                Some(e) if edges.is_some() => edges.iter_mut().for_each(|v| v.push(e)),
+                _ => {
+                    edges = None;
+                    dropped.insert("line elements".to_string());
+                }
+            },
             "p" => {
                 dropped.insert("point elements".to_string());
             }
@@ -180,6 +188,13 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         }
     }
     attributes.extend(kept.finish(LINES));
+    match edges {
+        Some(e) if e.iter().flatten().any(|&v| v as usize >= coords.len()) => {
+            dropped.insert("line elements".to_string());
+        }
+        Some(e) if !e.is_empty() => attributes.push(edge_channel(&e)),
+        _ => {}
+    }
     for (t, name) in [(uv, "uv"), (nrm, "normal")] {
         if let Some(a) = t.finish(name, topo.corner_count(), &mut dropped) {
             attributes.push(a);
@@ -468,18 +483,76 @@ fn read_face<'a>(
     Ok(())
 }
 
+/// An `l` statement of two plain vertex numbers (no `vt`), counted from 1 or back from
+/// the `nv` vertices so far: the two vertices' numbers from 0; else `None`.
+fn edge<'a>(mut tok: impl Iterator<Item = &'a str>, nv: usize) -> Option<[i64; 2]> {
+    let mut vertex = || -> Option<i64> {
+        let i: i64 = tok.next()?.parse().ok()?;
+        let v = match i {
+            i if i > 0 => i - 1,
+            i => nv as i64 + i,
+        };
+        (i != 0 && (0..u32::MAX as i64).contains(&v)).then_some(v)
+    };
+    let e = [vertex()?, vertex()?];
+    tok.next().is_none().then_some(e)
+}
+
+/// The per-file channel of an OBJ's `l` lines of two vertices each: an `edge` element
+/// as a PLY's ([`EDGES`]), its ends' vertex numbers renumbered with the vertices.
+fn edge_channel(edges: &[[i64; 2]]) -> RawAttribute {
+    let large = edges.iter().flatten().any(|&v| v > i32::MAX as i64);
+    let int = |v: i64| crate::quant::Decimal {
+        mantissa: v,
+        decimals: 0,
+    };
+    RawAttribute {
+        name: EDGES.to_string(),
+        domain: Domain::File,
+        value_type: if large {
+            ValueType::U32
+        } else {
+            ValueType::I32
+        },
+        width: 2,
+        values: crate::quant::RawCoords::Decimal(
+            edges
+                .iter()
+                .map(|e| [int(e[0]), int(e[1]), int(0)])
+                .collect(),
+        ),
+        indices: Vec::new(),
+        labels: Vec::new(),
+    }
+}
+
+/// The name of the channel of an OBJ's `l` lines of two vertices (and a PLY's `edge`
+/// element of its ends alone).
+pub(crate) const EDGES: &str = "edge/vertex1 vertex2";
+
 fn line_of(bytes: &[u8], offset: usize) -> usize {
     bytes[..offset].iter().filter(|&&b| b == b'\n').count() + 1
 }
 
 /// The channels an OBJ writes: vertex colours (`color`, three values per vertex) on the
 /// `v` lines, texture coordinates (`uv`) as `vt` lines and normals (`normal`) as `vn`
-/// lines, each per corner or per vertex.
+/// lines, each per corner or per vertex; the names of faces' objects, groups, smoothing
+/// groups and materials; per file, its lines ([`LINES`]) and edges ([`EDGES`], as `l`
+/// lines).
 pub(crate) fn writes(a: &Attribute) -> bool {
+    if a.is_list() {
+        return false;
+    }
     match a.name.as_str() {
         "color" => a.domain == Domain::Vertex && a.width == 3,
         "uv" | "normal" => matches!(a.domain, Domain::Vertex | Domain::Corner),
         LINES => a.domain == Domain::File && !a.labels.is_empty(),
+        EDGES => {
+            a.domain == Domain::File
+                && a.width == 2
+                && a.labels.is_empty()
+                && a.value_type.int_range().is_some()
+        }
         n if NAMED.iter().any(|(_, c)| *c == n) => {
             a.domain == Domain::Face
                 && a.width == 1
@@ -574,6 +647,18 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
         }
         line.push('\n');
         out.write_all(line.as_bytes())?;
+    }
+    if let Some(a) = find(EDGES) {
+        let nv = mesh.vertex_count() as i64;
+        for v in &a.values {
+            if !(0..nv).contains(&v[0]) || !(0..nv).contains(&v[1]) {
+                return Err(crate::Error::InvalidMesh(format!(
+                    "edge ({}, {}) names no vertex of {nv}",
+                    v[0], v[1]
+                )));
+            }
+            writeln!(out, "l {} {}", v[0] + 1, v[1] + 1)?;
+        }
     }
     Ok(())
 }

@@ -63,6 +63,35 @@ pub(crate) fn decode_listed(body: &[u8], names: usize) -> Result<Vec<[i64; 3]>> 
     Ok(out)
 }
 
+/// Coding 3: a list channel, its lengths and its values (SPEC.md 11.4).
+pub(crate) const LISTS: u8 = 3;
+
+/// Coding 3's body: the records' list lengths, then the nested container of the values.
+pub(crate) fn encode_lists(counts: &[u32], nested: &[u8]) -> Vec<u8> {
+    let mut w = ByteWriter::new();
+    w.varint(counts.len() as u64);
+    for &n in counts {
+        w.varint(n as u64);
+    }
+    w.out.extend_from_slice(nested);
+    w.out
+}
+
+/// Coding 3's lengths and nested container from its body; the lengths' sum too.
+pub(crate) fn decode_lists(body: &[u8]) -> Result<(Vec<u32>, u64, &[u8])> {
+    let mut r = ByteReader::new(body, 0);
+    // Each length takes at least a byte.
+    let n = r.varint_max("lists", r.remaining() as u64)?;
+    let mut counts = Vec::with_capacity(n as usize);
+    let mut total = 0u64;
+    for _ in 0..n {
+        let c = r.varint_max("list length", u32::MAX as u64)?;
+        total += c;
+        counts.push(c as u32);
+    }
+    Ok((counts, total, &body[body.len() - r.remaining()..]))
+}
+
 /// Coding 1's body: the values' decimals, the entries, and the two streams.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Normals<'a> {
@@ -169,6 +198,7 @@ pub(crate) fn decode(payload: &[u8]) -> Result<(Head, &[u8])> {
         NORMALS => pad == 0 && width == 3 && domain == Domain::Corner,
         // Names per file (checked below: the channel has names).
         LISTED => pad == 0 && width == 1 && domain == Domain::File,
+        LISTS => pad == 0 && width == 1 && domain != Domain::Corner,
         _ => false,
     };
     if !fits {
@@ -259,5 +289,28 @@ mod tests {
         assert!(decode(&encode(&h(Domain::File, 1), &body)).is_ok());
         assert!(decode(&encode(&h(Domain::Face, 1), &body)).is_err());
         assert!(decode(&encode(&h(Domain::File, 2), &body)).is_err());
+    }
+
+    #[test]
+    fn list_lengths_round_trip_and_list_channels_are_not_per_corner() {
+        let body = encode_lists(&[3, 0, 300], b"nested");
+        let (counts, total, nested) = decode_lists(&body).unwrap();
+        assert_eq!((counts, total, nested), (vec![3, 0, 300], 303, &b"nested"[..]));
+        // A count past the body, a length past 2^32 - 1.
+        assert!(decode_lists(&[9, 1]).is_err());
+        assert!(decode_lists(&[1, 0x80, 0x80, 0x80, 0x80, 0x10]).is_err());
+        let h = |domain| Head {
+            name: "weights".into(),
+            domain,
+            value_type: ValueType::F32,
+            width: 1,
+            pad: 0,
+            coding: LISTS,
+            labels: Vec::new(),
+        };
+        for d in [Domain::Vertex, Domain::Face, Domain::File] {
+            assert!(decode(&encode(&h(d), &body)).is_ok(), "{d:?}");
+        }
+        assert!(decode(&encode(&h(Domain::Corner), &body)).is_err());
     }
 }

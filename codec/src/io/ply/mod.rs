@@ -1,5 +1,7 @@
 //! PLY: ASCII, binary little-endian and big-endian; `vertex` (x, y, z) and `face`
-//! (`vertex_indices`) elements. Other properties and elements are reported as dropped.
+//! (`vertex_indices`) elements. Their other properties are attribute channels (per
+//! vertex, per face, per corner; lists as list channels), as are header comments and
+//! other elements' properties (per file).
 
 use std::collections::{BTreeSet, HashMap};
 use std::io::Write;
@@ -214,8 +216,8 @@ impl<'a> Columns<'a> {
     }
 }
 
-/// A face element's lists besides its vertex indices as they are read (texture
-/// coordinates per corner, as MeshLab writes `texcoord`): per list property, its
+/// An element's lists (a face's besides its vertex indices: texture coordinates per
+/// corner, as MeshLab writes `texcoord`) as they are read: per list property, its
 /// lengths and values, as text (ASCII) or numbers.
 #[derive(Default)]
 struct Lists<'a> {
@@ -228,7 +230,7 @@ struct List<'a> {
     prop: usize,
     /// Its items' type.
     ty: Scalar,
-    /// Per face, its length.
+    /// Per record, its length.
     lens: Vec<u64>,
     /// The items (binary).
     nums: Vec<Num>,
@@ -236,7 +238,79 @@ struct List<'a> {
     tokens: Vec<&'a str>,
 }
 
+impl List<'_> {
+    /// The list channel of this property of element `el` (SPEC.md 11.4): its items in
+    /// turn, one value each, and per record its length; `None`, noted as dropped, when
+    /// ASCII items are no numbers.
+    fn channel(
+        self,
+        name: String,
+        domain: Domain,
+        el: &Element,
+        dropped: &mut BTreeSet<String>,
+    ) -> Result<Option<RawAttribute>> {
+        let values = match self.tokens.is_empty() {
+            true => {
+                let rows: Vec<[Num; 3]> = self
+                    .nums
+                    .iter()
+                    .map(|&n| [n, self.ty.zero(), self.ty.zero()])
+                    .collect();
+                to_coords(&rows)?
+            }
+            false => {
+                let mut t = TextCoords::default();
+                if let Some(e) = self
+                    .tokens
+                    .iter()
+                    .find_map(|&x| t.push([x, "0", "0"]).err())
+                {
+                    dropped.insert(format!("{} property '{name}' ({e})", el.name));
+                    return Ok(None);
+                }
+                t.finish().0
+            }
+        };
+        let indices = self
+            .lens
+            .iter()
+            .map(|&n| u32::try_from(n).map_err(|_| err(format!("a '{name}' list of {n} items"))))
+            .collect::<Result<_>>()?;
+        Ok(Some(RawAttribute {
+            name,
+            domain,
+            value_type: self.ty.value_type(),
+            width: 1,
+            values,
+            indices,
+            labels: Vec::new(),
+        }))
+    }
+}
+
 impl<'a> Lists<'a> {
+    /// Every list as a list channel (a vertex's, or per file another element's,
+    /// [`extra_channel`]).
+    fn finish_lists(
+        self,
+        el: &Element,
+        domain: Domain,
+        out: &mut Vec<RawAttribute>,
+        dropped: &mut BTreeSet<String>,
+    ) -> Result<()> {
+        for list in self.read {
+            let Prop::List(name, _, _) = &el.props[list.prop] else {
+                continue;
+            };
+            let name = match domain {
+                Domain::File => extra_channel(&el.name, name),
+                _ => name.clone(),
+            };
+            out.extend(list.channel(name, domain, el, dropped)?);
+        }
+        Ok(())
+    }
+
     /// Reads property `i`'s list of the current face.
     fn read(&mut self, i: usize, ty: Scalar, body: &mut Body<'a>, cty: Scalar) -> Result<()> {
         let n = list_len(body, cty, ty)?;
@@ -265,8 +339,8 @@ impl<'a> Lists<'a> {
     }
 
     /// The lists that hold the same number (1 to 3) of values for each corner of every
-    /// face, as corner channels named by their properties (equal entries once); the
-    /// others noted as dropped.
+    /// face, as corner channels named by their properties (equal entries once); then
+    /// the others, as list channels per face.
     fn finish(
         self,
         el: &Element,
@@ -274,6 +348,7 @@ impl<'a> Lists<'a> {
         out: &mut Vec<RawAttribute>,
         dropped: &mut BTreeSet<String>,
     ) -> Result<()> {
+        let mut lists = Vec::new();
         for List {
             prop: i,
             ty: ity,
@@ -294,10 +369,15 @@ impl<'a> Lists<'a> {
                 || lens.len() != topo.face_count()
                 || degrees.zip(&lens).any(|(d, &n)| n != width * d)
             {
-                dropped.insert(format!(
-                    "{} property '{name}' (not 1 to 3 values for each corner)",
-                    el.name
-                ));
+                // Not 1 to 3 values for each corner: a list per face.
+                let list = List {
+                    prop: i,
+                    ty: ity,
+                    lens,
+                    nums,
+                    tokens,
+                };
+                lists.extend(list.channel(name.clone(), Domain::Face, el, dropped)?);
                 continue;
             }
             let w = width as usize;
@@ -356,6 +436,7 @@ impl<'a> Lists<'a> {
                 labels: Vec::new(),
             });
         }
+        out.extend(lists);
         Ok(())
     }
 }
@@ -589,8 +670,7 @@ fn parse_header(bytes: &[u8]) -> Result<Header> {
 /// Checks an element's header against the file: its records fit in the `remaining`
 /// bytes, a vertex element (the only one, unless `have_vertices`) has x, y and z, a face
 /// element a vertex index list. Notes what subwave does not keep as dropped: another
-/// element's lists, and the whole element unless it is `extra` (kept as per-file
-/// channels, [`extra_channel`]).
+/// element unless it is `extra` (kept as per-file channels, [`extra_channel`]).
 fn check_element(
     el: &Element,
     mode: Mode,
@@ -642,17 +722,9 @@ fn check_element(
         dropped.insert(format!("'{}' elements", el.name));
         return Ok(());
     }
-    for p in &el.props {
-        let name = match p {
-            Prop::Scalar(n, _) | Prop::List(n, _, _) => n,
-        };
-        // Scalar properties are attribute channels, per vertex, per face or per file.
-        // So are a face's other lists: per corner channels when they hold as many
-        // values for each corner (decided once read, [`Lists::finish`]).
-        if !is_face && matches!(p, Prop::List(..)) {
-            dropped.insert(format!("{} property '{name}'", el.name));
-        }
-    }
+    // Its properties are attribute channels, per vertex, per face or per file; lists
+    // list channels (a face's per corner channels when they hold as many values for
+    // each corner, decided once read, [`Lists::finish`]).
     Ok(())
 }
 
@@ -715,7 +787,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                         let want = is_face
                             && !took_list
                             && (name == "vertex_indices" || name == "vertex_index");
-                        if is_face && !want {
+                        if (is_face || is_vertex || extra) && !want {
                             lists.read(i, *ity, &mut body, *cty)?;
                             continue;
                         }
@@ -755,6 +827,13 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         }
         if is_face {
             lists.finish(el, &topo, &mut attributes, &mut dropped)?;
+        } else if is_vertex || extra {
+            let domain = if is_vertex {
+                Domain::Vertex
+            } else {
+                Domain::File
+            };
+            lists.finish_lists(el, domain, &mut attributes, &mut dropped)?;
         }
     }
     let mut header = FileLines::default();
@@ -915,6 +994,67 @@ fn put_values(a: &Attribute, e: usize, binary: bool, buf: &mut Vec<u8>, text: &m
     }
 }
 
+/// A channel as the PLY writer writes it: a run of scalar properties, or a list
+/// property whose lengths are written as `count` (its records' lists, in turn).
+struct Column<'a> {
+    a: &'a Attribute,
+    lists: Vec<std::ops::Range<usize>>,
+    count: &'static str,
+}
+
+impl<'a> Column<'a> {
+    fn new(a: &'a Attribute) -> Self {
+        let lists: Vec<_> = a.list().collect();
+        let count = match lists.iter().all(|r| r.len() <= 255) {
+            true => "uchar",
+            false => "uint",
+        };
+        Column { a, lists, count }
+    }
+
+    /// Records: entries, or lists.
+    fn records(&self) -> usize {
+        match self.a.is_list() {
+            true => self.lists.len(),
+            false => self.a.entry_count(),
+        }
+    }
+
+    /// Its header lines.
+    fn header<W: Write>(&self, out: &mut W) -> Result<()> {
+        let ty = property_type(self.a);
+        if self.a.is_list() {
+            let name = self.a.name.replace(|c: char| c.is_ascii_whitespace(), "_");
+            writeln!(out, "property list {} {ty} {name}", self.count)?;
+        } else {
+            for n in property_names(self.a) {
+                writeln!(out, "property {ty} {n}")?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Appends record `r`'s values ([`put_values`]), a list after its length.
+    fn put(&self, r: usize, binary: bool, buf: &mut Vec<u8>, text: &mut String) {
+        if !self.a.is_list() {
+            return put_values(self.a, r, binary, buf, text);
+        }
+        let items = self.lists[r].clone();
+        let n = items.len();
+        match (binary, self.count) {
+            (false, _) => {
+                use std::fmt::Write as _;
+                let _ = write!(text, " {n}");
+            }
+            (true, "uchar") => buf.push(n as u8),
+            (true, _) => buf.extend_from_slice(&(n as u32).to_le_bytes()),
+        }
+        for e in items {
+            put_values(self.a, e, binary, buf, text);
+        }
+    }
+}
+
 /// Ends a record: an ASCII one's `line` and its line break into `buf`; `buf` out to
 /// `out` once it is large.
 fn end_record<W: Write>(binary: bool, line: &str, buf: &mut Vec<u8>, out: &mut W) -> Result<()> {
@@ -949,7 +1089,13 @@ pub(crate) fn write<W: Write>(
     let of = |d: Domain| -> Vec<&Attribute> {
         mesh.attributes.iter().filter(|a| a.domain == d).collect()
     };
-    let (vchan, fchan, cchan) = (of(Domain::Vertex), of(Domain::Face), of(Domain::Corner));
+    let columns = |d: Domain| -> Vec<Column<'_>> { of(d).into_iter().map(Column::new).collect() };
+    let (vchan, cchan) = (columns(Domain::Vertex), of(Domain::Corner));
+    // A face's scalar properties, then its per-corner lists, then its other lists: as
+    // the reader makes channels of them.
+    let (fchan, flists): (Vec<_>, Vec<_>) = columns(Domain::Face)
+        .into_iter()
+        .partition(|c| !c.a.is_list());
     let header = mesh
         .attributes
         .iter()
@@ -985,35 +1131,37 @@ pub(crate) fn write<W: Write>(
     for a in ["x", "y", "z"] {
         writeln!(out, "property {fty} {a}")?;
     }
-    for a in &vchan {
-        for n in property_names(a) {
-            writeln!(out, "property {} {n}", property_type(a))?;
-        }
+    for c in &vchan {
+        c.header(out)?;
     }
     write!(
         out,
         "element face {}\nproperty list {cty} {ity} vertex_indices\n",
         mesh.face_count()
     )?;
-    for a in &fchan {
-        for n in property_names(a) {
-            writeln!(out, "property {} {n}", property_type(a))?;
-        }
+    for c in &fchan {
+        c.header(out)?;
     }
     for (a, lty) in cchan.iter().zip(&ltys) {
         let name = a.name.replace(|c: char| c.is_ascii_whitespace(), "_");
         writeln!(out, "property list {lty} {} {name}", property_type(a))?;
     }
+    for c in &flists {
+        c.header(out)?;
+    }
+    let extras: Vec<(&str, Vec<Column<'_>>)> = extras
+        .iter()
+        .map(|(e, g)| (*e, g.iter().map(Column::new).collect()))
+        .collect();
     for (element, group) in &extras {
-        writeln!(out, "element {element} {}", group[0].entry_count())?;
-        for a in group {
-            for n in property_names(a) {
-                writeln!(out, "property {} {n}", property_type(a))?;
-            }
+        writeln!(out, "element {element} {}", group[0].records())?;
+        for c in group {
+            c.header(out)?;
         }
     }
     writeln!(out, "end_header")?;
-    if !binary && vchan.is_empty() && fchan.is_empty() && cchan.is_empty() && extras.is_empty() {
+    let plain = vchan.is_empty() && fchan.is_empty() && flists.is_empty() && cchan.is_empty();
+    if !binary && plain && extras.is_empty() {
         return write_counted_text(out, mesh, q);
     }
     let mut buf = Vec::with_capacity(1 << 16);
@@ -1031,8 +1179,8 @@ pub(crate) fn write<W: Write>(
             super::coords_line("", mesh, v, q, &mut line);
             line.pop();
         }
-        for a in &vchan {
-            put_values(a, v, binary, &mut buf, &mut line);
+        for c in &vchan {
+            c.put(v, binary, &mut buf, &mut line);
         }
         end_record(binary, &line, &mut buf, out)?;
     }
@@ -1054,8 +1202,8 @@ pub(crate) fn write<W: Write>(
                 buf.extend_from_slice(&i.to_le_bytes());
             }
         }
-        for a in &fchan {
-            put_values(a, f, binary, &mut buf, &mut line);
+        for c in &fchan {
+            c.put(f, binary, &mut buf, &mut line);
         }
         let corners = mesh.face_starts[f] as usize..mesh.face_starts[f + 1] as usize;
         for (a, &lty) in cchan.iter().zip(&ltys) {
@@ -1072,13 +1220,16 @@ pub(crate) fn write<W: Write>(
                 put_values(a, a.indices[c] as usize, binary, &mut buf, &mut line);
             }
         }
+        for c in &flists {
+            c.put(f, binary, &mut buf, &mut line);
+        }
         end_record(binary, &line, &mut buf, out)?;
     }
     for (_, group) in &extras {
-        for e in 0..group[0].entry_count() {
+        for e in 0..group[0].records() {
             line.clear();
-            for a in group {
-                put_values(a, e, binary, &mut buf, &mut line);
+            for c in group {
+                c.put(e, binary, &mut buf, &mut line);
             }
             // Values are written each after a space.
             let record = line.get(1..).unwrap_or("");
@@ -1119,8 +1270,12 @@ fn extra_elements(mesh: &Mesh) -> Vec<(&str, Vec<Attribute>)> {
         };
         let mut a = a.clone();
         a.name = props.to_string();
+        let records = |a: &Attribute| match a.is_list() {
+            true => a.indices.len(),
+            false => a.entry_count(),
+        };
         match out.last_mut() {
-            Some((e, g)) if *e == element && g[0].entry_count() == a.entry_count() => g.push(a),
+            Some((e, g)) if *e == element && records(&g[0]) == records(&a) => g.push(a),
             _ => out.push((element, vec![a])),
         }
     }
