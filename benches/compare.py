@@ -5,8 +5,9 @@ zstd, xz) from a peers CSV written by ../shared/tools/peers/peers.py.
     python3 benches/compare.py ../shared/corpus --bits 16,12 \
         --peers ../shared/corpus/peers/peers-q16-q12.csv --out benches/results.md
 
-Runs `subwave verify --json --threads 1` (in-memory encode/decode, exactness check;
-one thread, as issue 4's speed targets are measured) and, with
+Runs `subwave verify --json --threads 1 --geometry-only` (positions and faces, as the
+peers code them; in-memory encode/decode, exactness check; one thread, as issue 4's
+speed targets are measured) and, with
 --keep-order, `subwave compress --keep-order` for the cost of the stored order.
 
     python3 benches/compare.py --speed [MESH...] [--repeats 15]
@@ -20,8 +21,9 @@ armadillo_cc5, bunny_cc4 and jacksboro_grid257 of ../shared/corpus).
 
 the whole-file table (issue 30) over the OBJ and PLY files of DIR (default
 ../shared/corpus/blender): the file's size; subwave's `--canonical` container
-(positions, faces and attribute channels in canonical order; `mtllib` lines, comments
-and number styles dropped) and its `--keep-order` container, the default for such files (the same
+(positions, faces and attribute channels in canonical order, a file's own lines and
+other elements too; number styles and line order dropped) and its `--keep-order`
+container, the default for such files (the same
 bytes back, checked); `xz -9e` and `zstd -19` of the file; and, as the lossy reference, Draco
 cl10 (DracoPy) of the mesh as trimesh loads it (vertices split at UV and normal seams)
 with 16-bit positions, 12-bit UVs and 10-bit normals, colours as they are (needs
@@ -180,7 +182,8 @@ def main():
             continue
         stem = os.path.basename(mesh).rsplit(".", 1)[0]
         for b in a.bits.split(","):
-            args = [exe, "-q", "verify", mesh, "--json", "--threads", "1"] + ([] if b == "exact" else ["--bits", b])
+            # Positions and faces, as the peers code them.
+            args = [exe, "-q", "verify", mesh, "--json", "--threads", "1", "--geometry-only"] + ([] if b == "exact" else ["--bits", b])
             r = subprocess.run(args, capture_output=True, text=True)
             if r.returncode != 0:
                 print(f"{stem} {b}: FAILED {r.stderr.strip()}", file=sys.stderr)

@@ -17,8 +17,8 @@ one() {
   name=$(basename "$obj" .obj)
   local out="$tmp/$name.$mode.swv"
   case $mode in
-    exact) "$bin" compress "$obj" "$out" -q ;;
-    q*) "$bin" compress "$obj" "$out" --bits "${mode#q}" -q ;;
+    exact) "$bin" compress "$obj" "$out" --geometry-only -q ;;
+    q*) "$bin" compress "$obj" "$out" --bits "${mode#q}" --geometry-only -q ;;
   esac
   "$bin" decompress "$out" "$out.ply" -q
   echo "$name $mode $(stat -c %s "$out") $(sha256sum < "$out" | cut -c1-16) $(sha256sum < "$out.ply" | cut -c1-16)"

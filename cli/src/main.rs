@@ -136,6 +136,12 @@ struct Coding {
     /// Quantise to Draco's Q-bit grid (1..=30) instead of keeping the exact values.
     #[arg(long, value_name = "Q", value_parser = clap::value_parser!(u8).range(1..=30))]
     bits: Option<u8>,
+    /// Code positions and faces only, in canonical order: leave out every attribute
+    /// channel (texture coordinates, normals, colours, names, the file's own lines and
+    /// other elements; a warning names them), as geometry codecs such as Draco's
+    /// position-only mode do.
+    #[arg(long)]
+    geometry_only: bool,
     /// Wavelet for subdivision levels: auto (smallest file); Catmull-Clark: lazy,
     /// bilinear, bicubic, biquintic, dyadic-sym, interp4 (4-point interpolating), interp6
     /// (6-point interpolating), or fit (the subdivision fit, for subdivided models);
@@ -678,13 +684,23 @@ fn compress(
     progress.stage("reading");
     let mut bytes = read_input(input)?;
     check_kind(input, &bytes)?;
-    let loaded = subwave::load(&bytes, coding.bits).map_err(|e| fail(input, e))?;
+    let mut loaded = subwave::load(&bytes, coding.bits).map_err(|e| fail(input, e))?;
+    if coding.geometry_only {
+        if matches!(order, Order::Keep) {
+            return Err(fail(
+                input,
+                "--geometry-only leaves out what --keep-order keeps: give one of them",
+            ));
+        }
+        geometry_only(cli.quiet, input, &mut loaded);
+    }
     let keep_order = match order {
         Order::Keep => true,
         Order::Canonical => false,
         // Nothing the file holds is left out by default: a file with more than
         // positions, faces and lines of its own (comments, `mtllib`, which canonical
         // order keeps at its head) keeps its order and bytes.
+        Order::Auto if coding.geometry_only => false,
         Order::Auto => {
             !loaded.dropped.is_empty()
                 || loaded
@@ -898,6 +914,18 @@ fn write_output(path: &str, bytes: &[u8]) -> Result<(), Failure> {
 }
 
 /// Warns that what `loaded` holds besides positions and faces is left out, and why.
+/// `--geometry-only`: `loaded` without its attribute channels, which a warning names;
+/// what else was not carried stays noted.
+fn geometry_only(quiet: bool, file: &str, loaded: &mut subwave::Loaded) {
+    let names: Vec<String> = loaded.mesh.attributes.drain(..).map(|a| a.name).collect();
+    if !quiet && !names.is_empty() {
+        eprintln!(
+            "subwave: warning: {file}: not carried (--geometry-only): {}",
+            names.join(", ")
+        );
+    }
+}
+
 fn warn_dropped(quiet: bool, file: &str, loaded: &subwave::Loaded, why: &str) {
     if !quiet && !loaded.dropped.is_empty() {
         let list: Vec<&str> = loaded.dropped.iter().map(String::as_str).collect();
@@ -1122,12 +1150,15 @@ fn verify(
     progress.stage("reading");
     let bytes = read_input(input)?;
     check_kind(input, &bytes)?;
-    let loaded = subwave::load(&bytes, coding.bits).map_err(|e| fail(input, e))?;
+    let mut loaded = subwave::load(&bytes, coding.bits).map_err(|e| fail(input, e))?;
+    if coding.geometry_only {
+        geometry_only(cli.quiet, input, &mut loaded);
+    }
     warn_dropped(
         cli.quiet,
         input,
         &loaded,
-        "verify checks positions and faces only",
+        "verify checks positions, faces and attribute channels",
     );
     let opts = &EncodeOptions {
         progress: progress.encoder(),

@@ -740,3 +740,53 @@ fn info_names_the_order_method() {
         .filter(|s| s["kind"] != "ORDR")
         .all(|s| s.get("order_method").is_none()));
 }
+
+#[test]
+fn geometry_only_leaves_out_every_channel_and_says_so() {
+    let p = tmp("geometry.obj");
+    std::fs::write(
+        &p,
+        b"# a comment\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0.5\nusemtl red\nf 1/1 2/1 3/1\n",
+    )
+    .unwrap();
+    let swv = tmp("geometry.swv");
+    let (input, out) = (p.to_str().unwrap(), swv.to_str().unwrap());
+    let o = run(&["-f", "compress", input, out, "--geometry-only"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("--geometry-only): material, lines, uv"),
+        "{err}"
+    );
+    let back = tmp("geometry_back.obj");
+    let o = run(&["-f", "decompress", out, back.to_str().unwrap()]);
+    assert!(o.status.success(), "{o:?}");
+    let text = std::fs::read_to_string(&back).unwrap();
+    assert!(
+        !text.contains("vt") && !text.contains('#') && text.contains("f 1 2 3"),
+        "{text}"
+    );
+    // The same mesh, smaller than with its channels.
+    let whole = tmp("geometry_whole.swv");
+    let o = run(&[
+        "-f",
+        "compress",
+        input,
+        whole.to_str().unwrap(),
+        "--canonical",
+    ]);
+    assert!(o.status.success());
+    let size = |p: &Path| std::fs::metadata(p).unwrap().len();
+    assert!(size(&swv) < size(&whole));
+    // With --keep-order it is an error.
+    let o = run(&[
+        "-f",
+        "compress",
+        input,
+        out,
+        "--geometry-only",
+        "--keep-order",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--geometry-only"));
+}

@@ -408,11 +408,8 @@ fn channel(payload: &[u8], limits: &Limits, mesh: &Mesh) -> Result<crate::mesh::
     if head.coding == chan::NORMALS {
         return predicted_normals(head, nested, mesh);
     }
-    if head.coding == chan::LISTS {
-        if !head.labels.is_empty() {
-            return Err(bad("lists of names"));
-        }
-        let (counts, total, body) = chan::decode_lists(nested)?;
+    // A nested container, decoded whole in its input order.
+    let ordered = |body: &[u8]| -> Result<Decoded> {
         let opts = DecodeOptions {
             limits: limits.clone(),
             ..DecodeOptions::default()
@@ -421,6 +418,14 @@ fn channel(payload: &[u8], limits: &Limits, mesh: &Mesh) -> Result<crate::mesh::
         if !d.input_order && d.mesh.vertex_count() > 1 {
             return Err(bad("the nested container has no order"));
         }
+        Ok(d)
+    };
+    if head.coding == chan::LISTS {
+        if !head.labels.is_empty() {
+            return Err(bad("lists of names"));
+        }
+        let (counts, total, body) = chan::decode_lists(nested)?;
+        let d = ordered(body)?;
         let m = d.mesh;
         if total != m.vertex_count() as u64 || !m.faces.is_empty() || counts.is_empty() {
             return Err(bad("its lists do not fit their values"));
@@ -438,14 +443,7 @@ fn channel(payload: &[u8], limits: &Limits, mesh: &Mesh) -> Result<crate::mesh::
         let q = Quantization::Decimal { decimals: 0 };
         return channel_of(head, (values, Vec::new(), q), Vec::new(), mesh);
     }
-    let opts = DecodeOptions {
-        limits: limits.clone(),
-        ..DecodeOptions::default()
-    };
-    let d = decode_nested(nested, &opts).map_err(|e| bad(&format!("nested container: {e}")))?;
-    if !d.input_order && d.mesh.vertex_count() > 1 {
-        return Err(bad("the nested container has no order"));
-    }
+    let d = ordered(nested)?;
     let mut m = d.mesh;
     // A corner channel's padding entries (zeros) go.
     let keep = m.positions.len().saturating_sub(head.pad as usize);
