@@ -249,9 +249,19 @@ fn a_channel_that_does_not_fit_the_mesh_is_refused() {
     let mut m = good.clone();
     m.attributes[1].indices.push(0);
     bad.push(m);
+    // A list per vertex whose lengths add up to more values than it has.
+    let mut m = good.clone();
+    m.attributes[0].indices = vec![1; m.vertex_count()];
+    m.attributes[0].indices[0] = 2;
+    bad.push(m);
     for m in bad {
         let e = subwave::encode_to_vec(&m, &input.quantization, &EncodeOptions::default());
         assert!(matches!(e, Err(subwave::Error::InvalidMesh(_))), "{e:?}");
+        // Nor is it written (no writer indexes past what it has).
+        for f in [subwave::Format::PlyBinary, subwave::Format::Obj] {
+            let w = subwave::write_mesh(Vec::new(), &m, &input.quantization, f);
+            assert!(matches!(w, Err(subwave::Error::InvalidMesh(_))), "{w:?}");
+        }
     }
 }
 
@@ -855,10 +865,61 @@ fn ply_comments_and_other_elements_come_back_in_canonical_order() {
 }
 
 #[test]
-fn obj_lines_of_other_than_two_vertices_are_noted_as_dropped() {
-    for l in ["l 1 2 3", "l 1/1 2/2", "l 1 99", "l 1"] {
-        let obj = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 1\nf 1 2 3\nl 2 3\n{l}\n");
-        let input = subwave::load(obj.as_bytes(), None).unwrap();
+fn obj_lines_and_points_are_lists_unless_they_name_more_than_vertices() {
+    let base = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 1\nf 1 2 3\nf 2 4 3\n";
+    // Lines of 2 and 3 vertices and points: list channels per file.
+    let obj = format!("{base}l 2 3\nl 1 -2 3\np 1 3\np 4\n");
+    let input = subwave::load(obj.as_bytes(), None).unwrap();
+    assert!(input.dropped.is_empty(), "{:?}", input.dropped);
+    let l = input.mesh.attribute("l/vertex_indices").expect("lines");
+    let p = input.mesh.attribute("p/vertex_indices").expect("points");
+    assert_eq!(
+        (l.domain, &l.indices[..], &p.indices[..]),
+        (Domain::File, &[2, 3][..], &[2, 1][..])
+    );
+    let numbers = |a: &Attribute| a.values.iter().map(|v| v[0]).collect::<Vec<_>>();
+    assert_eq!(
+        (numbers(l), numbers(p)),
+        (vec![1, 2, 0, 2, 2], vec![0, 2, 3])
+    );
+    // Written in canonical order and read again: the same points, in the same lists.
+    let opts = EncodeOptions {
+        keep_order: false,
+        ..Default::default()
+    };
+    let enc = subwave::encode_to_vec(&input.mesh, &input.quantization, &opts).unwrap();
+    let dec = subwave::decode_slice(&enc.bytes).unwrap();
+    same_up_to_order("lines", &input.mesh, &dec.mesh, &enc.order);
+    let mut file = Vec::new();
+    subwave::write_mesh(
+        &mut file,
+        &dec.mesh,
+        &dec.quantization,
+        subwave::Format::Obj,
+    )
+    .unwrap();
+    let again = subwave::load(&file, None).unwrap();
+    let points = |m: &Mesh, name: &str| -> Vec<Vec<[i64; 3]>> {
+        let a = m.attribute(name).unwrap();
+        a.list()
+            .map(|r| {
+                a.values[r]
+                    .iter()
+                    .map(|v| m.positions[v[0] as usize])
+                    .collect()
+            })
+            .collect()
+    };
+    for name in ["l/vertex_indices", "p/vertex_indices"] {
+        assert_eq!(
+            points(&again.mesh, name),
+            points(&input.mesh, name),
+            "{name}"
+        );
+    }
+    // A line that names texture coordinates or a vertex past the file's: noted.
+    for l in ["l 1/1 2/2", "l 1 99", "l 1 x", "l"] {
+        let input = subwave::load(format!("{base}l 2 3\n{l}\n").as_bytes(), None).unwrap();
         assert!(
             input.dropped.contains("line elements"),
             "{l}: {:?}",

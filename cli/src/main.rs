@@ -59,11 +59,11 @@ enum Command {
         keep_order: bool,
         /// Canonical order: positions, faces and the attribute channels (texture
         /// coordinates, normals, vertex colours, an OBJ's objects, groups, smoothing
-        /// groups and materials, its comments, `mtllib` lines and two-vertex `l` lines;
-        /// PLY vertex, face and other elements' properties, lists included, and header
-        /// comments), every value exact, written back by subwave's writers; drops number
-        /// styles, line order and what else the file holds (OBJ `p`, other `l` and
-        /// free-form statements; a warning names them).
+        /// groups and materials, its comments, `mtllib`, `l` and `p` lines; PLY vertex,
+        /// face and other elements' properties, lists included, and header comments),
+        /// every value exact, written back by subwave's writers; drops number styles,
+        /// line order and what else the file holds (OBJ free-form statements, say; a
+        /// warning names it).
         #[arg(long)]
         canonical: bool,
         #[command(flatten)]

@@ -346,7 +346,7 @@ fn canonical_warns_what_it_drops_and_q_silences_it() {
     let p = tmp("attrs.obj");
     std::fs::write(
         &p,
-        b"mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0.5\ng side\nusemtl red\nf 1/1/1 2/1/1 3/1/1\np 1\n",
+        b"mtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0.5\ng side\nusemtl red\nf 1/1/1 2/1/1 3/1/1\ncurv 0 1 1 2\n",
     )
     .unwrap();
     let o = run(&[
@@ -358,9 +358,9 @@ fn canonical_warns_what_it_drops_and_q_silences_it() {
     assert!(o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     // UVs, normals, the group, the material and the material library are channels,
-    // kept; the point element is not.
+    // kept; the free-form curve is not.
     assert!(
-        err.contains("point elements")
+        err.contains("'curv' statements")
             && !err.contains("mtllib")
             && !err.contains("group")
             && !err.contains("normals"),

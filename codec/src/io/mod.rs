@@ -353,8 +353,11 @@ pub fn writes_attribute(format: Format, a: &Attribute) -> bool {
 }
 
 /// Writes `mesh` in `format`, mapping integers to values with `q`, with the attribute
-/// channels the format holds ([`writes_attribute`]).
+/// channels the format holds ([`writes_attribute`]). A mesh that is not valid
+/// ([`Mesh::validate`]) is an error.
 pub fn write_mesh<W: Write>(out: W, mesh: &Mesh, q: &Quantization, format: Format) -> Result<()> {
+    // The writers index the faces and channels as a valid mesh has them.
+    mesh.validate()?;
     let mut out = std::io::BufWriter::with_capacity(1 << 16, out);
     match format {
         Format::Obj => obj::write(&mut out, mesh, q)?,

@@ -1,6 +1,6 @@
 //! Wavefront OBJ: `v` and `f` statements; `vt`, `vn`, vertex colours, `o`, `g`, `s`,
-//! `usemtl`, comments, `mtllib` and two-vertex `l` lines as attribute channels; what
-//! else the file holds is reported as dropped.
+//! `usemtl`, comments, `mtllib`, `l` and `p` lines as attribute channels; what else
+//! the file holds is reported as dropped.
 
 use std::collections::BTreeSet;
 use std::io::Write;
@@ -65,8 +65,11 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
     // Objects, groups, smoothing groups and materials: channels of names per face.
     let mut names = NAMED.map(|(kw, _)| Names::new(kw));
     let mut kept = FileLines::default();
-    // `l` lines of two vertices each (Blender's loose edges), until one is not.
-    let mut edges: Option<Vec<[i64; 2]>> = Some(Vec::new());
+    // `l` and `p` lines of plain vertex numbers, until one is not.
+    let mut elements = [
+        Elements::new("l", "line elements"),
+        Elements::new("p", "point elements"),
+    ];
     while let Some((n, raw)) = lines.next() {
         let lineno = n + 1;
         let mut line: &str = raw;
@@ -134,15 +137,11 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
             "vp" => {
                 dropped.insert("parameter-space vertices".to_string());
             }
-            "l" => match edge(tok, coords.len()) {
-                Some(e) if edges.is_some() => edges.iter_mut().for_each(|v| v.push(e)),
-                _ => {
-                    edges = None;
-                    dropped.insert("line elements".to_string());
+            "l" | "p" => {
+                let e = &mut elements[(kw == "p") as usize];
+                if !e.push(tok, coords.len()) {
+                    dropped.insert(e.what.to_string());
                 }
-            },
-            "p" => {
-                dropped.insert("point elements".to_string());
             }
             "o" | "g" | "s" | "usemtl" => {
                 if let Some(n) = names.iter_mut().find(|n| n.keyword == kw) {
@@ -188,12 +187,13 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
         }
     }
     attributes.extend(kept.finish(LINES));
-    match edges {
-        Some(e) if e.iter().flatten().any(|&v| v as usize >= coords.len()) => {
-            dropped.insert("line elements".to_string());
+    for e in elements {
+        match e.finish(coords.len()) {
+            Ok(a) => attributes.extend(a),
+            Err(what) => {
+                dropped.insert(what.to_string());
+            }
         }
-        Some(e) if !e.is_empty() => attributes.push(edge_channel(&e)),
-        _ => {}
     }
     for (t, name) in [(uv, "uv"), (nrm, "normal")] {
         if let Some(a) = t.finish(name, topo.corner_count(), &mut dropped) {
@@ -483,48 +483,97 @@ fn read_face<'a>(
     Ok(())
 }
 
-/// An `l` statement of two plain vertex numbers (no `vt`), counted from 1 or back from
-/// the `nv` vertices so far: the two vertices' numbers from 0; else `None`.
-fn edge<'a>(mut tok: impl Iterator<Item = &'a str>, nv: usize) -> Option<[i64; 2]> {
-    let mut vertex = || -> Option<i64> {
-        let i: i64 = tok.next()?.parse().ok()?;
-        let v = match i {
-            i if i > 0 => i - 1,
-            i => nv as i64 + i,
-        };
-        (i != 0 && (0..u32::MAX as i64).contains(&v)).then_some(v)
-    };
-    let e = [vertex()?, vertex()?];
-    tok.next().is_none().then_some(e)
+/// An OBJ's `l` or `p` statements as read: each its vertices' numbers (from 0), while
+/// every one names vertices by plain numbers (no `vt`).
+struct Elements {
+    keyword: &'static str,
+    /// What they are, for the note of them as dropped.
+    what: &'static str,
+    lists: Option<Vec<Vec<i64>>>,
 }
 
-/// The per-file channel of an OBJ's `l` lines of two vertices each: an `edge` element
-/// as a PLY's ([`EDGES`]), its ends' vertex numbers renumbered with the vertices.
-fn edge_channel(edges: &[[i64; 2]]) -> RawAttribute {
-    let large = edges.iter().flatten().any(|&v| v > i32::MAX as i64);
-    let int = |v: i64| crate::quant::Decimal {
-        mantissa: v,
-        decimals: 0,
-    };
-    RawAttribute {
-        name: EDGES.to_string(),
-        domain: Domain::File,
-        value_type: if large {
-            ValueType::U32
-        } else {
-            ValueType::I32
-        },
-        width: 2,
-        values: crate::quant::RawCoords::Decimal(
-            edges
-                .iter()
-                .map(|e| [int(e[0]), int(e[1]), int(0)])
-                .collect(),
-        ),
-        indices: Vec::new(),
-        labels: Vec::new(),
+impl Elements {
+    fn new(keyword: &'static str, what: &'static str) -> Self {
+        Elements {
+            keyword,
+            what,
+            lists: Some(Vec::new()),
+        }
+    }
+
+    /// A statement's vertex numbers (counted from 1, or back from the `nv` vertices so
+    /// far); false once one is not plain numbers.
+    fn push<'a>(&mut self, tok: impl Iterator<Item = &'a str>, nv: usize) -> bool {
+        let vertex = |t: &str| -> Option<i64> {
+            let i: i64 = t.parse().ok()?;
+            let v = if i > 0 { i - 1 } else { nv as i64 + i };
+            (i != 0 && (0..u32::MAX as i64).contains(&v)).then_some(v)
+        };
+        let list: Option<Vec<i64>> = tok.map(vertex).collect();
+        match (list, self.lists.as_mut()) {
+            (Some(l), Some(all)) if !l.is_empty() => {
+                all.push(l);
+                true
+            }
+            _ => {
+                self.lists = None;
+                false
+            }
+        }
+    }
+
+    /// Their channel for a file of `nv` vertices: `l` lines all of two vertices as the
+    /// edges ([`EDGES`]), else a list channel `l/vertex_indices` or `p/vertex_indices`,
+    /// per file ([`ELEMENT_LISTS`]); none when there are none; what they are (to note
+    /// as dropped) when one names a vertex past the file's.
+    fn finish(self, nv: usize) -> std::result::Result<Option<RawAttribute>, &'static str> {
+        let Some(lists) = self.lists.filter(|l| !l.is_empty()) else {
+            return Ok(None);
+        };
+        let all = || lists.iter().flatten();
+        if all().any(|&v| v as usize >= nv) {
+            return Err(self.what);
+        }
+        let int = |v: i64| crate::quant::Decimal {
+            mantissa: v,
+            decimals: 0,
+        };
+        let value_type = match all().any(|&v| v > i32::MAX as i64) {
+            true => ValueType::U32,
+            false => ValueType::I32,
+        };
+        let edges = self.keyword == "l" && lists.iter().all(|l| l.len() == 2);
+        let (name, values, indices) = match edges {
+            true => (
+                EDGES.to_string(),
+                lists
+                    .iter()
+                    .map(|l| [int(l[0]), int(l[1]), int(0)])
+                    .collect(),
+                Vec::new(),
+            ),
+            false => (
+                format!("{}/vertex_indices", self.keyword),
+                all().map(|&v| [int(v), int(0), int(0)]).collect(),
+                lists.iter().map(|l| l.len() as u32).collect(),
+            ),
+        };
+        Ok(Some(RawAttribute {
+            name,
+            domain: Domain::File,
+            value_type,
+            width: if edges { 2 } else { 1 },
+            values: crate::quant::RawCoords::Decimal(values),
+            indices,
+            labels: Vec::new(),
+        }))
     }
 }
+
+/// The list channels of an OBJ's `l` and `p` statements, per file, written back as
+/// they were read (each statement's vertex numbers renumbered with the vertices).
+pub(crate) const ELEMENT_LISTS: [(&str, &str); 2] =
+    [("l", "l/vertex_indices"), ("p", "p/vertex_indices")];
 
 /// The name of the channel of an OBJ's `l` lines of two vertices (and a PLY's `edge`
 /// element of its ends alone).
@@ -537,11 +586,13 @@ fn line_of(bytes: &[u8], offset: usize) -> usize {
 /// The channels an OBJ writes: vertex colours (`color`, three values per vertex) on the
 /// `v` lines, texture coordinates (`uv`) as `vt` lines and normals (`normal`) as `vn`
 /// lines, each per corner or per vertex; the names of faces' objects, groups, smoothing
-/// groups and materials; per file, its lines ([`LINES`]) and edges ([`EDGES`], as `l`
-/// lines).
+/// groups and materials; per file, its lines ([`LINES`]), edges ([`EDGES`]) and
+/// other `l` and `p` lines ([`ELEMENT_LISTS`]).
 pub(crate) fn writes(a: &Attribute) -> bool {
     if a.is_list() {
-        return false;
+        return a.domain == Domain::File
+            && a.value_type.int_range().is_some()
+            && ELEMENT_LISTS.iter().any(|(_, n)| *n == a.name);
     }
     match a.name.as_str() {
         "color" => a.domain == Domain::Vertex && a.width == 3,
@@ -648,16 +699,31 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
         line.push('\n');
         out.write_all(line.as_bytes())?;
     }
+    // Lines and points: their vertices' numbers, each a vertex of the mesh.
+    let nv = mesh.vertex_count() as i64;
+    let number = |v: i64| -> Result<i64> {
+        match (0..nv).contains(&v) {
+            true => Ok(v + 1),
+            false => Err(crate::Error::InvalidMesh(format!(
+                "a line or point element names vertex {v} of {nv}"
+            ))),
+        }
+    };
     if let Some(a) = find(EDGES) {
-        let nv = mesh.vertex_count() as i64;
         for v in &a.values {
-            if !(0..nv).contains(&v[0]) || !(0..nv).contains(&v[1]) {
-                return Err(crate::Error::InvalidMesh(format!(
-                    "edge ({}, {}) names no vertex of {nv}",
-                    v[0], v[1]
-                )));
+            writeln!(out, "l {} {}", number(v[0])?, number(v[1])?)?;
+        }
+    }
+    for (keyword, name) in ELEMENT_LISTS {
+        let Some(a) = find(name) else { continue };
+        for items in a.list() {
+            line.clear();
+            line.push_str(keyword);
+            for v in &a.values[items] {
+                let _ = write!(line, " {}", number(v[0])?);
             }
-            writeln!(out, "l {} {}", v[0] + 1, v[1] + 1)?;
+            line.push('\n');
+            out.write_all(line.as_bytes())?;
         }
     }
     Ok(())
