@@ -38,7 +38,7 @@ pub use subwave_codec::{
     DecodeOptions, Decoded, DiscTransform, Domain, EncodeOptions, Encoded, Error, Family,
     FloatWidth, Header, Info, Limits, Mesh, Progress, Quantization, RawCoords, Result, SectionInfo,
     Source, Stage, Transform, TransformChoice, ValueType, Wavelet, DEFAULT_EFFORT, FORMAT_VERSION,
-    MAX_ATTRIBUTES, MAX_COORD, MAX_DECIMALS, MAX_EFFORT,
+    MAX_ATTRIBUTES, MAX_COORD, MAX_DECIMALS, MAX_EFFORT, NO_ENTRY,
 };
 
 /// A mesh file read and turned into integers.
@@ -319,9 +319,10 @@ fn compare_channels(
                         for (a, l) in m.attributes.iter().zip(&ranges) {
                             match a.domain {
                                 ChannelDomain::Vertex => record(a, l, v as usize, &mut c),
-                                ChannelDomain::Corner => {
-                                    entry(a, a.indices[s + j] as usize, &mut c)
-                                }
+                                ChannelDomain::Corner => match a.indices[s + j] {
+                                    subwave_codec::NO_ENTRY => c.push("none".into()),
+                                    e => entry(a, e as usize, &mut c),
+                                },
                                 ChannelDomain::Face | ChannelDomain::File => {}
                             }
                         }

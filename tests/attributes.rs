@@ -153,7 +153,10 @@ fn faces_with_values(m: &Mesh, vertex: &dyn Fn(u32) -> u32) -> Vec<Vec<i64>> {
                 for a in &m.attributes {
                     match a.domain {
                         Domain::Vertex => record(a, face[j] as usize, &mut key),
-                        Domain::Corner => entry(a, a.indices[s + j] as usize, &mut key),
+                        Domain::Corner => match a.indices[s + j] {
+                            subwave::NO_ENTRY => key.push(-1),
+                            e => entry(a, e as usize, &mut key),
+                        },
                         Domain::Face | Domain::File => {}
                     }
                 }
@@ -424,6 +427,9 @@ fn every_bit_flip_or_cut_of_a_channel_is_an_error_or_a_valid_mesh() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/mixed_cc2.obj");
     let input = subwave::load(&std::fs::read(path).unwrap(), None).unwrap();
     let mut mesh = with_channels(input.mesh);
+    // The first face's corners without uv entries (coding 4).
+    let d = mesh.face(0).len();
+    mesh.attributes[3].indices[..d].fill(subwave::NO_ENTRY);
     // And per file: lines (their names listed) and an element's vertex numbers.
     let file =
         |name: &str, value_type, width, values: Vec<[i64; 3]>, labels: Vec<String>| Attribute {
@@ -983,4 +989,52 @@ fn obj_comments_and_material_libraries_come_back_in_canonical_order() {
     assert_eq!(text.matches("\nl ").count(), 2);
     let again = subwave::load(text.as_bytes(), None).unwrap();
     same_values(path, &dec.mesh, &again.mesh);
+}
+
+#[test]
+fn faces_without_texture_coordinates_among_faces_with_them_keep_both() {
+    // Every third face of the textured mesh without its `vt` numbers (as a model whose
+    // parts are textured and others not is written): the `uv` channel has no entry at
+    // those faces' corners, and comes back so, in canonical order and written again.
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/corpus/textured_cc3.obj");
+    let mut f = 0;
+    let text: String = std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let mut l = l.to_string();
+            if l.starts_with("f ") {
+                if f % 3 == 0 {
+                    let corners: Vec<String> = l[2..]
+                        .split(' ')
+                        .map(|c| {
+                            let p: Vec<&str> = c.split('/').collect();
+                            format!("{}//{}", p[0], p[2])
+                        })
+                        .collect();
+                    l = format!("f {}", corners.join(" "));
+                }
+                f += 1;
+            }
+            l + "\n"
+        })
+        .collect();
+    let input = subwave::load(text.as_bytes(), None).unwrap();
+    assert!(input.dropped.is_empty(), "{:?}", input.dropped);
+    let uv = input.mesh.attribute("uv").expect("a uv channel");
+    let none = uv
+        .indices
+        .iter()
+        .filter(|&&e| e == subwave::NO_ENTRY)
+        .count();
+    assert!(none > 0 && none < uv.indices.len(), "{none}");
+    let (channels, _) = canonical_round_trip("partial uv", text.as_bytes());
+    assert_eq!(channels, 6);
+    // The file's order kept: the same channel, entry for entry.
+    let opts = EncodeOptions {
+        keep_order: true,
+        ..Default::default()
+    };
+    let enc = subwave::encode_to_vec(&input.mesh, &input.quantization, &opts).unwrap();
+    assert_eq!(subwave::decode_slice(&enc.bytes).unwrap().mesh, input.mesh);
 }

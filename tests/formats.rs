@@ -51,19 +51,19 @@ fn obj_keeps_unreferenced_vertices_and_reports_attributes() {
     let (input, out) = round_trip(OBJ, Format::Obj);
     assert_eq!(input.mesh.vertex_count(), 6);
     assert_eq!(input.mesh.face(1), &[1, 5, 2]);
-    let dropped: Vec<&str> = input.dropped.iter().map(String::as_str).collect();
-    // The second face has neither: no channel holds them.
-    assert_eq!(
-        dropped,
-        [
-            "normals on some corners only",
-            "texture coordinates on some corners only"
-        ]
-    );
-    // Its comment is a line of the file's.
+    assert!(input.dropped.is_empty(), "{:?}", input.dropped);
+    // Its comment is a line of the file's; the second face has neither a texture
+    // coordinate nor a normal: its corners have no entry.
     let a = &input.mesh.attributes;
-    assert!(a.len() == 1 && a[0].name == "lines", "{a:?}");
+    let names: Vec<&str> = a.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["lines", "uv", "normal"]);
+    let none = subwave::NO_ENTRY;
+    assert_eq!(a[1].indices, [0, 0, 0, 0, none, none, none]);
     let text = String::from_utf8(out).unwrap();
+    assert!(
+        text.contains("f 1/1/1 2/1/1 3/1/1 4/1/1\nf 2 6 3\n"),
+        "{text}"
+    );
     assert!(
         text.starts_with("# test\nv 0.500 0.250 -1.125\nv 1.000 0.000 0.000\n"),
         "{text}"

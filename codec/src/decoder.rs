@@ -448,13 +448,26 @@ fn channel(payload: &[u8], limits: &Limits, mesh: &Mesh) -> Result<crate::mesh::
     // A corner channel's padding entries (zeros) go.
     let keep = m.positions.len().saturating_sub(head.pad as usize);
     let padding = &m.positions[keep..];
+    // With coding 4 the last padding entry stands for none: corners that use it have
+    // no entry.
+    let none = (head.coding == chan::NESTED_NONE)
+        .then(|| m.positions.len().checked_sub(1))
+        .flatten();
     if head.pad > 0
         && (head.domain != Domain::Corner
             || padding.len() != head.pad as usize
             || padding.iter().any(|p| *p != [0; 3])
-            || m.faces.iter().any(|&i| i as usize >= keep))
+            || m.faces
+                .iter()
+                .any(|&i| i as usize >= keep && Some(i as usize) != none))
     {
         return Err(bad("padding entries that are no padding"));
+    }
+    if let Some(n) = none {
+        m.faces
+            .iter_mut()
+            .filter(|i| **i as usize == n)
+            .for_each(|i| *i = crate::mesh::NO_ENTRY);
     }
     m.positions.truncate(keep);
     m.floats.truncate(keep);

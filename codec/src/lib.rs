@@ -37,7 +37,7 @@ pub mod error;
 pub mod io;
 
 pub use error::{Error, Result};
-pub use mesh::{Attribute, Domain, Mesh, ValueType, MAX_ATTRIBUTES, MAX_COORD};
+pub use mesh::{Attribute, Domain, Mesh, ValueType, MAX_ATTRIBUTES, MAX_COORD, NO_ENTRY};
 pub use quant::{integerize, Decimal, FloatWidth, Quantization, RawCoords, MAX_DECIMALS};
 pub use sections::head::{Header, Source, Transform};
 pub use subwave_container::{Limits, FORMAT_VERSION};

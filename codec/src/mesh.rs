@@ -33,6 +33,10 @@ pub struct Mesh {
     pub attributes: Vec<Attribute>,
 }
 
+/// A corner's entry in a per-corner channel when it has none (an OBJ face without
+/// `vt` numbers among faces with them): [`Attribute::indices`].
+pub const NO_ENTRY: u32 = u32::MAX;
+
 /// Most named attribute channels a mesh may carry (SPEC.md 11.4).
 pub const MAX_ATTRIBUTES: usize = 32;
 
@@ -150,7 +154,7 @@ pub struct Attribute {
     /// How the integers map to values.
     pub quantization: Quantization,
     /// [`Domain::Corner`]: per face corner (in the order of [`Mesh::faces`]), its
-    /// entry. For the other domains, empty, or for a *list channel* (a PLY list
+    /// entry, or [`NO_ENTRY`] for none. For the other domains, empty, or for a *list channel* (a PLY list
     /// property of any length per record, one value per entry) per vertex, face or
     /// record its number of entries: the entries hold every record's list in turn
     /// ([`Attribute::list`]).
@@ -292,7 +296,8 @@ impl Attribute {
             if self.indices.len() != mesh.corner_count() {
                 return bad(format!("{} corner indices for {} corners", self.indices.len(), mesh.corner_count()));
             }
-            if let Some(&i) = self.indices.iter().find(|&&i| i as usize >= self.values.len()) {
+            let past = |i: u32| i as usize >= self.values.len() && i != NO_ENTRY;
+            if let Some(&i) = self.indices.iter().find(|&&i| past(i)) {
                 return bad(format!("corner index {i} past its {} entries", self.values.len()));
             }
         }

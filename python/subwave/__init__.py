@@ -80,7 +80,8 @@ class Attribute:
             ``lines``, a PLY's header comments as ``header`` and its other elements'
             properties as ``element/properties``).
         indices: for ``"corner"``, the entry of each face corner (in the order of
-            ``Mesh.flat_faces``); for a *list channel* of another domain (a PLY list
+            ``Mesh.flat_faces``; 2**32 - 1 for none: an OBJ face without ``vt``
+            numbers among faces with them); for a *list channel* of another domain (a PLY list
             property: any number of values per vertex, face or record, one per row of
             ``values``, each record's in turn), the number of values of each; else
             ``None``.

@@ -13,7 +13,7 @@ use crate::error::{Error, Result};
 use crate::info::{section_info, SectionInfo};
 use crate::io::template::{Attribute, Channels};
 use crate::io::{self, Format};
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, NO_ENTRY};
 use crate::quant::Quantization;
 use crate::sections::attr;
 use crate::sections::cidx;
@@ -420,6 +420,7 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
             continue;
         }
         let mut m = Mesh::new();
+        let has_none = a.domain == crate::mesh::Domain::Corner && a.indices.contains(&NO_ENTRY);
         let pick = |e: usize, m: &mut Mesh| {
             m.positions.push(a.values[e]);
             if let Some(f) = a.floats.get(e) {
@@ -444,16 +445,38 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
             crate::mesh::Domain::Corner => {
                 m.positions = a.values.clone();
                 m.floats = a.floats.clone();
+                // Corners without an entry use one more, the last (coding 4).
+                let none = a.values.len() as u32;
+                if has_none {
+                    m.positions.push([0; 3]);
+                    if !m.floats.is_empty() {
+                        m.floats.push([0; 3]);
+                    }
+                }
+                let entry = |c: usize| match a.indices[c] {
+                    NO_ENTRY => none,
+                    e => e,
+                };
                 m.faces.reserve(a.indices.len());
                 for &f in &faces {
-                    m.faces.extend(input_corners(mesh, f).map(|c| a.indices[c]));
+                    m.faces.extend(input_corners(mesh, f).map(entry));
                 }
                 m.face_starts = out.face_starts.clone();
                 // In canonical order the table's order is the encoder's to choose:
                 // entries numbered as the decoded corners first use them (then those no
                 // corner uses; base::canonical_order).
                 if !identity {
-                    m = permuted(&m, &base::canonical_order(&m));
+                    let order = base::canonical_order(&m);
+                    m = permuted(&m, &order);
+                    if let Some(at) = order.iter().position(|&o| o == none).filter(|_| has_none) {
+                        // The entry for none stays last.
+                        let n = order.len() as u32;
+                        let last: Vec<u32> = (0..n)
+                            .filter(|&k| k != at as u32)
+                            .chain([at as u32])
+                            .collect();
+                        m = permuted(&m, &last);
+                    }
                 }
             }
         }
@@ -469,13 +492,25 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
         // Unit normals per corner: predicted from the geometry where that is smaller.
         let normals = predicted_normals(a, out, &m)?;
         if a.domain == crate::mesh::Domain::Corner {
-            // A mesh with faces has at least 3 vertices.
+            // A mesh with faces has at least 3 vertices: padding entries, before the
+            // entry for none (which then counts as padding too).
+            let at = m.positions.len() - has_none as usize;
             while m.positions.len() < 3 {
-                m.positions.push([0; 3]);
+                m.positions.insert(at, [0; 3]);
                 if !m.floats.is_empty() {
-                    m.floats.push([0; 3]);
+                    m.floats.insert(at, [0; 3]);
+                }
+                if has_none {
+                    m.faces
+                        .iter_mut()
+                        .filter(|e| **e as usize >= at)
+                        .for_each(|e| *e += 1);
                 }
                 head.pad += 1;
+            }
+            if has_none {
+                head.pad += 1;
+                head.coding = chan::NESTED_NONE;
             }
         }
         let mut o = opts.clone();
@@ -567,6 +602,7 @@ fn predicted_normals(a: &crate::mesh::Attribute, out: &Mesh, m: &Mesh) -> Result
         return Ok(None);
     };
     if a.domain != crate::mesh::Domain::Corner
+        || a.indices.contains(&NO_ENTRY)
         || a.width != 3
         || a.value_type != crate::mesh::ValueType::Text
         || decimals as u32 > MAX_DECIMALS

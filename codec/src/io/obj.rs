@@ -8,7 +8,7 @@ use std::io::Write;
 use super::template::{Attribute as FileAttribute, Builder, Form};
 use super::{coords_line, syntax, FileLines, Format, RawAttribute, RawMesh};
 use crate::error::Result;
-use crate::mesh::{Attribute, Domain, Mesh, ValueType};
+use crate::mesh::{Attribute, Domain, Mesh, ValueType, NO_ENTRY};
 use crate::quant::{Quantization, TextCoords};
 use crate::sections::nrml::Component;
 
@@ -343,7 +343,10 @@ impl Table {
     ) {
         for r in refs {
             let Some(i) = pick(r) else {
-                self.indices = None;
+                // A corner without a number has no entry.
+                if let Some(v) = &mut self.indices {
+                    v.push(NO_ENTRY);
+                }
                 continue;
             };
             self.numbered += 1;
@@ -395,8 +398,10 @@ impl Table {
         }
         let why = match (self.width, &self.indices) {
             (None, _) => "of differing lengths",
-            (_, None) => "on some corners only",
-            (_, Some(v)) if v.len() != corners || corners == 0 => "that no face uses",
+            (_, None) => "with numbers out of range",
+            (_, Some(v)) if v.len() != corners || corners == 0 || self.numbered == 0 => {
+                "that no face uses"
+            }
             _ => "",
         };
         if !why.is_empty() {
@@ -650,11 +655,12 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
     if let Some(a) = normal {
         table(a, "vn", out, &mut line)?;
     }
-    // A corner's entry in a channel, counted from 1.
-    let entry = |a: &Attribute, c: usize, v: u32| -> u64 {
+    // A corner's entry in a channel, counted from 1; none for none.
+    let entry = |a: &Attribute, c: usize, v: u32| -> Option<u64> {
         match a.domain {
-            Domain::Corner => a.indices[c] as u64 + 1,
-            _ => v as u64 + 1,
+            Domain::Corner if a.indices[c] == NO_ENTRY => None,
+            Domain::Corner => Some(a.indices[c] as u64 + 1),
+            _ => Some(v as u64 + 1),
         }
     };
     // The statements that name faces, written where a face's name changes.
@@ -683,16 +689,17 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
         line.push('f');
         for (j, &i) in mesh.face(f).iter().enumerate() {
             let _ = write!(line, " {}", i as u64 + 1);
-            match (uv, normal) {
+            let t = uv.and_then(|t| entry(t, s + j, i));
+            match (t, normal.and_then(|n| entry(n, s + j, i))) {
                 (None, None) => {}
                 (Some(t), None) => {
-                    let _ = write!(line, "/{}", entry(t, s + j, i));
+                    let _ = write!(line, "/{t}");
                 }
                 (None, Some(n)) => {
-                    let _ = write!(line, "//{}", entry(n, s + j, i));
+                    let _ = write!(line, "//{n}");
                 }
                 (Some(t), Some(n)) => {
-                    let _ = write!(line, "/{}/{}", entry(t, s + j, i), entry(n, s + j, i));
+                    let _ = write!(line, "/{t}/{n}");
                 }
             }
         }

@@ -63,6 +63,10 @@ pub(crate) fn decode_listed(body: &[u8], names: usize) -> Result<Vec<[i64; 3]>> 
     Ok(out)
 }
 
+/// Coding 4: as [`NESTED`], a corner channel whose last padding entry stands for no
+/// entry (SPEC.md 11.4).
+pub(crate) const NESTED_NONE: u8 = 4;
+
 /// Coding 3: a list channel, its lengths and its values (SPEC.md 11.4).
 pub(crate) const LISTS: u8 = 3;
 
@@ -190,7 +194,8 @@ pub(crate) fn decode(payload: &[u8]) -> Result<(Head, &[u8])> {
     if !(1..=3).contains(&width) {
         return Err(bad(format!("width {width}")));
     }
-    if pad > 2 {
+    // Up to 2 to make 3 entries, and one more for none (coding 4).
+    if pad > 2 + (coding == NESTED_NONE) as u8 {
         return Err(bad(format!("{pad} padding entries")));
     }
     let fits = match coding {
@@ -199,6 +204,7 @@ pub(crate) fn decode(payload: &[u8]) -> Result<(Head, &[u8])> {
         // Names per file (checked below: the channel has names).
         LISTED => pad == 0 && width == 1 && domain == Domain::File,
         LISTS => pad == 0 && width == 1 && domain != Domain::Corner,
+        NESTED_NONE => pad >= 1 && domain == Domain::Corner,
         _ => false,
     };
     if !fits {

@@ -1087,7 +1087,10 @@ pub(crate) fn write<W: Write>(
         "uint"
     };
     let of = |d: Domain| -> Vec<&Attribute> {
-        mesh.attributes.iter().filter(|a| a.domain == d).collect()
+        mesh.attributes
+            .iter()
+            .filter(|a| a.domain == d && writes(a))
+            .collect()
     };
     let columns = |d: Domain| -> Vec<Column<'_>> { of(d).into_iter().map(Column::new).collect() };
     let (vchan, cchan) = (columns(Domain::Vertex), of(Domain::Corner));
@@ -1251,6 +1254,8 @@ pub(crate) fn writes(a: &Attribute) -> bool {
             }),
             false => a.name == HEADER,
         },
+        // A list per face holds a value for every corner.
+        Domain::Corner => !a.indices.contains(&crate::mesh::NO_ENTRY),
         _ => true,
     }
 }
