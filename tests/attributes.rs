@@ -896,14 +896,7 @@ fn obj_lines_and_points_are_lists_unless_they_name_more_than_vertices() {
     let enc = subwave::encode_to_vec(&input.mesh, &input.quantization, &opts).unwrap();
     let dec = subwave::decode_slice(&enc.bytes).unwrap();
     same_up_to_order("lines", &input.mesh, &dec.mesh, &enc.order);
-    let mut file = Vec::new();
-    subwave::write_mesh(
-        &mut file,
-        &dec.mesh,
-        &dec.quantization,
-        subwave::Format::Obj,
-    )
-    .unwrap();
+    let file = obj_of(&dec);
     let again = subwave::load(&file, None).unwrap();
     let points = |m: &Mesh, name: &str| -> Vec<Vec<[i64; 3]>> {
         let a = m.attribute(name).unwrap();
@@ -975,14 +968,7 @@ fn obj_comments_and_material_libraries_come_back_in_canonical_order() {
             .collect()
     };
     assert_eq!(ends(&dec.mesh), ends(&input.mesh));
-    let mut file = Vec::new();
-    subwave::write_mesh(
-        &mut file,
-        &dec.mesh,
-        &dec.quantization,
-        subwave::Format::Obj,
-    )
-    .unwrap();
+    let file = obj_of(&dec);
     let text = String::from_utf8(file).unwrap();
     let want = kept.join("\n") + "\nv ";
     assert!(text.starts_with(&want), "{}", &text[..200]);
@@ -1037,4 +1023,11 @@ fn faces_without_texture_coordinates_among_faces_with_them_keep_both() {
     };
     let enc = subwave::encode_to_vec(&input.mesh, &input.quantization, &opts).unwrap();
     assert_eq!(subwave::decode_slice(&enc.bytes).unwrap().mesh, input.mesh);
+}
+
+/// The OBJ file the decoded mesh `d` is written as.
+fn obj_of(d: &subwave::Decoded) -> Vec<u8> {
+    let mut file = Vec::new();
+    subwave::write_mesh(&mut file, &d.mesh, &d.quantization, subwave::Format::Obj).unwrap();
+    file
 }
