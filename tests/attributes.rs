@@ -1031,3 +1031,30 @@ fn obj_of(d: &subwave::Decoded) -> Vec<u8> {
     subwave::write_mesh(&mut file, &d.mesh, &d.quantization, subwave::Format::Obj).unwrap();
     file
 }
+
+#[test]
+fn a_texture_table_no_face_uses_comes_back() {
+    let obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 1\nvt 0.25 0.5\nvt 1 0\nf 1 2 3\nf 2 4 3\n";
+    let input = subwave::load(obj, None).unwrap();
+    assert!(input.dropped.is_empty(), "{:?}", input.dropped);
+    let uv = input.mesh.attribute("uv").expect("a uv channel");
+    assert_eq!(uv.entry_count(), 2);
+    assert!(uv.indices.iter().all(|&e| e == subwave::NO_ENTRY));
+    let (channels, _) = canonical_round_trip("unused vt", obj);
+    assert_eq!(channels, 1);
+    // The entries themselves, in canonical order.
+    let opts = EncodeOptions {
+        keep_order: false,
+        ..Default::default()
+    };
+    let enc = subwave::encode_to_vec(&input.mesh, &input.quantization, &opts).unwrap();
+    let dec = subwave::decode_slice(&enc.bytes).unwrap();
+    let values = |a: &Attribute| {
+        let mut v: Vec<[u64; 2]> = (0..a.entry_count())
+            .map(|e| [0, 1].map(|k| a.value_f64(e, k).to_bits()))
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(values(dec.mesh.attribute("uv").unwrap()), values(uv));
+}

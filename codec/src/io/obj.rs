@@ -399,9 +399,7 @@ impl Table {
         let why = match (self.width, &self.indices) {
             (None, _) => "of differing lengths",
             (_, None) => "with numbers out of range",
-            (_, Some(v)) if v.len() != corners || corners == 0 || self.numbered == 0 => {
-                "that no face uses"
-            }
+            (_, Some(v)) if v.len() != corners || corners == 0 => "that no face uses",
             _ => "",
         };
         if !why.is_empty() {
