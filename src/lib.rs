@@ -242,7 +242,7 @@ fn compare_channels(
     fn entry(a: &subwave_codec::Attribute, e: usize, out: &mut Vec<String>) {
         if !a.labels.is_empty() {
             let v = a.values[e][0];
-            out.push(format!("{:?}", a.labels.get(v as usize).filter(|_| v >= 0)));
+            out.push(format!("{:?}", a.label(v)));
             return;
         }
         for k in 0..a.width as usize {

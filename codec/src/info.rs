@@ -118,13 +118,7 @@ fn attribute_info(payload: &[u8], limits: &Limits, order: Option<&[u8]>) -> Opti
 fn channel_info(payload: &[u8], limits: &Limits) -> Option<AttributeInfo> {
     use crate::sections::chan;
     let (head, rest) = chan::decode(payload).ok()?;
-    let domain = match head.domain {
-        crate::mesh::Domain::Vertex => "vertex",
-        crate::mesh::Domain::Face => "face",
-        crate::mesh::Domain::Corner => "corner",
-        crate::mesh::Domain::File => "file",
-    }
-    .to_string();
+    let domain = head.domain.name().to_string();
     let (entries, transform, rules) = match head.coding {
         chan::NORMALS => {
             let n = chan::decode_normals(rest).ok()?;

@@ -56,6 +56,18 @@ pub enum Domain {
     File,
 }
 
+impl Domain {
+    /// Its name: `vertex`, `face`, `corner` or `file`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Domain::Vertex => "vertex",
+            Domain::Face => "face",
+            Domain::Corner => "corner",
+            Domain::File => "file",
+        }
+    }
+}
+
 /// The type an attribute's values are written as (a PLY property's type; `Text` for a
 /// value written as text, as an OBJ's are).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -154,10 +166,10 @@ pub struct Attribute {
     /// How the integers map to values.
     pub quantization: Quantization,
     /// [`Domain::Corner`]: per face corner (in the order of [`Mesh::faces`]), its
-    /// entry, or [`NO_ENTRY`] for none. For the other domains, empty, or for a *list channel* (a PLY list
-    /// property of any length per record, one value per entry) per vertex, face or
-    /// record its number of entries: the entries hold every record's list in turn
-    /// ([`Attribute::list`]).
+    /// entry, or [`NO_ENTRY`] for none. For the other domains, empty, or for a *list
+    /// channel* (a PLY list property of any length per record, one value per entry)
+    /// per vertex, face or record its number of entries: the entries hold every
+    /// record's list in turn ([`Attribute::list`]).
     pub indices: Vec<u32>,
     /// A channel of names (an OBJ's materials, groups, objects, smoothing groups): the
     /// names its values (one per entry, integers) stand for, value `i` for
@@ -181,6 +193,12 @@ impl Attribute {
             start = r.end;
             r
         })
+    }
+
+    /// In a channel of names, the name value `v` stands for (none for -1 or a value
+    /// past its names).
+    pub fn label(&self, v: i64) -> Option<&str> {
+        usize::try_from(v).ok().and_then(|i| self.labels.get(i)).map(String::as_str)
     }
 
     /// Number of entries.
@@ -214,8 +232,8 @@ impl Attribute {
     /// Which of a per-file channel's values number vertices (from 0), by the PLY
     /// convention of its name: `ELEMENT/PROPERTIES` whose property is `vertex1`,
     /// `vertex2`, `vertex_index` (an `edge` element's ends) or `vertex_indices` (a
-    /// list), of an integer type. The
-    /// encoder renumbers them with the vertices when it reorders them.
+    /// list), of an integer type. The encoder renumbers them with the vertices when it
+    /// reorders them.
     pub fn vertex_components(&self) -> [bool; 3] {
         let mut out = [false; 3];
         let props = match (self.domain, self.value_type.int_range(), self.name.split_once('/')) {

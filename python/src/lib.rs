@@ -305,15 +305,6 @@ type Channel<'py> = (
 /// The names of [`ValueType`]s in Python, in the order of their codes.
 const TYPE_NAMES: [&str; 9] = ["text", "f32", "f64", "i8", "u8", "i16", "u16", "i32", "u32"];
 
-fn domain_name(d: Domain) -> &'static str {
-    match d {
-        Domain::Vertex => "vertex",
-        Domain::Face => "face",
-        Domain::Corner => "corner",
-        Domain::File => "file",
-    }
-}
-
 /// The values of `mesh` on `q` in the type they came in ([`value_array`]), with the
 /// integers and the quantisation as JSON, and the attribute channels.
 fn parts<'py>(py: Python<'py>, mesh: &Mesh, q: &Quantization) -> PyResult<MeshParts<'py>> {
@@ -338,7 +329,7 @@ fn parts<'py>(py: Python<'py>, mesh: &Mesh, q: &Quantization) -> PyResult<MeshPa
         };
         channels.push((
             a.name.clone(),
-            domain_name(a.domain),
+            a.domain.name(),
             TYPE_NAMES[a.value_type.code() as usize],
             values,
             indices,

@@ -378,6 +378,7 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
         false => match_faces(mesh, out, &enc.order)?,
     };
     let mut chans = Vec::with_capacity(mesh.attributes.len());
+    let o = nested_options(opts);
     for a in &mesh.attributes {
         if a.is_list() {
             // Each decoded vertex's, face's or record's list, in turn.
@@ -400,9 +401,6 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
                     m.floats.extend(&a.floats[lists[r].clone()]);
                 }
             }
-            let mut o = opts.clone();
-            o.keep_order = true;
-            o.progress = Progress::default();
             let nested = encode_inner(&m, &a.quantization, &o, None)?;
             let head = chan::Head {
                 name: a.name.clone(),
@@ -513,9 +511,6 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
                 head.coding = chan::NESTED_NONE;
             }
         }
-        let mut o = opts.clone();
-        o.keep_order = true;
-        o.progress = Progress::default();
         let mut nested = encode_inner(&m, &a.quantization, &o, None)?;
         if a.domain == crate::mesh::Domain::Corner && !identity {
             // Also the entries renumbered in the nested mesh's own canonical order, so
@@ -732,12 +727,20 @@ pub fn encode_file(
     encode_inner(mesh, q, opts, Some(&own))
 }
 
+/// The options a nested container (an attribute's values) is coded with: `opts`'
+/// search, the values' order kept, no progress of its own.
+fn nested_options(opts: &EncodeOptions) -> EncodeOptions {
+    EncodeOptions {
+        keep_order: true,
+        progress: Progress::default(),
+        ..opts.clone()
+    }
+}
+
 /// The ATTR payload of attribute `a` (SPEC.md 11.3): its mesh coded with its order kept
 /// and `opts`' search.
 fn attribute(a: &Attribute, opts: &EncodeOptions) -> Result<Vec<u8>> {
-    let mut o = opts.clone();
-    o.keep_order = true;
-    o.progress = Progress::default();
+    let o = nested_options(opts);
     Ok(attr::encode(
         a.width,
         &a.name,

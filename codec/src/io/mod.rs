@@ -179,23 +179,8 @@ impl RawAttribute {
     /// A channel of names ([`crate::Attribute::labels`]) with value `values[e]` per
     /// entry: `labels[v]`, or none for -1.
     pub(crate) fn names(name: &str, domain: Domain, values: &[i64], labels: Vec<String>) -> Self {
-        let zero = crate::quant::Decimal {
-            mantissa: 0,
-            decimals: 0,
-        };
-        let values = values
-            .iter()
-            .map(|&m| {
-                [
-                    crate::quant::Decimal {
-                        mantissa: m,
-                        decimals: 0,
-                    },
-                    zero,
-                    zero,
-                ]
-            })
-            .collect();
+        let int = crate::quant::Decimal::integer;
+        let values = values.iter().map(|&m| [int(m), int(0), int(0)]).collect();
         RawAttribute {
             name: name.to_string(),
             domain,

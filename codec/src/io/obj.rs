@@ -537,10 +537,7 @@ impl Elements {
         if all().any(|&v| v as usize >= nv) {
             return Err(self.what);
         }
-        let int = |v: i64| crate::quant::Decimal {
-            mantissa: v,
-            decimals: 0,
-        };
+        let int = crate::quant::Decimal::integer;
         let value_type = match all().any(|&v| v > i32::MAX as i64) {
             true => ValueType::U32,
             false => ValueType::I32,
@@ -623,7 +620,7 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
     let mut line = String::with_capacity(128);
     if let Some(a) = find(LINES) {
         for v in &a.values {
-            if let Some(l) = a.labels.get(v[0] as usize).filter(|_| v[0] >= 0) {
+            if let Some(l) = a.label(v[0]) {
                 writeln!(out, "{l}")?;
             }
         }
@@ -675,7 +672,7 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
                 names[k] = v;
                 line.clear();
                 line.push_str(kw);
-                if let Some(l) = a.labels.get(v as usize).filter(|_| v >= 0) {
+                if let Some(l) = a.label(v) {
                     line.push(' ');
                     line.push_str(l);
                 }

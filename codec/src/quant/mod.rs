@@ -35,6 +35,14 @@ const POW10: [i64; 19] = {
 };
 
 impl Decimal {
+    /// The integer `m` (no decimals).
+    pub const fn integer(m: i64) -> Decimal {
+        Decimal {
+            mantissa: m,
+            decimals: 0,
+        }
+    }
+
     /// Parses a decimal number the way text mesh formats write them: optional sign,
     /// digits with an optional point, optional exponent. NaN and infinities are refused.
     pub fn parse(token: &str) -> std::result::Result<Decimal, String> {

@@ -63,10 +63,6 @@ pub(crate) fn decode_listed(body: &[u8], names: usize) -> Result<Vec<[i64; 3]>> 
     Ok(out)
 }
 
-/// Coding 4: as [`NESTED`], a corner channel whose last padding entry stands for no
-/// entry (SPEC.md 11.4).
-pub(crate) const NESTED_NONE: u8 = 4;
-
 /// Coding 3: a list channel, its lengths and its values (SPEC.md 11.4).
 pub(crate) const LISTS: u8 = 3;
 
@@ -95,6 +91,10 @@ pub(crate) fn decode_lists(body: &[u8]) -> Result<(Vec<u32>, u64, &[u8])> {
     }
     Ok((counts, total, &body[body.len() - r.remaining()..]))
 }
+
+/// Coding 4: as [`NESTED`], a corner channel whose last padding entry stands for no
+/// entry (SPEC.md 11.4).
+pub(crate) const NESTED_NONE: u8 = 4;
 
 /// Coding 1's body: the values' decimals, the entries, and the two streams.
 #[derive(Debug, Clone, PartialEq, Eq)]

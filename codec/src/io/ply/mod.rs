@@ -914,10 +914,7 @@ fn to_coords(nums: &[[Num; 3]]) -> Result<RawCoords> {
     }
     let dec = |x: &Num| match *x {
         Num::Dec(d) => d,
-        Num::Int(i) => Decimal {
-            mantissa: i,
-            decimals: 0,
-        },
+        Num::Int(i) => Decimal::integer(i),
         _ => unreachable!("types are uniform per property"),
     };
     let f64_of = |x: &Num| match *x {
@@ -1120,7 +1117,7 @@ pub(crate) fn write<W: Write>(
     writeln!(out, "ply\nformat {format} 1.0")?;
     if let Some(a) = header {
         for v in &a.values {
-            if let Some(l) = a.labels.get(v[0] as usize).filter(|_| v[0] >= 0) {
+            if let Some(l) = a.label(v[0]) {
                 writeln!(out, "{l}")?;
             }
         }
