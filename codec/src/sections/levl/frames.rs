@@ -141,80 +141,85 @@ pub(super) fn mul_q(p: i64, y: i64) -> i64 {
     ((p as i128 * y as i128 + (1 << (ROT_BITS - 1))) >> ROT_BITS) as i64
 }
 
-/// `SQRT_TABLE[m] = floor(sqrt(m 2^16))`: square roots of 8-bit mantissas to 12 bits.
-pub(super) const SQRT_TABLE: [u32; 256] = {
-    let mut t = [0u32; 256];
+/// Bits of a plane rotation's table index: the tangent of its residual angle (at most
+/// 45 degrees) in steps of 2^-10 (SPEC.md 10.5).
+pub(super) const TURN_BITS: u32 = 10;
+
+/// `TURNS[m]`: the lifting factors `(p, u)` of the exact rotation taking `(2^28, m 2^18)`
+/// onto the positive first axis (SPEC.md 10.5), for `0 <= m <= 2^10`: with
+/// `r = floor(sqrt(a^2 + b^2))`, `p = [b 2^30 / (r + a)]`, `u = [-b 2^30 / r]`.
+pub(super) static TURNS: [(i32, i32); (1 << TURN_BITS) + 1] = {
+    let mut t = [(0i32, 0i32); (1 << TURN_BITS) + 1];
     let mut m = 0;
-    while m < 256 {
-        let v = (m as u32) << 16;
-        let mut r = 0u32;
-        while (r + 1) * (r + 1) <= v {
-            r += 1;
+    while m < t.len() {
+        let a = 1i64 << 28;
+        let b = (m as i64) << (28 - TURN_BITS);
+        let v = (a * a + b * b) as u64;
+        // Floor of the square root by bisection (a const context: no table, no floats).
+        let (mut lo, mut hi) = (0u64, 1u64 << 30);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if mid * mid <= v {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
         }
-        t[m] = r;
+        let r = lo as i64;
+        // [n / d] rounded half up (9.1), d > 0.
+        let p = (2 * (b << ROT_BITS) + (r + a)).div_euclid(2 * (r + a));
+        let u = (2 * (-b << ROT_BITS) + r).div_euclid(2 * r);
+        t[m] = (p as i32, u as i32);
         m += 1;
     }
     t
 };
 
-/// Floor of the square root of `v`: a first guess from [`SQRT_TABLE`] good to about
-/// 1 %, two Newton steps (each at least the floor after the first, the error squared
-/// each time), then exact correction.
-pub(super) fn isqrt(v: u64) -> u64 {
-    debug_assert!(v < 1 << 60, "the correction steps square the root");
-    if v < 256 {
-        return (SQRT_TABLE[v as usize] >> 8) as u64;
-    }
-    // An even shift leaving 7 or 8 significant bits: v = m 2^sh, sqrt(v) = sqrt(m) 2^(sh/2).
-    let len = 64 - v.leading_zeros();
-    let sh = (len - 7) & !1;
-    let m = (v >> sh) as usize;
-    let mut x = ((SQRT_TABLE[m] as u64) << (sh / 2)) >> 8;
-    x = x.max(1);
-    for _ in 0..2 {
-        x = (x + v / x) >> 1;
-    }
-    while x * x > v {
-        x -= 1;
-    }
-    while (x + 1) * (x + 1) <= v {
-        x += 1;
-    }
-    x
-}
-
-/// One plane rotation of components `i` and `j` as three lifting steps (SPEC.md 10.5),
-/// after negating both when `flip`: exactly invertible on integers.
+/// One plane rotation of components `i` and `j` (SPEC.md 10.5): `turns` quarter turns,
+/// then three lifting steps by table factors: exactly invertible on integers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) struct Givens {
     pub(super) i: u8,
     pub(super) j: u8,
-    pub(super) flip: bool,
+    /// Quarter turns `(v_i, v_j) -> (v_j, -v_i)` made first, 0 to 3.
+    pub(super) turns: u8,
     /// The lifting factors, `|p|, |u| <= 2^30`.
     pub(super) p: i32,
     pub(super) u: i32,
 }
 
 impl Givens {
-    /// The rotation that turns `(a, b)` (components `i`, `j`) onto the positive `i` axis,
-    /// and the length it leaves there.
-    pub(super) fn towards(i: u8, j: u8, a: i64, b: i64) -> (Givens, i64) {
-        let flip = a < 0;
-        let (a, b) = if flip { (-a, -b) } else { (a, b) };
-        // |a|, |b| < 2^26 (24-bit normals and tangents, rotated), so the squares fit.
-        let r = isqrt((a * a + b * b) as u64) as i64;
-        // cos = a / r, sin = -b / r; p = (cos - 1) / sin = b / (r + a), u = sin.
-        let (p, u) = if r == 0 {
-            (0, 0)
+    /// The rotation that turns `(a, b)` (components `i`, `j`) to within half a table
+    /// step of the positive `i` axis (SPEC.md 10.5): the quarter turns that leave
+    /// `a' >= |b'|`, `a' > 0`, then the table's rotation for `m = [|b'| 2^10 / a']`,
+    /// negated when `b' < 0`. Only the ratio of `a` and `b` matters (|a|, |b| < 2^40).
+    pub(super) fn towards(i: u8, j: u8, a: i64, b: i64) -> Givens {
+        let (turns, a, b) = if a > 0 && b.abs() <= a {
+            (0, a, b)
+        } else if b > 0 && a.abs() < b {
+            (1, b, -a)
+        } else if a < 0 && b.abs() <= -a {
+            (2, -a, -b)
+        } else if b < 0 {
+            (3, -b, a)
         } else {
-            // `transform::round_div` in 64 bits (|b| 2^31 + d < 2^58): its 128-bit checks
-            // cost 2.5 % of a rotated level's decode instructions.
-            let div = |n: i64, d: i64| ((2 * (n << ROT_BITS) + d).div_euclid(2 * d)) as i32;
-            (div(b, r + a), div(-b, r))
+            // a = b = 0: no rotation.
+            return Givens {
+                i,
+                j,
+                turns: 0,
+                p: 0,
+                u: 0,
+            };
         };
-        (Givens { i, j, flip, p, u }, r)
+        // 0 <= |b| <= a, a > 0: m in 0..=2^10, one division.
+        let m = (((b.unsigned_abs() << (TURN_BITS + 1)) + a as u64) / (2 * a as u64)) as usize;
+        let (p, u) = TURNS[m];
+        let (p, u) = if b < 0 { (-p, -u) } else { (p, u) };
+        Givens { i, j, turns, p, u }
     }
 
+    #[inline]
     pub(super) fn forward(&self, v: &mut [i64; 3]) {
         let (i, j, p, u) = (
             self.i as usize,
@@ -222,15 +227,19 @@ impl Givens {
             self.p as i64,
             self.u as i64,
         );
-        if self.flip {
-            v[i] = -v[i];
-            v[j] = -v[j];
-        }
-        v[i] += mul_q(p, v[j]);
-        v[j] += mul_q(u, v[i]);
-        v[i] += mul_q(p, v[j]);
+        let (vi, vj) = match self.turns {
+            0 => (v[i], v[j]),
+            1 => (v[j], -v[i]),
+            2 => (-v[i], -v[j]),
+            _ => (-v[j], v[i]),
+        };
+        let vi = vi + mul_q(p, vj);
+        let vj = vj + mul_q(u, vi);
+        v[i] = vi + mul_q(p, vj);
+        v[j] = vj;
     }
 
+    #[inline]
     pub(super) fn inverse(&self, v: &mut [i64; 3]) {
         let (i, j, p, u) = (
             self.i as usize,
@@ -238,13 +247,15 @@ impl Givens {
             self.p as i64,
             self.u as i64,
         );
-        v[i] -= mul_q(p, v[j]);
-        v[j] -= mul_q(u, v[i]);
-        v[i] -= mul_q(p, v[j]);
-        if self.flip {
-            v[i] = -v[i];
-            v[j] = -v[j];
-        }
+        let vi = v[i] - mul_q(p, v[j]);
+        let vj = v[j] - mul_q(u, vi);
+        let vi = vi - mul_q(p, vj);
+        (v[i], v[j]) = match self.turns {
+            0 => (vi, vj),
+            1 => (-vj, vi),
+            2 => (-vi, -vj),
+            _ => (vj, -vi),
+        };
     }
 }
 
@@ -270,12 +281,14 @@ pub(super) struct Rotation(pub(super) [Givens; 3]);
 
 impl Rotation {
     pub(super) fn new(n: [i64; 3], t: [i128; 3]) -> Rotation {
-        let (g0, r1) = Givens::towards(0, 1, n[0], n[1]);
-        let (g1, _) = Givens::towards(0, 2, r1, n[2]);
+        let g0 = Givens::towards(0, 1, n[0], n[1]);
+        let mut n = n;
+        g0.forward(&mut n);
+        let g1 = Givens::towards(0, 2, n[0], n[2]);
         let mut t = to_24_bits(t);
         g0.forward(&mut t);
         g1.forward(&mut t);
-        let (g2, _) = Givens::towards(1, 2, t[1], t[2]);
+        let g2 = Givens::towards(1, 2, t[1], t[2]);
         Rotation([g0, g1, g2])
     }
 
