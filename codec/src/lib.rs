@@ -20,7 +20,7 @@ macro_rules! stages {
 }
 
 stages! {
-    /// Adaptive models and the range coder (SPEC.md 4).
+    /// Adaptive models and the ANS coder (SPEC.md 4).
     entropy;
     /// The integer mesh.
     mesh;

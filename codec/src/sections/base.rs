@@ -1,5 +1,5 @@
 //! Zero-level coding: a mesh without subdivision structure, as connectivity plus
-//! predicted positions in one range-coded stream (SPEC.md 6).
+//! predicted positions in one entropy-coded stream (SPEC.md 6).
 
 use std::collections::HashMap;
 

@@ -115,7 +115,7 @@ fn corner_walk(mesh: &Mesh) -> impl Iterator<Item = (usize, u32, bool)> + '_ {
 }
 
 /// The CIDX payload of `indices` for `mesh` (in the file's order): the channel count,
-/// then one range-coded stream.
+/// then one entropy-coded stream.
 pub fn encode(mesh: &Mesh, indices: &CornerIndices) -> Result<Vec<u8>> {
     let nc = indices.channels.len();
     if nc > MAX_CHANNELS {
