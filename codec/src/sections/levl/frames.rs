@@ -175,25 +175,27 @@ pub(super) static TURNS: [(i32, i32); (1 << TURN_BITS) + 1] = {
     t
 };
 
-/// One plane rotation of components `i` and `j` (SPEC.md 10.5): `turns` quarter turns,
+/// One plane rotation of a pair of components (SPEC.md 10.5): `turns` quarter turns,
 /// then three lifting steps by table factors: exactly invertible on integers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) struct Givens {
-    pub(super) i: u8,
-    pub(super) j: u8,
-    /// Quarter turns `(v_i, v_j) -> (v_j, -v_i)` made first, 0 to 3.
+    /// Quarter turns `(a, b) -> (b, -a)` made first, 0 to 3.
     pub(super) turns: u8,
     /// The lifting factors, `|p|, |u| <= 2^30`.
     pub(super) p: i32,
     pub(super) u: i32,
 }
 
+/// `(cos, sin)` of 0 to 3 quarter turns: a pair turned `t` times is
+/// `(c a + s b, c b - s a)`, without a branch on `t`.
+const TURN: [(i64, i64); 4] = [(1, 0), (0, 1), (-1, 0), (0, -1)];
+
 impl Givens {
-    /// The rotation that turns `(a, b)` (components `i`, `j`) to within half a table
-    /// step of the positive `i` axis (SPEC.md 10.5): the quarter turns that leave
-    /// `a' >= |b'|`, `a' > 0`, then the table's rotation for `m = [|b'| 2^10 / a']`,
-    /// negated when `b' < 0`. Only the ratio of `a` and `b` matters (|a|, |b| < 2^40).
-    pub(super) fn towards(i: u8, j: u8, a: i64, b: i64) -> Givens {
+    /// The rotation that turns `(a, b)` to within half a table step of the positive
+    /// first axis (SPEC.md 10.5): the quarter turns that leave `a' >= |b'|`, `a' > 0`,
+    /// then the table's rotation for `m = [|b'| 2^10 / a']`, negated when `b' < 0`.
+    /// Only the ratio of `a` and `b` matters (|a|, |b| < 2^40).
+    pub(super) fn towards(a: i64, b: i64) -> Givens {
         let (turns, a, b) = if a > 0 && b.abs() <= a {
             (0, a, b)
         } else if b > 0 && a.abs() < b {
@@ -204,58 +206,35 @@ impl Givens {
             (3, -b, a)
         } else {
             // a = b = 0: no rotation.
-            return Givens {
-                i,
-                j,
-                turns: 0,
-                p: 0,
-                u: 0,
-            };
+            return Givens { turns: 0, p: 0, u: 0 };
         };
         // 0 <= |b| <= a, a > 0: m in 0..=2^10, one division.
         let m = (((b.unsigned_abs() << (TURN_BITS + 1)) + a as u64) / (2 * a as u64)) as usize;
         let (p, u) = TURNS[m];
         let (p, u) = if b < 0 { (-p, -u) } else { (p, u) };
-        Givens { i, j, turns, p, u }
+        Givens { turns, p, u }
     }
 
+    /// The rotation applied to the pair `(a, b)`.
     #[inline]
-    pub(super) fn forward(&self, v: &mut [i64; 3]) {
-        let (i, j, p, u) = (
-            self.i as usize,
-            self.j as usize,
-            self.p as i64,
-            self.u as i64,
-        );
-        let (vi, vj) = match self.turns {
-            0 => (v[i], v[j]),
-            1 => (v[j], -v[i]),
-            2 => (-v[i], -v[j]),
-            _ => (-v[j], v[i]),
-        };
-        let vi = vi + mul_q(p, vj);
-        let vj = vj + mul_q(u, vi);
-        v[i] = vi + mul_q(p, vj);
-        v[j] = vj;
+    pub(super) fn apply(&self, a: i64, b: i64) -> (i64, i64) {
+        let (c, s) = TURN[self.turns as usize & 3];
+        let (p, u) = (self.p as i64, self.u as i64);
+        let (a, b) = (c * a + s * b, c * b - s * a);
+        let a = a + mul_q(p, b);
+        let b = b + mul_q(u, a);
+        (a + mul_q(p, b), b)
     }
 
+    /// [`Givens::apply`] undone.
     #[inline]
-    pub(super) fn inverse(&self, v: &mut [i64; 3]) {
-        let (i, j, p, u) = (
-            self.i as usize,
-            self.j as usize,
-            self.p as i64,
-            self.u as i64,
-        );
-        let vi = v[i] - mul_q(p, v[j]);
-        let vj = v[j] - mul_q(u, vi);
-        let vi = vi - mul_q(p, vj);
-        (v[i], v[j]) = match self.turns {
-            0 => (vi, vj),
-            1 => (-vj, vi),
-            2 => (-vi, -vj),
-            _ => (vj, -vi),
-        };
+    pub(super) fn undo(&self, a: i64, b: i64) -> (i64, i64) {
+        let (c, s) = TURN[self.turns as usize & 3];
+        let (p, u) = (self.p as i64, self.u as i64);
+        let a = a - mul_q(p, b);
+        let b = b - mul_q(u, a);
+        let a = a - mul_q(p, b);
+        (c * a - s * b, c * b + s * a)
     }
 }
 
@@ -281,25 +260,33 @@ pub(super) struct Rotation(pub(super) [Givens; 3]);
 
 impl Rotation {
     pub(super) fn new(n: [i64; 3], t: [i128; 3]) -> Rotation {
-        let g0 = Givens::towards(0, 1, n[0], n[1]);
-        let mut n = n;
-        g0.forward(&mut n);
-        let g1 = Givens::towards(0, 2, n[0], n[2]);
-        let mut t = to_24_bits(t);
-        g0.forward(&mut t);
-        g1.forward(&mut t);
-        let g2 = Givens::towards(1, 2, t[1], t[2]);
+        let g0 = Givens::towards(n[0], n[1]);
+        let (n0, _) = g0.apply(n[0], n[1]);
+        let g1 = Givens::towards(n0, n[2]);
+        let t = to_24_bits(t);
+        let (t0, t1) = g0.apply(t[0], t[1]);
+        let (_, t2) = g1.apply(t0, t[2]);
+        let g2 = Givens::towards(t1, t2);
         Rotation([g0, g1, g2])
     }
 
-    pub(super) fn forward(&self, mut v: [i64; 3]) -> [i64; 3] {
-        self.0.iter().for_each(|g| g.forward(&mut v));
-        v
+    /// `g0` on components 0 and 1, `g1` on 0 and 2, `g2` on 1 and 2.
+    #[inline]
+    pub(super) fn forward(&self, [x, y, z]: [i64; 3]) -> [i64; 3] {
+        let [g0, g1, g2] = &self.0;
+        let (x, y) = g0.apply(x, y);
+        let (x, z) = g1.apply(x, z);
+        let (y, z) = g2.apply(y, z);
+        [x, y, z]
     }
 
-    pub(super) fn inverse(&self, mut v: [i64; 3]) -> [i64; 3] {
-        self.0.iter().rev().for_each(|g| g.inverse(&mut v));
-        v
+    #[inline]
+    pub(super) fn inverse(&self, [x, y, z]: [i64; 3]) -> [i64; 3] {
+        let [g0, g1, g2] = &self.0;
+        let (y, z) = g2.undo(y, z);
+        let (x, z) = g1.undo(x, z);
+        let (x, y) = g0.undo(x, y);
+        [x, y, z]
     }
 }
 
