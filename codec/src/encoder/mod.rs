@@ -98,6 +98,9 @@ pub(crate) struct Effort {
     /// [`Effort::SHORTER_LIST`] at 5, [`Effort::SHORT_LIST`] at 6, every one (`None`)
     /// from 7.
     pub rank: Option<&'static [Wavelet]>,
+    /// The family's other transforms are ranked by their details' bits
+    /// ([`search::detail_bits`], no coding) rather than by coding them: at 5 and 6.
+    pub estimated: bool,
     /// Every candidate hierarchy of a family is coded (a mesh and its dual; else the
     /// one recovery prefers): from 8.
     pub candidates: bool,
@@ -129,6 +132,7 @@ impl Effort {
                 6 => Some(Self::SHORT_LIST),
                 _ => None,
             },
+            estimated: (5..=6).contains(&e),
             candidates: e >= 8,
             unrotated: e >= 9,
         }

@@ -19,36 +19,13 @@ pub(crate) fn code_hierarchy(
     bound: usize,
     progress: &Progress,
 ) -> Option<Payloads> {
-    // The positions in canonical order, gathered for each coding rather than held
-    // beside the hierarchy (the memory of large meshes).
-    let mut x = canonical_positions(mesh, canon);
-    // sqrt2-lazy levels: their predictions' phases (10.6).
-    let mut phases: Vec<Option<crate::transform::phase::Phases>> = vec![None; canon.levels.len()];
     let scheme = Scheme {
         family: canon.family,
         wavelet: w,
         poles: &canon.poles,
         disc,
     };
-    for (l, level) in canon.levels.iter().enumerate().rev() {
-        // As the decoder: sqrt2-lazy predicts from the coarse values (which it keeps)
-        // and finds its phases with the predictions; ir2w runs its own passes,
-        // sqrt2-sym a plan; polar levels code the poles' discs first (SPEC.md 9.9).
-        let mut t = LevelTransform::new(&scheme, level, l, &x, true);
-        // The phases of modes 6 and 9 (SPEC.md 10.6): sqrt2-lazy's from its predictions,
-        // a predict-only Catmull-Clark level's from the fine values (the decoder makes
-        // them as it reads the level).
-        phases[l] = match t.take_phases() {
-            Some(p) => Some(p),
-            None => t
-                .phaser(level)
-                .map(|p| p.phases(&x, level.ne() + level.nf(), true)),
-        };
-        t.analyse(level, canon.family.fine_nv(level), &mut x);
-    }
-    if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
-        return None;
-    }
+    let (mut x, phases) = analyse_all(canon, mesh, &scheme)?;
     let (mut header, base_bytes) = hierarchy_base(canon, &x, header);
     let mut models = levl::LevelModels::new();
     models.rotated = rotated;
@@ -103,6 +80,69 @@ pub(crate) fn code_hierarchy(
         levels: level_bytes,
         order: None,
     })
+}
+
+/// A hierarchy's analysed values (the base values in `x[k][..base vertices]`, then every
+/// level's details) and each level's phases (modes 6 and 9).
+type Analysis = ([Vec<i64>; 3], Vec<Option<crate::transform::phase::Phases>>);
+
+/// A hierarchy's analysis with `scheme` (SPEC.md 9), fine to coarse, as the decoder
+/// undoes it; `None` if a lifted value leaves the supported range.
+fn analyse_all(canon: &Canonical, mesh: &Mesh, scheme: &Scheme<'_>) -> Option<Analysis> {
+    // The positions in canonical order, gathered for each coding rather than held
+    // beside the hierarchy (the memory of large meshes).
+    let mut x = canonical_positions(mesh, canon);
+    // sqrt2-lazy levels: their predictions' phases (10.6).
+    let mut phases: Vec<Option<crate::transform::phase::Phases>> = vec![None; canon.levels.len()];
+    for (l, level) in canon.levels.iter().enumerate().rev() {
+        // As the decoder: sqrt2-lazy predicts from the coarse values (which it keeps)
+        // and finds its phases with the predictions; ir2w runs its own passes,
+        // sqrt2-sym a plan; polar levels code the poles' discs first (SPEC.md 9.9).
+        let mut t = LevelTransform::new(scheme, level, l, &x, true);
+        // The phases of modes 6 and 9 (SPEC.md 10.6): sqrt2-lazy's from its predictions,
+        // a predict-only Catmull-Clark level's from the fine values (the decoder makes
+        // them as it reads the level).
+        phases[l] = match t.take_phases() {
+            Some(p) => Some(p),
+            None => t
+                .phaser(level)
+                .map(|p| p.phases(&x, level.ne() + level.nf(), true)),
+        };
+        t.analyse(level, canon.family.fine_nv(level), &mut x);
+    }
+    if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
+        return None;
+    }
+    Some((x, phases))
+}
+
+/// What ranks a hierarchy's transforms at the default effort without coding them: the
+/// bits of its details as a plain integer code would spend them (each nonzero value
+/// its bit length and a sign). `None` if a lifted value leaves the supported range.
+pub(crate) fn detail_bits(
+    canon: &Canonical,
+    mesh: &Mesh,
+    w: Wavelet,
+    disc: DiscTransform,
+) -> Option<u64> {
+    let scheme = Scheme {
+        family: canon.family,
+        wavelet: w,
+        poles: &canon.poles,
+        disc,
+    };
+    let (x, _) = analyse_all(canon, mesh, &scheme)?;
+    Some(value_bits(&x, canon.base.nv))
+}
+
+/// The bits of `x[k][from..]` as a plain integer code spends them: each nonzero value
+/// its bit length and a sign.
+fn value_bits(x: &[Vec<i64>; 3], from: usize) -> u64 {
+    x.iter()
+        .flat_map(|xk| &xk[from.min(xk.len())..])
+        .filter(|&&v| v != 0)
+        .map(|&v| 1 + u64::from(64 - v.unsigned_abs().leading_zeros()))
+        .sum()
 }
 
 /// The header and BASE payload of a hierarchy's coding: the base mesh with the values
@@ -249,7 +289,9 @@ pub(crate) fn code_family(
             .filter(|&&w| w != first && effort.rank.is_none_or(|r| r.contains(&w)))
             .map(|&w| (w, disc))
             .collect();
-        if !pairs.is_empty() {
+        if !pairs.is_empty() && effort.estimated {
+            coder.estimate_then_code(&mut p, &pairs, first, effort.rotated);
+        } else if !pairs.is_empty() {
             coder.rank_then_code(&mut p, &pairs, effort.rotated);
         }
     }
@@ -323,6 +365,34 @@ impl Recoder<'_> {
             q.order = p.order.clone();
             if q.coded() < p.coded() {
                 *p = q;
+            }
+        }
+    }
+
+    /// Other (transform, disc) pairs are ranked by their details' bits
+    /// ([`detail_bits`]); the best of them is coded in every mode if its bits are within
+    /// [`RANK_MARGIN`] of those of `first`, p's transform, and kept if smaller.
+    fn estimate_then_code(
+        &self,
+        p: &mut Payloads,
+        pairs: &[(Wavelet, DiscTransform)],
+        first: Wavelet,
+        rotated: bool,
+    ) {
+        let bits = |&(w, d): &(Wavelet, DiscTransform)| detail_bits(self.canon, self.mesh, w, d);
+        let Some(mine) = bits(&(first, p.header.disc)) else {
+            return;
+        };
+        let ranked = par_map(pairs, self.threads, bits);
+        // The fewest bits, the first in `pairs` on ties.
+        let best = pairs
+            .iter()
+            .zip(ranked)
+            .filter_map(|(pair, b)| Some((b?, *pair)))
+            .min_by_key(|&(b, _)| b);
+        if let Some((b, (w, d))) = best {
+            if b * 100 <= mine * RANK_MARGIN as u64 {
+                self.try_code(p, w, d, rotated);
             }
         }
     }
