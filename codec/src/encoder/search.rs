@@ -19,12 +19,7 @@ pub(crate) fn code_hierarchy(
     bound: usize,
     progress: &Progress,
 ) -> Option<Payloads> {
-    let scheme = Scheme {
-        family: canon.family,
-        wavelet: w,
-        poles: &canon.poles,
-        disc,
-    };
+    let scheme = scheme_of(canon, w, disc);
     let (mut x, phases) = analyse_all(canon, mesh, &scheme)?;
     let (mut header, base_bytes) = hierarchy_base(canon, &x, header);
     let mut models = levl::LevelModels::new();
@@ -82,6 +77,16 @@ pub(crate) fn code_hierarchy(
     })
 }
 
+/// The transform of hierarchy `canon` with wavelet `w` and disc transform `disc`.
+fn scheme_of(canon: &Canonical, w: Wavelet, disc: DiscTransform) -> Scheme<'_> {
+    Scheme {
+        family: canon.family,
+        wavelet: w,
+        poles: &canon.poles,
+        disc,
+    }
+}
+
 /// A hierarchy's analysed values (the base values in `x[k][..base vertices]`, then every
 /// level's details) and each level's phases (modes 6 and 9).
 type Analysis = ([Vec<i64>; 3], Vec<Option<crate::transform::phase::Phases>>);
@@ -125,13 +130,7 @@ pub(crate) fn detail_bits(
     w: Wavelet,
     disc: DiscTransform,
 ) -> Option<u64> {
-    let scheme = Scheme {
-        family: canon.family,
-        wavelet: w,
-        poles: &canon.poles,
-        disc,
-    };
-    let (x, _) = analyse_all(canon, mesh, &scheme)?;
+    let (x, _) = analyse_all(canon, mesh, &scheme_of(canon, w, disc))?;
     Some(value_bits(&x, canon.base.nv))
 }
 
