@@ -329,7 +329,14 @@ pub fn coder_roundtrip(data: &[u8]) {
             Op::Uni(v, n) => e.uniform(v, n),
         }
     }
+    // The encoder's size bound (its early stops) never passes the stream's size.
+    let bound = e.written();
     let bytes = e.finish();
+    assert!(
+        bound <= bytes.len(),
+        "bound {bound} > {} bytes",
+        bytes.len()
+    );
     let mut d = Decoder::new(&bytes, "fuzz").expect("own stream");
     let mut models: Vec<AdaptiveModel> = sizes.iter().map(|&n| AdaptiveModel::new(n)).collect();
     let mut im = IntModel::new();
