@@ -444,13 +444,19 @@ impl Encoder {
         self.info += ((16 - e) * 256) as u64 - self.log2[m as usize] as u64;
     }
 
-    /// Codes `s` with `m` and adapts `m`.
+    /// Notes symbol `s` of model `m` (any model: adaptive, uniform, raw bits).
     #[inline]
-    pub fn symbol(&mut self, m: &mut AdaptiveModel, s: usize) {
+    fn note_symbol<M: EncoderModel<PRECISION, Probability = u32>>(&mut self, m: M, s: M::Symbol) {
         let (lo, p) = m
             .left_cumulative_and_probability(s)
             .expect("symbol within the model's alphabet");
         self.note(lo, p.get());
+    }
+
+    /// Codes `s` with `m` and adapts `m`.
+    #[inline]
+    pub fn symbol(&mut self, m: &mut AdaptiveModel, s: usize) {
+        self.note_symbol(&*m, s);
         m.update(s);
     }
 
@@ -469,10 +475,7 @@ impl Encoder {
             let shift = bits - 16;
             (s >> shift, ((n - 1) >> shift) + 1, shift)
         };
-        let (lo, p) = Uniform::new(top_n as u32)
-            .left_cumulative_and_probability(top as u32)
-            .expect("within range");
-        self.note(lo, p.get());
+        self.note_symbol(Uniform::new(top_n as u32), top as u32);
         self.bits(s & ((1 << shift) - 1), shift);
     }
 
@@ -484,8 +487,7 @@ impl Encoder {
             let c = k.min(16);
             k -= c;
             let chunk = ((v >> k) & ((1u64 << c) - 1)) as u32;
-            let w = PRECISION as u32 - c;
-            self.note(chunk << w, 1 << w);
+            self.note_symbol(RawBits(c), chunk);
         }
     }
 
@@ -567,7 +569,7 @@ impl Decoder {
             .collect();
         if !first.is_empty() {
             let top = first.iter().fold(0u32, |w, &b| w << 8 | b as u32);
-            if top == 0 || first[0] == 0 {
+            if first[0] == 0 {
                 return Err(Error::corrupt(section, "bad stream start"));
             }
             words.push(top);
@@ -641,7 +643,7 @@ impl Decoder {
         Ok(v)
     }
 
-/// Decodes what [`Encoder::int`] wrote.
+    /// Decodes what [`Encoder::int`] wrote.
     pub fn int(&mut self, m: &mut IntModel) -> Result<i64> {
         let s = self.symbol(&mut m.sym)?;
         let (c, neg, top) = match s {
