@@ -250,7 +250,7 @@ fn hostile_fit_containers_are_refused() {
         }
     }
     // Fit rules the format does not define are unsupported, not guessed at.
-    match subwave::decode_slice(&rewritten(|h| h[at + 1] |= 16, |_, _| {})) {
+    match subwave::decode_slice(&rewritten(|h| h[at + 1] |= 64, |_, _| {})) {
         Err(Error::Unsupported(what)) => assert!(what.contains("fit rules"), "{what}"),
         other => panic!("unknown fit rules: {other:?}"),
     }
@@ -330,6 +330,76 @@ fn each_rule_set_is_found_and_its_surfaces_code_to_near_zero_residuals() {
 }
 
 #[test]
+fn semi_sharp_creases_are_found_with_their_sharpness() {
+    // Limit surfaces made by the corpus crate's own float evaluation of OpenSubdiv's
+    // semi-sharp rules: the prism's rims at Blender's crease 0.3, 0.5 and 0.8
+    // (sharpness 0.9, 2.5 and 6.4 over four levels), and one vertex crease (sharpness
+    // 1.6) on a smooth prism. The fit finds the edges or the vertex and the sharpness
+    // from the data alone, decodes exactly, and its residuals cost next to nothing;
+    // the infinitely sharp rims' fit does not.
+    let (control, rims) = prism_and_rims();
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    let one = 65536.0;
+    let corner = control.faces[0][0];
+    for (crease, vertex) in [(0.3, None), (0.5, None), (0.8, None), (0.0, Some(1.6))] {
+        let sharpness: f64 = 10.0 * crease * crease;
+        let edges: Vec<([u32; 2], f64)> = if vertex.is_none() {
+            rims.iter().map(|&e| (e, sharpness)).collect()
+        } else {
+            Vec::new()
+        };
+        let vertices: Vec<(u32, f64)> = vertex.map(|s| (corner, s)).into_iter().collect();
+        let surface = control.subdivision_surface_sharp(4, &edges, &vertices, true, Kept::Nothing);
+        let mesh = common::to_mesh(&surface, 1e5);
+        let what = format!("crease {crease}, vertex {vertex:?}");
+        let enc = encode(&mesh, &q, TransformChoice::Fit);
+        assert!(
+            matches!(enc.header.transform, Transform::Fit { limit: true, .. }),
+            "{what}: {:?}",
+            enc.header.transform
+        );
+        match vertex {
+            None => {
+                assert_eq!(enc.header.creases.len(), 10, "{what}");
+                assert!(enc.header.vertex_creases.is_empty(), "{what}");
+                // Sharpness beyond the four levels is sharp to the limit: the same
+                // surface as infinitely sharp, which the header lists without values.
+                if sharpness < 4.0 {
+                    assert_eq!(enc.header.crease_sharpness.len(), 10, "{what}");
+                }
+                for &s in &enc.header.crease_sharpness {
+                    let s = s as f64 / one;
+                    assert!(
+                        (s - sharpness).abs() < 0.01 || sharpness > 4.0 && s > 4.0,
+                        "{what}: sharpness {s}"
+                    );
+                }
+            }
+            Some(v) => {
+                assert!(enc.header.creases.is_empty(), "{what}");
+                // (numbered as the base mesh the encoder found)
+                assert_eq!(enc.header.vertex_creases.len(), 1, "{what}");
+                let s = enc.header.vertex_sharpness[0] as f64 / one;
+                assert!((s - v).abs() < 0.01, "{what}: sharpness {s}");
+            }
+        }
+        assert_exact(&enc.bytes, &mesh, &what);
+        let (n, r) = (mesh.vertex_count(), residual_bytes(&enc.bytes));
+        assert!(
+            8 * r < n,
+            "{what}: {r} B of residuals for {n} vertices ({:?}, {:?} {:?})",
+            enc.header.crease_sharpness,
+            enc.header.vertex_creases,
+            enc.header.vertex_sharpness
+        );
+        // Infinitely sharp rules miss these surfaces (but where the sharpness
+        // outlasts the four levels).
+        let sharp = common::to_mesh(&control.subdivision_surface(4, &rims, true), 1e5);
+        assert_eq!(sharp.positions == mesh.positions, sharpness > 4.0, "{what}");
+    }
+}
+
+#[test]
 fn auto_finds_a_creased_limit_surface() {
     // A folded sheet (a tent along a column; 5 columns, so that its hierarchy's base
     // is this grid), its fold creased, on the limit: regular patches, so `auto` sees a
@@ -345,6 +415,32 @@ fn auto_finds_a_creased_limit_surface() {
     );
     assert_eq!(enc.header.creases.len(), 4);
     assert_exact(&enc.bytes, &mesh, "folded sheet");
+    let n = mesh.vertex_count();
+    let r = residual_bytes(&enc.bytes);
+    assert!(8 * r < n, "{r} B of residuals for {n} vertices");
+}
+
+#[test]
+fn auto_finds_a_semi_sharp_limit_surface() {
+    // The folded sheet, its fold at Blender's crease 0.5 (sharpness 2.5), on the
+    // limit: `auto` sees a surface, tries the fit and finds the crease and its
+    // sharpness.
+    let (control, fold) = subwave_corpus::folded_sheet();
+    let edges: Vec<([u32; 2], f64)> = fold.iter().map(|&e| (e, 2.5)).collect();
+    let surface = control.subdivision_surface_sharp(3, &edges, &[], true, Kept::Nothing);
+    let mesh = common::to_mesh(&surface, 1e6);
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    let enc = encode(&mesh, &q, TransformChoice::Auto);
+    assert!(
+        matches!(enc.header.transform, Transform::Fit { limit: true, .. }),
+        "auto chose {}",
+        enc.header.transform.name()
+    );
+    assert_eq!(enc.header.creases.len(), 4);
+    for &s in &enc.header.crease_sharpness {
+        assert!((s as i64 - (5 << 15)).abs() < 64, "sharpness {s}");
+    }
+    assert_exact(&enc.bytes, &mesh, "semi-sharp folded sheet");
     let n = mesh.vertex_count();
     let r = residual_bytes(&enc.bytes);
     assert!(8 * r < n, "{r} B of residuals for {n} vertices");
@@ -437,6 +533,51 @@ fn hostile_crease_lists_are_refused() {
             Ok(_) => panic!("crease {e} decoded"),
         }
     }
+    // Sharpnesses: in range they decode (to another mesh); 0, past infinitely sharp,
+    // without creases, or a creased vertex past the base mesh's are malformed.
+    let n = enc.header.creases.len();
+    let one = 1u32 << 16;
+    let mut h = enc.header.clone();
+    h.crease_sharpness = vec![one * 3 / 2; n];
+    h.vertex_creases = vec![0];
+    h.vertex_sharpness = vec![one * 10];
+    // (The residuals were coded for other predictions, so they may run out.)
+    match subwave::decode_slice(&with_header(&h)) {
+        Ok(other) => assert_ne!(
+            common::fingerprint(&other.mesh),
+            common::fingerprint(&mesh),
+            "the sharpnesses change the surface"
+        ),
+        Err(Error::CorruptLevel { .. }) => {}
+        Err(e) => panic!("sharpnesses in range: {e}"),
+    }
+    let bad = |f: &dyn Fn(&mut subwave::Header), what: &str| {
+        let mut h = enc.header.clone();
+        f(&mut h);
+        match subwave::decode_slice(&with_header(&h)) {
+            Err(Error::Container(err)) => assert!(err.to_string().contains(what), "{err}"),
+            other => panic!("{what}: {other:?}"),
+        }
+    };
+    bad(&|h| h.crease_sharpness = vec![0; n], "crease sharpness 0");
+    bad(
+        &|h| h.crease_sharpness = vec![one * 10 + 1; n],
+        "crease sharpness 655361",
+    );
+    bad(
+        &|h| {
+            h.creases.clear();
+            h.crease_sharpness = vec![one];
+        },
+        "without creases",
+    );
+    bad(
+        &|h| {
+            h.vertex_creases = vec![h.base_vertices as u32];
+            h.vertex_sharpness = vec![one];
+        },
+        "past",
+    );
 }
 
 #[test]

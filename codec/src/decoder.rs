@@ -242,9 +242,9 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
         } => {
             let rules = fit::Rules {
                 limit,
-                sharp: Vec::new(),
                 corners,
                 linear,
+                ..fit::Rules::default()
             };
             synthesise_fit(&c, &h, base, bits, &rules, level)?
         }
@@ -821,7 +821,8 @@ fn coarse_mesh(h: &Header, w: Wavelet, upto: u8, x: &[Vec<i64>; 3], topo: Topo) 
 
 /// Rebuilds levels 1..=`upto` of a subdivision fit (SPEC.md 9.10, 10.4): the control
 /// values (`bits` extra bits) refined in integers by the header's `rules` (its creases
-/// kept apart, per level; `rules.sharp` is not read), rounded to the grid, and at the
+/// from the header, per level; `rules`' sharpnesses are not read), rounded to the grid,
+/// and at the
 /// finest level the residuals added.
 fn synthesise_fit(
     c: &Container<'_>,
@@ -837,12 +838,25 @@ fn synthesise_fit(
     let mut x: [Vec<i64>; 3] =
         std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect());
     let mut level = Level::new(&topo)?;
-    let mut sharp = vec![false; if h.creases.is_empty() { 0 } else { level.ne() }];
-    for &e in &h.creases {
+    let mut sharp = fit::Sharpness::default();
+    if !h.creases.is_empty() {
+        sharp.edges = vec![0; level.ne()];
+    }
+    for (i, &e) in h.creases.iter().enumerate() {
         *sharp
+            .edges
             .get_mut(e as usize)
-            .ok_or_else(|| Error::corrupt("HEAD", format!("crease {e} is not a base edge")))? =
-            true;
+            .ok_or_else(|| Error::corrupt("HEAD", format!("crease {e} is not a base edge")))? = h
+            .crease_sharpness
+            .get(i)
+            .copied()
+            .unwrap_or(fit::SHARP_INFINITE);
+    }
+    if !h.vertex_creases.is_empty() {
+        sharp.vertices = vec![0; level.nv];
+        for (&v, &s) in h.vertex_creases.iter().zip(&h.vertex_sharpness) {
+            sharp.vertices[v as usize] = s;
+        }
     }
     for l in 0..upto as usize {
         check_refinement_size(h, level.fine_nv(), level.fine_faces_with(&[]))?;
@@ -856,7 +870,7 @@ fn synthesise_fit(
             fit::subdivide(&level, rules.hard(&sharp), xs);
         }
         let fine = level.next();
-        sharp = fit::sharp_below(&level, &sharp, &fine);
+        sharp = sharp.below(&level, &fine);
         level = fine;
     }
     if rules.limit {

@@ -168,9 +168,36 @@ pub fn fit_rules(h: &Header) -> String {
     };
     let mut rules = Vec::new();
     let n = h.creases.len();
+    let sharpness = |list: &[u32]| -> String {
+        let mut v: Vec<String> = list
+            .iter()
+            .map(|&s| format!("{:.4}", s as f64 / crate::transform::fit::SHARP_ONE as f64))
+            .collect();
+        v.dedup();
+        if v.len() > 3 {
+            v.truncate(3);
+            v.push("...".into());
+        }
+        v.join(", ")
+    };
     if n > 0 {
         let s = if n == 1 { "" } else { "s" };
-        rules.push(format!("{n} creased base edge{s}"));
+        rules.push(if h.crease_sharpness.is_empty() {
+            format!("{n} creased base edge{s}")
+        } else {
+            format!(
+                "{n} creased base edge{s} (sharpness {})",
+                sharpness(&h.crease_sharpness)
+            )
+        });
+    }
+    let n = h.vertex_creases.len();
+    if n > 0 {
+        rules.push(format!(
+            "{n} creased base {} (sharpness {})",
+            if n == 1 { "vertex" } else { "vertices" },
+            sharpness(&h.vertex_sharpness)
+        ));
     }
     if corners {
         rules.push("boundary corners kept".to_string());

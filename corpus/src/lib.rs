@@ -7,7 +7,7 @@
 // Numeric kernels index several arrays (axes, positions, weights) in lockstep.
 #![allow(clippy::needless_range_loop)]
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 use std::fmt::Write;
 
 /// A polygon mesh with `f64` positions.
@@ -55,19 +55,20 @@ impl PolyMesh {
     /// Positions follow the Catmull-Clark rules (boundary edges and vertices use the
     /// cubic B-spline curve rules).
     pub fn catmull_clark(&self) -> PolyMesh {
-        self.catmull_clark_creased(&HashSet::new(), Kept::Nothing).0
+        self.catmull_clark_creased(&Creases::default(), Kept::Nothing)
+            .0
     }
 
-    /// One Catmull-Clark step with infinitely sharp edges (`creases`, as ordered pairs
-    /// `(min, max)`): a creased edge's point is its midpoint, a vertex with two hard
-    /// (boundary or creased) edges takes the curve rule along them, one with more
-    /// keeps its place, and so do the boundary vertices `kept` names.
-    /// Also returns the creased edges of the result (both halves of each creased edge).
-    pub fn catmull_clark_creased(
-        &self,
-        creases: &HashSet<(u32, u32)>,
-        kept: Kept,
-    ) -> (PolyMesh, HashSet<(u32, u32)>) {
+    /// One Catmull-Clark step with creases, by OpenSubdiv's rules (uniform creasing):
+    /// an edge of sharpness `s >= 1` (boundary edges are infinitely sharp) gets its
+    /// midpoint, of `0 < s < 1` the point `s` of the way from the smooth point to it; a
+    /// vertex with two sharp edges takes the curve rule along them, one with more or a
+    /// vertex sharpness keeps its place, and so do the boundary vertices `kept` names;
+    /// where a vertex's rule one level down differs, the two are blended by the mean
+    /// sharpness of the vertex and its edges that are sharp at most 1.
+    /// Also returns the creases of the result (both halves of each creased edge and
+    /// each old vertex one less sharp; 10 is infinite and stays).
+    pub fn catmull_clark_creased(&self, creases: &Creases, kept: Kept) -> (PolyMesh, Creases) {
         let nv = self.positions.len();
         let mut edge_id: HashMap<(u32, u32), usize> = HashMap::new();
         let mut edges: Vec<(u32, u32)> = Vec::new();
@@ -92,14 +93,29 @@ impl PolyMesh {
             .collect();
         let mut pos = vec![[0.0; 3]; nv + ne + self.faces.len()];
         let boundary_edge = |e: usize| edge_faces[e].len() < 2;
-        let hard_edge = |e: usize| boundary_edge(e) || creases.contains(&edges[e]);
+        let sharpness = |e: usize| {
+            if boundary_edge(e) {
+                INFINITELY_SHARP
+            } else {
+                creases.edges.get(&edges[e]).copied().unwrap_or(0.0)
+            }
+        };
         for (e, &(a, b)) in edges.iter().enumerate() {
             let pa = self.positions[a as usize];
             let pb = self.positions[b as usize];
-            pos[nv + e] = if hard_edge(e) {
-                mean([pa, pb].into_iter())
+            let s = sharpness(e);
+            let mid = mean([pa, pb].into_iter());
+            pos[nv + e] = if s >= 1.0 {
+                mid
             } else {
-                mean([pa, pb, face_pt[edge_faces[e][0]], face_pt[edge_faces[e][1]]].into_iter())
+                let smooth = mean(
+                    [pa, pb, face_pt[edge_faces[e][0]], face_pt[edge_faces[e][1]]].into_iter(),
+                );
+                if s > 0.0 {
+                    [0, 1, 2].map(|k| s * mid[k] + (1.0 - s) * smooth[k])
+                } else {
+                    smooth
+                }
             };
         }
         // Old vertices.
@@ -114,20 +130,42 @@ impl PolyMesh {
             v_edges[a as usize].push(e);
             v_edges[b as usize].push(e);
         }
+        #[derive(Clone, PartialEq)]
+        enum Rule {
+            Keep,
+            Crease(Vec<usize>),
+            Smooth,
+        }
         for v in 0..nv {
             let p = self.positions[v];
-            let bnd: Vec<usize> = v_edges[v]
-                .iter()
-                .copied()
-                .filter(|&e| hard_edge(e))
-                .collect();
             let on_boundary = v_edges[v].iter().any(|&e| boundary_edge(e));
-            pos[v] = if v_edges[v].is_empty() || kept.keeps(on_boundary, v_faces[v].len()) {
-                p
-            } else if on_boundary || bnd.len() >= 2 {
-                if bnd.len() == 2 {
+            let corner = creases.vertices.get(&(v as u32)).copied().unwrap_or(0.0);
+            let rule = |now: &dyn Fn(f64) -> f64| {
+                let hard: Vec<usize> = v_edges[v]
+                    .iter()
+                    .copied()
+                    .filter(|&e| now(sharpness(e)) > 0.0)
+                    .collect();
+                if v_edges[v].is_empty()
+                    || kept.keeps(on_boundary, v_faces[v].len())
+                    || now(corner) > 0.0
+                {
+                    Rule::Keep
+                } else if on_boundary || hard.len() >= 2 {
+                    if hard.len() == 2 {
+                        Rule::Crease(hard)
+                    } else {
+                        Rule::Keep
+                    }
+                } else {
+                    Rule::Smooth
+                }
+            };
+            let value = |r: &Rule| match r {
+                Rule::Keep => p,
+                Rule::Crease(hard) => {
                     let mut s = [0.0; 3];
-                    for &e in &bnd {
+                    for &e in hard {
                         let (a, b) = edges[e];
                         let o = if a as usize == v { b } else { a };
                         for k in 0..3 {
@@ -135,17 +173,33 @@ impl PolyMesh {
                         }
                     }
                     [0, 1, 2].map(|k| p[k] * 0.75 + s[k])
-                } else {
-                    p
                 }
+                Rule::Smooth => {
+                    let n = v_edges[v].len() as f64;
+                    let q = mean(v_faces[v].iter().map(|&f| face_pt[f]));
+                    let r = mean(v_edges[v].iter().map(|&e| {
+                        let (a, b) = edges[e];
+                        mean([self.positions[a as usize], self.positions[b as usize]].into_iter())
+                    }));
+                    [0, 1, 2].map(|k| (q[k] + 2.0 * r[k] + (n - 3.0) * p[k]) / n)
+                }
+            };
+            let parent = rule(&|s| s);
+            let child = rule(&|s| one_less(s));
+            pos[v] = if parent == Rule::Smooth || parent == child {
+                value(&parent)
             } else {
-                let n = v_edges[v].len() as f64;
-                let q = mean(v_faces[v].iter().map(|&f| face_pt[f]));
-                let r = mean(v_edges[v].iter().map(|&e| {
-                    let (a, b) = edges[e];
-                    mean([self.positions[a as usize], self.positions[b as usize]].into_iter())
-                }));
-                [0, 1, 2].map(|k| (q[k] + 2.0 * r[k] + (n - 3.0) * p[k]) / n)
+                let sharp: Vec<f64> = std::iter::once(corner)
+                    .chain(v_edges[v].iter().map(|&e| sharpness(e)))
+                    .filter(|&s| s > 0.0 && s <= 1.0)
+                    .collect();
+                if sharp.is_empty() {
+                    value(&child)
+                } else {
+                    let w = (sharp.iter().sum::<f64>() / sharp.len() as f64).min(1.0);
+                    let (a, b) = (value(&parent), value(&child));
+                    [0, 1, 2].map(|k| w * a[k] + (1.0 - w) * b[k])
+                }
             };
         }
         for (fi, fp) in face_pt.iter().enumerate() {
@@ -163,13 +217,24 @@ impl PolyMesh {
                 faces.push(vec![f[i], e_of(i), fp, e_of((i + k - 1) % k)]);
             }
         }
-        let below = creases
-            .iter()
-            .flat_map(|&(a, b)| {
-                let mid = (nv + edge_id[&(a, b)]) as u32;
-                [(a.min(mid), a.max(mid)), (b.min(mid), b.max(mid))]
-            })
-            .collect();
+        let below = Creases {
+            edges: creases
+                .edges
+                .iter()
+                .filter(|&(_, &s)| one_less(s) > 0.0)
+                .flat_map(|(&(a, b), &s)| {
+                    let mid = (nv + edge_id[&(a, b)]) as u32;
+                    let s = one_less(s);
+                    [((a.min(mid), a.max(mid)), s), ((b.min(mid), b.max(mid)), s)]
+                })
+                .collect(),
+            vertices: creases
+                .vertices
+                .iter()
+                .filter(|&(_, &s)| one_less(s) > 0.0)
+                .map(|(&v, &s)| (v, one_less(s)))
+                .collect(),
+        };
         (
             PolyMesh {
                 positions: pos,
@@ -198,8 +263,29 @@ impl PolyMesh {
         limit: bool,
         kept: Kept,
     ) -> PolyMesh {
-        let mut sharp: HashSet<(u32, u32)> =
-            creases.iter().map(|&[a, b]| (a.min(b), a.max(b))).collect();
+        let edges: Vec<([u32; 2], f64)> = creases.iter().map(|&e| (e, INFINITELY_SHARP)).collect();
+        self.subdivision_surface_sharp(levels, &edges, &[], limit, kept)
+    }
+
+    /// [`PolyMesh::subdivision_surface_with`] with semi-sharp creases: `edges` as
+    /// vertex pairs with their sharpness (Blender's edge crease `c` is `10 c^2`; 10 is
+    /// infinitely sharp), `vertices` with theirs (vertex creases). On the limit, an
+    /// edge or vertex with sharpness left after the last step is sharp.
+    pub fn subdivision_surface_sharp(
+        &self,
+        levels: u32,
+        edges: &[([u32; 2], f64)],
+        vertices: &[(u32, f64)],
+        limit: bool,
+        kept: Kept,
+    ) -> PolyMesh {
+        let mut sharp = Creases {
+            edges: edges
+                .iter()
+                .map(|&([a, b], s)| ((a.min(b), a.max(b)), s))
+                .collect(),
+            vertices: vertices.iter().copied().collect(),
+        };
         let mut m = self.clone();
         for _ in 0..levels {
             (m, sharp) = m.catmull_clark_creased(&sharp, kept);
@@ -211,7 +297,7 @@ impl PolyMesh {
     }
 
     /// The limit positions of [`PolyMesh::subdivision_surface`].
-    fn limit_positions(&self, sharp: &HashSet<(u32, u32)>, kept: Kept) -> Vec<[f64; 3]> {
+    fn limit_positions(&self, creases: &Creases, kept: Kept) -> Vec<[f64; 3]> {
         let nv = self.positions.len();
         let mut edge_faces: HashMap<(u32, u32), usize> = HashMap::new();
         let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); nv];
@@ -237,10 +323,12 @@ impl PolyMesh {
                 let hard: Vec<u32> = neighbours[v]
                     .iter()
                     .copied()
-                    .filter(|&o| edge_faces[&key(o)] < 2 || sharp.contains(&key(o)))
+                    .filter(|&o| edge_faces[&key(o)] < 2 || creases.edges.contains_key(&key(o)))
                     .collect();
                 let n = neighbours[v].len();
-                if kept.keeps(boundary, opposite[v].len()) {
+                if kept.keeps(boundary, opposite[v].len())
+                    || creases.vertices.contains_key(&(v as u32))
+                {
                     p
                 } else if hard.len() == 2 {
                     let (a, b) = (
@@ -829,6 +917,28 @@ pub fn large_polar(levels: u32) -> PolyMesh {
     let mut m = polar_sphere(8, 7).polar_refined(&[0, 1], levels);
     m.displace(0.02, 0.001, &mut rng);
     m
+}
+
+/// The sharpness of an infinitely sharp crease (OpenSubdiv's 10).
+pub const INFINITELY_SHARP: f64 = 10.0;
+
+/// A sharpness one subdivision step down: one less, at least 0; infinite stays.
+fn one_less(s: f64) -> f64 {
+    if s >= INFINITELY_SHARP {
+        INFINITELY_SHARP
+    } else {
+        (s - 1.0).max(0.0)
+    }
+}
+
+/// Creases of a mesh: sharpness per edge (as an ordered vertex pair) and per vertex;
+/// absent ones are smooth.
+#[derive(Clone, Debug, Default)]
+pub struct Creases {
+    /// Edge `(min, max)` to its sharpness.
+    pub edges: HashMap<(u32, u32), f64>,
+    /// Vertex to its sharpness.
+    pub vertices: HashMap<u32, f64>,
 }
 
 /// Which boundary vertices a subdivision keeps where they are.

@@ -79,50 +79,115 @@ pub(crate) fn code_fit(
     }
     let nb = canon.base.nv;
     let mut best: Option<Payloads> = None;
+    let mut keep = |p: Payloads| {
+        if best.as_ref().is_none_or(|q| p.size() < q.size()) {
+            best = Some(p);
+        }
+    };
     let sets = sets.unwrap_or_else(|| rule_sets(canon, &finest, pos));
-    for rules in sets {
+    // The smooth rule sets' sizes and the limit surface's distances, for the search
+    // for semi-sharp creases.
+    let mut smooth: Vec<(usize, bool)> = Vec::new();
+    let mut distances = None;
+    for rules in &sets {
+        let op = fit::Operator::new(&canon.levels, &finest, rules);
+        let control = robust_fit(&op, &fine, nb);
+        let plain = rules.sharpness.is_empty() && !rules.corners && !rules.linear;
+        if plain && rules.limit {
+            distances = Some((distances_from(&op, &control, &fine), control.clone()));
+        }
+        drop(op);
+        if let Some(p) = code_rules(canon, pos, header, bits, rules, &control, &finest) {
+            if plain {
+                smooth.push((p.size(), rules.limit));
+            }
+            keep(p);
+        }
+    }
+    let limit = smooth.iter().min().is_none_or(|&(_, l)| l);
+    let found = distances.and_then(|(d, c)| semi_sharp(canon, &finest, pos, &fine, &d, &c, limit));
+    if let Some(rules) = found.filter(|r| !sets.contains(r)) {
         let op = fit::Operator::new(&canon.levels, &finest, &rules);
         let control = robust_fit(&op, &fine, nb);
         drop(op);
-        // B = 0 last, for values too large for any precision asked for.
-        let mut found = false;
-        for b in bits.iter().copied().chain([0]) {
-            if b == 0 && found {
-                break;
-            }
-            let s = (1u64 << b) as f64;
-            let mut x: [Vec<i64>; 3] = std::array::from_fn(|k| {
-                control.iter().map(|v| (v[k] * s).round() as i64).collect()
-            });
-            if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
-                continue;
-            }
-            found = true;
-            let (mut h, base_bytes) = hierarchy_base(canon, &x, header);
-            fit::refine(&canon.levels, &finest, &rules, &mut x);
-            let mut level_bytes = vec![Vec::new(); canon.levels.len() - 1];
-            level_bytes.push(levl::fit::encode_residuals(&x, pos, b));
-            h.transform = Transform::Fit {
-                bits: b,
-                limit: rules.limit,
-                corners: rules.corners,
-                linear: rules.linear,
-            };
-            h.creases = (0..rules.sharp.len() as u32)
-                .filter(|&e| rules.sharp[e as usize])
-                .collect();
-            let p = Payloads {
-                header: h,
-                base: base_bytes,
-                levels: level_bytes,
-                order: None,
-            };
-            if best.as_ref().is_none_or(|q| p.size() < q.size()) {
-                best = Some(p);
-            }
+        if let Some(p) = code_rules(canon, pos, header, bits, &rules, &control, &finest) {
+            keep(p);
         }
     }
     best
+}
+
+/// The smallest coding of `rules` with the control values `control`, over the
+/// precisions in `bits` (B = 0 last, for values too large for any of them).
+fn code_rules(
+    canon: &Canonical,
+    pos: &[Vec<i64>; 3],
+    header: &Header,
+    bits: &[u8],
+    rules: &Rules,
+    control: &[[f64; 3]],
+    finest: &Level,
+) -> Option<Payloads> {
+    let mut best: Option<Payloads> = None;
+    let mut found = false;
+    for b in bits.iter().copied().chain([0]) {
+        if b == 0 && found {
+            break;
+        }
+        let s = (1u64 << b) as f64;
+        let mut x: [Vec<i64>; 3] =
+            std::array::from_fn(|k| control.iter().map(|v| (v[k] * s).round() as i64).collect());
+        if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
+            continue;
+        }
+        found = true;
+        let (mut h, base_bytes) = hierarchy_base(canon, &x, header);
+        fit::refine(&canon.levels, finest, rules, &mut x);
+        let mut level_bytes = vec![Vec::new(); canon.levels.len() - 1];
+        level_bytes.push(levl::fit::encode_residuals(&x, pos, b));
+        h.transform = Transform::Fit {
+            bits: b,
+            limit: rules.limit,
+            corners: rules.corners,
+            linear: rules.linear,
+        };
+        let listed = |sharpness: &[u32]| -> (Vec<u32>, Vec<u32>) {
+            sharpness
+                .iter()
+                .enumerate()
+                .filter(|&(_, &s)| s > 0)
+                .map(|(i, &s)| (i as u32, s.min(fit::SHARP_INFINITE)))
+                .unzip()
+        };
+        let (creases, sharpness) = listed(&rules.sharpness);
+        h.creases = creases;
+        h.crease_sharpness = if sharpness.iter().all(|&s| s == fit::SHARP_INFINITE) {
+            Vec::new()
+        } else {
+            sharpness
+        };
+        (h.vertex_creases, h.vertex_sharpness) = listed(&rules.vertex_sharpness);
+        let p = Payloads {
+            header: h,
+            base: base_bytes,
+            levels: level_bytes,
+            order: None,
+        };
+        if best.as_ref().is_none_or(|q| p.size() < q.size()) {
+            best = Some(p);
+        }
+    }
+    best
+}
+
+/// Per finest vertex, its largest distance over the axes from the refinement of
+/// `control` by `op`.
+fn distances_from(op: &fit::Operator, control: &[[f64; 3]], fine: &[[f64; 3]]) -> Vec<f64> {
+    op.apply(control)
+        .iter()
+        .zip(fine)
+        .map(|(p, y)| (0..3).map(|k| (p[k] - y[k]).abs()).fold(0.0, f64::max))
+        .collect()
 }
 
 /// Median distance (grid units, per axis) from the finest values to the limit surface
@@ -171,12 +236,7 @@ const OUTLIER_FLOOR: f64 = 4.0;
 /// the outliers of the first fit.
 fn robust_fit(op: &fit::Operator, fine: &[[f64; 3]], nb: usize) -> Vec<[f64; 3]> {
     let first = op.fit(fine, &fine[..nb], &[], 400, FIT_TOLERANCE);
-    let dist: Vec<f64> = op
-        .apply(&first)
-        .iter()
-        .zip(fine)
-        .map(|(p, y)| (0..3).map(|k| (p[k] - y[k]).abs()).fold(0.0, f64::max))
-        .collect();
+    let dist = distances_from(op, &first, fine);
     let mut sorted = dist.clone();
     sorted.sort_by(f64::total_cmp);
     let cut = (OUTLIER_FACTOR * sorted[sorted.len() / 2]).max(OUTLIER_FLOOR);
@@ -201,15 +261,15 @@ fn rule_sets(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<Rule
             ..Rules::default()
         },
     ];
-    let sharp = creases(canon, finest, pos);
-    if !sharp.is_empty() {
+    let sharpness = creases(canon, finest, pos);
+    if !sharpness.is_empty() {
         sets.push(Rules {
             limit: true,
-            sharp: sharp.clone(),
+            sharpness: sharpness.clone(),
             ..Rules::default()
         });
         sets.push(Rules {
-            sharp,
+            sharpness,
             ..Rules::default()
         });
     }
@@ -252,17 +312,22 @@ fn rule_sets(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<Rule
 /// meet at a few degrees, a crease at its fold.
 const CREASE_ANGLE: f64 = 0.3;
 
-/// The base edges along which the finest surface folds (mean angle between the finest
-/// faces beside the edge's descendants above [`CREASE_ANGLE`]): the creases the fit
-/// tries. Empty when there is none.
-fn creases(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<bool> {
-    // Per edge of each level, the base edge it descends from (NONE: none).
-    let none = u32::MAX;
+/// Per edge of the finest level (the coarse mesh of `finest`), the base edge it
+/// descends from, or `u32::MAX`.
+fn owners(canon: &Canonical, finest: &Level) -> Vec<u32> {
     let mut owner: Vec<u32> = (0..canon.levels[0].ne() as u32).collect();
     for (l, level) in canon.levels.iter().enumerate() {
         let fine = canon.levels.get(l + 1).unwrap_or(finest);
-        owner = fit::tags_below(level, &owner, none, fine);
+        owner = fit::tags_below(level, &owner, u32::MAX, fine);
     }
+    owner
+}
+
+/// Per base edge, the mean angle (radians) between the finest faces beside its
+/// descendants: a smooth surface's finest faces meet at a few degrees, a crease at its
+/// fold (0 for an edge whose descendants are all on a boundary).
+fn fold_angles(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<f64> {
+    let owner = owners(canon, finest);
     let p = |v: u32| -> [f64; 3] { std::array::from_fn(|k| pos[k][v as usize] as f64) };
     let normal = |f: u32| {
         let c = finest.coarse.face(f as usize);
@@ -279,7 +344,7 @@ fn creases(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<bool> 
         ]
     };
     let mut sum = vec![(0.0f64, 0usize); canon.levels[0].ne()];
-    for (h, &o) in owner.iter().enumerate().filter(|&(_, &o)| o != none) {
+    for (h, &o) in owner.iter().enumerate().filter(|&(_, &o)| o != u32::MAX) {
         if finest.is_boundary(h) {
             continue;
         }
@@ -294,15 +359,340 @@ fn creases(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<bool> 
             s.1 += 1;
         }
     }
-    let sharp: Vec<bool> = sum
+    sum.iter()
+        .map(|&(a, n)| if n > 0 { a / n as f64 } else { 0.0 })
+        .collect()
+}
+
+/// The base edges along which the finest surface folds (mean angle above
+/// [`CREASE_ANGLE`]), infinitely sharp: the creases the fit tries. Empty when there is
+/// none.
+fn creases(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<u32> {
+    let sharp: Vec<u32> = fold_angles(canon, finest, pos)
         .iter()
-        .map(|&(a, n)| n > 0 && a / n as f64 > CREASE_ANGLE)
+        .map(|&a| {
+            if a > CREASE_ANGLE {
+                fit::SHARP_INFINITE
+            } else {
+                0
+            }
+        })
         .collect();
-    if sharp.contains(&true) {
+    if sharp.iter().any(|&s| s > 0) {
         sharp
     } else {
         Vec::new()
     }
+}
+
+/// Most rounds of the sharpness search's last step.
+const SETTLE_ROUNDS: usize = 12;
+
+/// Golden-section steps of the sharpness search (from two levels' span to 2^-9).
+const GOLDEN_STEPS: usize = 15;
+
+/// Base edges whose finest vertices lie, at their median, more than one of these times
+/// the median distance from the smooth limit surface make a set of creases to try.
+const CREASE_FACTORS: [f64; 2] = [1.5, 3.0];
+
+/// Base vertices whose finest vertex lies more than this many times the median
+/// distance from the surface fitted so far are tried as vertex creases.
+const VERTEX_FACTOR: f64 = 2.0;
+
+/// A drop in fold angle by this factor between consecutive base edges (ranked by
+/// fold) separates creases from smooth edges.
+const FOLD_GAP: f64 = 1.25;
+
+/// The largest drops in fold angle whose sets of edges are tried.
+const FOLD_SETS: usize = 2;
+
+/// Blender crease values at which each set of creases is screened.
+const SCREEN_CREASES: [f64; 2] = [0.3, 0.7];
+
+/// A set of creases is searched only if at a screening value it fits with less than
+/// this share of the smooth surface's misfit.
+const SCREEN_GAIN: f64 = 0.5;
+
+/// Iterations of a screening fit and of a search's fits (warm started from the
+/// smooth surface's control values), and the search's tolerance (grid units).
+const SCREEN_ITERATIONS: usize = 15;
+const SEARCH_ITERATIONS: usize = 200;
+const SEARCH_TOLERANCE: f64 = 1e-3;
+
+/// The sharpness (units of 2^-16) of Blender's crease value `c`.
+fn crease_sharpness(c: f64) -> u32 {
+    ((10.0 * c * c * fit::SHARP_ONE as f64).round() as u32).clamp(1, fit::SHARP_INFINITE)
+}
+
+/// Semi-sharp creases (SPEC.md 9.10), as a modelling tool's user sets them: a set of
+/// base edges, or of base vertices, with one sharpness. Candidate edge sets are those
+/// whose finest vertices lie far from the smooth surface (`distances`, per finest
+/// vertex, of the control values `start`) and those that fold far more than the rest;
+/// each is screened at a few sharpnesses, and the best, if it fits far better than the
+/// smooth surface, gets the sharpness that fits best by least squares. Then base
+/// vertices still far off are tried as vertex creases the same way (on the creases
+/// found, and alone). `None` when nothing fits better than the smooth surface.
+fn semi_sharp(
+    canon: &Canonical,
+    finest: &Level,
+    pos: &[Vec<i64>; 3],
+    fine: &[[f64; 3]],
+    distances: &[f64],
+    start: &[[f64; 3]],
+    limit: bool,
+) -> Option<Rules> {
+    let mut sorted = distances.to_vec();
+    let mid = sorted.len() / 2;
+    let median = *sorted.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let cut = (OUTLIER_FACTOR * median).max(OUTLIER_FLOOR);
+    let base = &canon.levels[0];
+    // Per base edge, the median distance of the finest vertices on its descendants
+    // (a median: one vertex beside an extraordinary vertex does not make a crease).
+    let owner = owners(canon, finest);
+    let mut along: Vec<Vec<f64>> = vec![Vec::new(); base.ne()];
+    for (h, &o) in owner.iter().enumerate().filter(|&(_, &o)| o != u32::MAX) {
+        along[o as usize].extend(finest.edges[h].iter().map(|&v| distances[v as usize]));
+    }
+    let score: Vec<f64> = along
+        .iter_mut()
+        .map(|d| {
+            let m = d.len() / 2;
+            if d.is_empty() {
+                0.0
+            } else {
+                *d.select_nth_unstable_by(m, f64::total_cmp).1
+            }
+        })
+        .collect();
+    // Candidate sets: the edges scoring above each factor of the median, each set once.
+    let mut sets: Vec<Vec<usize>> = Vec::new();
+    for f in CREASE_FACTORS {
+        let set: Vec<usize> = (0..base.ne())
+            .filter(|&e| score[e] > (f * median).max(OUTLIER_FLOOR))
+            .collect();
+        if !set.is_empty() && !sets.contains(&set) {
+            sets.push(set);
+        }
+    }
+    // And the edges folding most, cut where the fold angles drop by a gap (a crease
+    // concentrates its edge's fold): the largest gaps' sets.
+    let angles = fold_angles(canon, finest, pos);
+    let mut by_angle: Vec<usize> = (0..base.ne()).filter(|&e| angles[e] > 0.0).collect();
+    by_angle.sort_by(|&a, &b| angles[b].total_cmp(&angles[a]).then(a.cmp(&b)));
+    let mut gaps: Vec<(f64, usize)> = (1..by_angle.len())
+        .map(|k| (angles[by_angle[k - 1]] / angles[by_angle[k]], k))
+        .filter(|&(g, _)| g >= FOLD_GAP)
+        .collect();
+    gaps.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    for &(_, k) in gaps.iter().take(FOLD_SETS) {
+        let mut set = by_angle[..k].to_vec();
+        set.sort_unstable();
+        if !sets.contains(&set) {
+            sets.push(set);
+        }
+    }
+    let nb = base.nv;
+    let levels = canon.levels.len() as u32;
+    let smooth_rules = Rules {
+        limit,
+        ..Rules::default()
+    };
+    // Vertices far off the smooth surface (placed by other rules) do not count.
+    let counted: Vec<bool> = distances.iter().map(|&d| d <= cut).collect();
+    let ignored: Vec<bool> = counted.iter().map(|&c| !c).collect();
+    let square = |p: &[[f64; 3]]| -> f64 {
+        p.iter()
+            .zip(fine)
+            .zip(&counted)
+            .filter(|(_, &c)| c)
+            .map(|((p, y), _)| (0..3).map(|k| (y[k] - p[k]).powi(2)).sum::<f64>())
+            .sum()
+    };
+    // The least-squares misfit of `rules` (the sum of squares over the counted
+    // vertices), and every vertex's distance.
+    let misfit = |rules: &Rules, iterations: usize| -> (f64, Vec<f64>) {
+        let op = fit::Operator::new(&canon.levels, finest, rules);
+        let control = op.fit(fine, start, &ignored, iterations, SEARCH_TOLERANCE);
+        let p = op.apply(&control);
+        let d = p
+            .iter()
+            .zip(fine)
+            .map(|(p, y)| (0..3).map(|k| (p[k] - y[k]).abs()).fold(0.0, f64::max))
+            .collect();
+        (square(&p), d)
+    };
+    // The best of a few crease values, as (misfit, crease value).
+    let screen = |set: &dyn Fn(u32) -> Rules| -> (f64, f64) {
+        SCREEN_CREASES
+            .iter()
+            .map(|&c| (misfit(&set(crease_sharpness(c)), SCREEN_ITERATIONS).0, c))
+            .fold((f64::MAX, 1.0), |a, b| if b.0 < a.0 { b } else { a })
+    };
+    // The sharpness that fits best: the control values fitted at each whole
+    // sharpness (and infinitely sharp), golden sections between the best's
+    // neighbours, then, with the control values fixed, the exact best in the span
+    // (between two whole sharpnesses k and k + 1 only level k's rules blend, by the
+    // fraction, so the finest values move in proportion to it: a quadratic).
+    let search = |set: &dyn Fn(u32) -> Rules| -> (u32, f64) {
+        let fitted = |s: u32, from: &[[f64; 3]]| {
+            let op = fit::Operator::new(&canon.levels, finest, &set(s));
+            let control = op.fit(fine, from, &ignored, SEARCH_ITERATIONS, SEARCH_TOLERANCE);
+            let m = square(&op.apply(&control));
+            (m, control)
+        };
+        let one = fit::SHARP_ONE as f64;
+        let mut best = (f64::MAX, fit::SHARP_INFINITE, start.to_vec());
+        for s in (0..=levels)
+            .map(|k| k * fit::SHARP_ONE)
+            .chain([fit::SHARP_INFINITE])
+        {
+            let (m, c) = fitted(s.max(1), start);
+            if m < best.0 {
+                best = (m, s.max(1), c);
+            }
+        }
+        if best.1 == fit::SHARP_INFINITE {
+            return (best.1, best.0);
+        }
+        let k = (best.1 as f64 / one).round();
+        let (mut lo, mut hi) = ((k - 1.0).max(0.0), (k + 1.0).min(levels as f64));
+        let g = (5f64.sqrt() - 1.0) / 2.0;
+        let mut control = best.2.clone();
+        let mut at = |x: f64| {
+            let (m, c) = fitted(((x * one).round() as u32).max(1), &control);
+            control = c;
+            m
+        };
+        let (mut x1, mut x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
+        let (mut f1, mut f2) = (at(x1), at(x2));
+        for _ in 0..GOLDEN_STEPS {
+            if f1 <= f2 {
+                (hi, x2, f2) = (x2, x1, f1);
+                x1 = hi - g * (hi - lo);
+                f1 = at(x1);
+            } else {
+                (lo, x1, f1) = (x1, x2, f2);
+                x2 = lo + g * (hi - lo);
+                f2 = at(x2);
+            }
+        }
+        let x = if f1 <= f2 { x1 } else { x2 };
+        // Gauss-Newton steps in x's span: with the control values fixed, the finest
+        // values move in proportion to the fraction (only level k's rules blend, by
+        // it), along `v`; the control values and the step that fit best together come
+        // from two least-squares fits (of the finest values, and of `v`).
+        let k = (x.floor() as u32).min(levels - 1);
+        let mut t = x - k as f64;
+        let mut s = 0;
+        let mut m = f64::MAX;
+        let zero = vec![[0.0; 3]; nb];
+        for _ in 0..SETTLE_ROUNDS {
+            let now = (((k as f64 + t) * one).round() as u32).max(1);
+            if now == s {
+                break;
+            }
+            s = now;
+            let op = fit::Operator::new(&canon.levels, finest, &set(s));
+            control = op.fit(fine, &control, &ignored, 400, FIT_TOLERANCE);
+            let p = op.apply(&control);
+            let p0 = fit::Operator::new(&canon.levels, finest, &set((k * fit::SHARP_ONE).max(1)))
+                .apply(&control);
+            let p1 = fit::Operator::new(&canon.levels, finest, &set((k + 1) * fit::SHARP_ONE))
+                .apply(&control);
+            let v: Vec<[f64; 3]> = p1
+                .iter()
+                .zip(&p0)
+                .map(|(a, b)| std::array::from_fn(|i| a[i] - b[i]))
+                .collect();
+            let along = op.fit(&v, &zero, &ignored, 400, FIT_TOLERANCE);
+            let q = op.apply(&along);
+            let (mut rv, mut vv) = (0.0, 0.0);
+            for i in (0..fine.len()).filter(|&i| counted[i]) {
+                for a in 0..3 {
+                    let w = v[i][a] - q[i][a];
+                    rv += (fine[i][a] - p[i][a]) * w;
+                    vv += w * w;
+                }
+            }
+            m = square(&p);
+            if vv > 0.0 {
+                t = (t + rv / vv).clamp(0.0, 1.0);
+            }
+        }
+        if m < best.0 {
+            (s, m)
+        } else {
+            (best.1, best.0)
+        }
+    };
+    let smooth = square(&fit::Operator::new(&canon.levels, finest, &smooth_rules).apply(start));
+    let mut best = (smooth_rules.clone(), smooth);
+    // Edge creases: the set (and limit rule) that fits best at a few sharpnesses is
+    // searched, if it fits far better than the smooth surface.
+    let with = |list: &[usize], n: usize, s: u32| -> Vec<u32> {
+        let mut v = vec![0; n];
+        for &e in list {
+            v[e] = s;
+        }
+        v
+    };
+    let limits: &[bool] = if limit { &[true] } else { &[true, false] };
+    let screened = sets
+        .iter()
+        .flat_map(|set| limits.iter().map(move |&l| (set, l)))
+        .map(|(set, limit)| {
+            let (m, _) = screen(&|s| Rules {
+                limit,
+                sharpness: with(set, base.ne(), s),
+                ..Rules::default()
+            });
+            (m, set, limit)
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0));
+    if let Some((_, edges, limit)) = screened.filter(|s| s.0 < SCREEN_GAIN * smooth) {
+        let set = |s| Rules {
+            limit,
+            sharpness: with(edges, base.ne(), s),
+            ..Rules::default()
+        };
+        let (s, m) = search(&set);
+        if m < best.1 {
+            best = (set(s), m);
+        }
+    }
+    // Vertex creases: base vertices still far off, on the creases found and on the
+    // smooth surface (a vertex crease's edges may pass for creases).
+    let vertex_creases = |rules: &Rules, d: &[f64], now: f64| -> Option<(Rules, f64)> {
+        let mut sorted = d.to_vec();
+        let median = *sorted.select_nth_unstable_by(mid, f64::total_cmp).1;
+        let vertices: Vec<usize> = (0..nb)
+            .filter(|&v| d[v] > (VERTEX_FACTOR * median).max(OUTLIER_FLOOR))
+            .collect();
+        if vertices.is_empty() {
+            return None;
+        }
+        let set = |s| Rules {
+            vertex_sharpness: with(&vertices, nb, s),
+            ..rules.clone()
+        };
+        if screen(&set).0 >= SCREEN_GAIN * now {
+            return None;
+        }
+        let (s, m) = search(&set);
+        Some((set(s), m))
+    };
+    let mut found = Vec::new();
+    if !best.0.sharpness.is_empty() {
+        let (m, d) = misfit(&best.0, SEARCH_ITERATIONS);
+        found.extend(vertex_creases(&best.0, &d, m));
+    }
+    found.extend(vertex_creases(&smooth_rules, distances, smooth));
+    for f in found {
+        if f.1 < best.1 {
+            best = f;
+        }
+    }
+    (best.1 < smooth).then_some(best.0)
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

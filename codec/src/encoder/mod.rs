@@ -314,6 +314,9 @@ pub(crate) fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -
         has_normals: false,
         poles: Vec::new(),
         creases: Vec::new(),
+        crease_sharpness: Vec::new(),
+        vertex_creases: Vec::new(),
+        vertex_sharpness: Vec::new(),
         disc: DiscTransform::None,
     }
 }

@@ -156,6 +156,14 @@ pub struct Header {
     /// Subdivision fits: the base mesh's infinitely sharp edges (creases), numbered as
     /// in SPEC.md 8.1, increasing; empty for every other transform.
     pub creases: Vec<u32>,
+    /// Subdivision fits: each crease's sharpness in units of 2^-16 of a level (SPEC.md
+    /// 9.10), `1..=655360` (`10 << 16`: infinitely sharp); empty: every crease is
+    /// infinitely sharp.
+    pub crease_sharpness: Vec<u32>,
+    /// Subdivision fits: the base mesh's creased vertices, increasing; empty: none.
+    pub vertex_creases: Vec<u32>,
+    /// Subdivision fits: each creased vertex's sharpness, as `crease_sharpness`.
+    pub vertex_sharpness: Vec<u32>,
 }
 
 const FLAG_ORDER: u64 = 1;
@@ -174,6 +182,12 @@ const FIT_CREASES: u8 = 2;
 const FIT_CORNERS: u8 = 4;
 /// Fit rules: every boundary vertex keeps its value (linear boundaries).
 const FIT_LINEAR: u8 = 8;
+/// Fit rules: the creases' sharpnesses follow their list.
+const FIT_SEMI_SHARP: u8 = 16;
+/// Fit rules: a list of creased base vertices and their sharpnesses ends the header.
+const FIT_VERTEX_CREASES: u8 = 32;
+/// The largest crease sharpness a header holds: infinitely sharp (SPEC.md 9.10).
+const MAX_SHARPNESS: u64 = crate::transform::fit::SHARP_INFINITE as u64;
 
 impl Header {
     /// Serialises the header.
@@ -205,7 +219,9 @@ impl Header {
                 flag(limit, FIT_LIMIT)
                     | flag(!self.creases.is_empty(), FIT_CREASES)
                     | flag(corners, FIT_CORNERS)
-                    | flag(linear, FIT_LINEAR),
+                    | flag(linear, FIT_LINEAR)
+                    | flag(!self.crease_sharpness.is_empty(), FIT_SEMI_SHARP)
+                    | flag(!self.vertex_creases.is_empty(), FIT_VERTEX_CREASES),
             );
         }
         match self.quantization {
@@ -246,6 +262,15 @@ impl Header {
         }
         if !self.creases.is_empty() {
             write_increasing(&mut w, &self.creases);
+            for &s in &self.crease_sharpness {
+                w.varint(s as u64);
+            }
+        }
+        if !self.vertex_creases.is_empty() {
+            write_increasing(&mut w, &self.vertex_creases);
+            for &s in &self.vertex_sharpness {
+                w.varint(s as u64);
+            }
         }
         w.out
     }
@@ -292,7 +317,7 @@ impl Header {
                 )))
             }
         };
-        let (transform, creased) = read_transform(&mut r)?;
+        let (transform, rules) = read_transform(&mut r)?;
         let quantization = read_quantization(&mut r)?;
         let source = Source::from_code(r.u8("source format")?);
         let at = r.offset();
@@ -315,10 +340,22 @@ impl Header {
             (Vec::new(), DiscTransform::None)
         };
         // Fits with creases: the creased base edges, as gaps (SPEC.md 5).
-        let creases = if creased {
+        let creases = if rules & FIT_CREASES != 0 {
             read_increasing(&mut r, "crease", base_corners)?
         } else {
             Vec::new()
+        };
+        let crease_sharpness = if rules & FIT_SEMI_SHARP != 0 {
+            read_sharpness(&mut r, creases.len())?
+        } else {
+            Vec::new()
+        };
+        let (vertex_creases, vertex_sharpness) = if rules & FIT_VERTEX_CREASES != 0 {
+            let list = read_increasing(&mut r, "vertex crease", base_vertices)?;
+            let sharpness = read_sharpness(&mut r, list.len())?;
+            (list, sharpness)
+        } else {
+            (Vec::new(), Vec::new())
         };
         r.finish("the header")?;
         let h = Header {
@@ -342,6 +379,9 @@ impl Header {
             poles,
             disc,
             creases,
+            crease_sharpness,
+            vertex_creases,
+            vertex_sharpness,
         };
         h.check(offset, limits)?;
         Ok(h)
@@ -505,11 +545,27 @@ fn read_increasing(r: &mut ByteReader<'_>, what: &'static str, bound: u64) -> Re
     Ok(list)
 }
 
-/// The header's transform (SPEC.md 5), and for a fit whether creases end the header.
-fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, bool)> {
+/// `n` crease sharpnesses, each `1..=MAX_SHARPNESS` (SPEC.md 5).
+fn read_sharpness(r: &mut ByteReader<'_>, n: usize) -> Result<Vec<u32>> {
+    (0..n)
+        .map(|_| {
+            let s = r.varint("crease sharpness")?;
+            if s == 0 || s > MAX_SHARPNESS {
+                return Err(malformed(
+                    r.offset(),
+                    format!("crease sharpness {s}, not in 1..={MAX_SHARPNESS}"),
+                ));
+            }
+            Ok(s as u32)
+        })
+        .collect()
+}
+
+/// The header's transform (SPEC.md 5), and for a fit its rules byte (0 otherwise).
+fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, u8)> {
     let at = r.offset();
     Ok(match r.u8("transform")? {
-        0 => (Transform::None, false),
+        0 => (Transform::None, 0),
         FIT_CODE => {
             let at = r.offset();
             let bits = r.u8("fit precision")?;
@@ -521,10 +577,19 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, bool)> {
             }
             let at = r.offset();
             let rules = r.u8("fit rules")?;
-            if rules & !(FIT_LIMIT | FIT_CREASES | FIT_CORNERS | FIT_LINEAR) != 0 {
+            let known = FIT_LIMIT
+                | FIT_CREASES
+                | FIT_CORNERS
+                | FIT_LINEAR
+                | FIT_SEMI_SHARP
+                | FIT_VERTEX_CREASES;
+            if rules & !known != 0 {
                 return Err(Error::Unsupported(format!(
                     "fit rules {rules:#x} (byte {at})"
                 )));
+            }
+            if rules & FIT_SEMI_SHARP != 0 && rules & FIT_CREASES == 0 {
+                return Err(malformed(at, "crease sharpnesses without creases"));
             }
             let fit = Transform::Fit {
                 bits,
@@ -532,10 +597,10 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, bool)> {
                 corners: rules & FIT_CORNERS != 0,
                 linear: rules & FIT_LINEAR != 0,
             };
-            (fit, rules & FIT_CREASES != 0)
+            (fit, rules)
         }
         t => match Wavelet::from_code(t) {
-            Some(w) => (Transform::Wavelet(w), false),
+            Some(w) => (Transform::Wavelet(w), 0),
             _ => {
                 return Err(Error::Unsupported(format!(
                     "transform code {t} (byte {at})"

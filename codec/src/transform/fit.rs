@@ -17,13 +17,33 @@ use crate::transform::round_div;
 /// Most extra bits of precision the control values may carry (SPEC.md 9.10).
 pub const MAX_EXTRA_BITS: u8 = 16;
 
+/// A crease sharpness of one level (SPEC.md 9.10): sharpness is in units of 2^-16 of a
+/// level, as OpenSubdiv's (Blender's edge crease `c` is sharpness `10 c^2`).
+pub const SHARP_ONE: u32 = 1 << 16;
+
+/// Sharpness at or above which an edge or vertex is infinitely sharp (OpenSubdiv's 10).
+pub const SHARP_INFINITE: u32 = 10 << 16;
+
+/// A sharpness one level down (OpenSubdiv's uniform creasing): one less, at least
+/// zero; infinitely sharp stays so.
+pub fn decrement(s: u32) -> u32 {
+    if s >= SHARP_INFINITE {
+        SHARP_INFINITE
+    } else {
+        s.saturating_sub(SHARP_ONE)
+    }
+}
+
 /// The rules a fit's subdivision follows (SPEC.md 9.10).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Rules {
     /// The finest values are placed on the limit surface (the limit masks of 9.10).
     pub limit: bool,
-    /// Per base edge, whether it is an infinitely sharp crease; empty: none is.
-    pub sharp: Vec<bool>,
+    /// Per base edge, its crease sharpness (0: smooth, [`SHARP_INFINITE`]: infinitely
+    /// sharp); empty: no edge is creased.
+    pub sharpness: Vec<u32>,
+    /// Per base vertex, its crease sharpness (a vertex crease); empty: none.
+    pub vertex_sharpness: Vec<u32>,
     /// Boundary vertices with one face keep their values (Blender's "Keep Corners",
     /// OpenSubdiv's sharp boundary corners).
     pub corners: bool,
@@ -34,65 +54,218 @@ pub struct Rules {
 }
 
 impl Rules {
-    /// A level's sharp features under these rules, `edges` its creased edges.
-    pub fn hard<'a>(&self, edges: &'a [bool]) -> Hard<'a> {
+    /// A level's sharp features under these rules, `sharp` its sharpnesses.
+    pub fn hard<'a>(&self, sharp: &'a Sharpness) -> Hard<'a> {
         Hard {
-            edges,
+            edges: &sharp.edges,
+            vertices: &sharp.vertices,
             corners: self.corners,
             linear: self.linear,
         }
     }
+
+    /// The base level's sharpnesses.
+    pub fn base_sharpness(&self) -> Sharpness {
+        Sharpness {
+            edges: self.sharpness.clone(),
+            vertices: self.vertex_sharpness.clone(),
+        }
+    }
 }
 
-/// A level's sharp features: its creased edges (empty: none) and which boundary
+/// The crease sharpnesses of one level, per edge and per vertex (each empty: all 0).
+#[derive(Clone, Debug, Default)]
+pub struct Sharpness {
+    /// Per edge of the level.
+    pub edges: Vec<u32>,
+    /// Per vertex of the level.
+    pub vertices: Vec<u32>,
+}
+
+impl Sharpness {
+    /// The sharpnesses of `fine`, the level after `level`: both halves of every edge
+    /// and every old vertex one less (9.10), the new vertices 0.
+    pub fn below(&self, level: &Level, fine: &Level) -> Sharpness {
+        let dec = |s: &[u32]| -> Option<Vec<u32>> {
+            let d: Vec<u32> = s.iter().map(|&x| decrement(x)).collect();
+            d.iter().any(|&x| x > 0).then_some(d)
+        };
+        let edges = dec(&self.edges).map_or_else(Vec::new, |d| tags_below(level, &d, 0, fine));
+        let vertices = dec(&self.vertices).map_or_else(Vec::new, |mut d| {
+            d.resize(fine.nv, 0);
+            d
+        });
+        Sharpness { edges, vertices }
+    }
+}
+
+/// A level's sharp features: its crease sharpnesses (empty: none) and which boundary
 /// vertices keep their values (those with one face, or all).
 #[derive(Clone, Copy, Debug)]
 pub struct Hard<'a> {
-    /// Per edge of the level, whether it is creased.
-    pub edges: &'a [bool],
+    /// Per edge of the level, its sharpness.
+    pub edges: &'a [u32],
+    /// Per vertex of the level, its sharpness.
+    pub vertices: &'a [u32],
     /// Boundary vertices with one face keep their values.
     pub corners: bool,
     /// Every boundary vertex keeps its value.
     pub linear: bool,
 }
 
+impl Hard<'_> {
+    /// The sharpness of edge `e` of `level`: a boundary edge is infinitely sharp.
+    fn edge(&self, level: &Level, e: u32) -> u32 {
+        if level.is_boundary(e as usize) {
+            SHARP_INFINITE
+        } else {
+            self.edges.get(e as usize).copied().unwrap_or(0)
+        }
+    }
+
+    fn vertex(&self, v: usize) -> u32 {
+        self.vertices.get(v).copied().unwrap_or(0)
+    }
+}
+
 /// Which vertex rule of SPEC.md 9.10 coarse vertex `v` takes.
+#[derive(Clone, Copy, PartialEq, Eq)]
 enum VertexRule {
-    /// Exactly two hard edges (boundary or sharp), to these vertices.
+    /// Exactly two sharp edges (boundary or creased), to these vertices.
     Crease([u32; 2]),
     /// No boundary edge, at most one sharp edge (a dart), at least three edges and as
     /// many face corners.
     Inside,
-    /// Anything else: the value is kept.
+    /// Anything else (a corner): the value is kept.
     Kept,
 }
 
-#[inline]
-fn is_sharp(sharp: &[bool], e: u32) -> bool {
-    sharp.get(e as usize).copied().unwrap_or(false)
-}
-
-fn vertex_rule(level: &Level, v: usize, hard: Hard<'_>) -> VertexRule {
-    // The count of hard edges, the first two's other ends, and whether any is a boundary.
+/// The rule of vertex `v` by the sharpnesses of `hard`, or, with `child`, by those one
+/// level down.
+fn vertex_rule(level: &Level, v: usize, hard: Hard<'_>, child: bool) -> VertexRule {
+    let now = |s: u32| if child { decrement(s) } else { s };
+    // The count of sharp edges, the first two's other ends, and whether any is a boundary.
     let (mut count, mut boundary, mut ends) = (0usize, false, [0u32; 2]);
     for &e in level.v_edges(v) {
-        let b = level.is_boundary(e as usize);
-        if b || is_sharp(hard.edges, e) {
+        if now(hard.edge(level, e)) > 0 {
             if count < 2 {
                 ends[count] = level.other_end(e, v);
             }
             count += 1;
-            boundary |= b;
+            boundary |= level.is_boundary(e as usize);
         }
     }
     let n = level.v_edges(v).len();
-    if boundary && (hard.linear || hard.corners && level.v_faces(v).len() == 1) {
+    if boundary && (hard.linear || hard.corners && level.v_faces(v).len() == 1)
+        || now(hard.vertex(v)) > 0
+    {
         return VertexRule::Kept;
     }
     match count {
         2 => VertexRule::Crease(ends),
         0 | 1 if !boundary && n >= 3 && level.v_faces(v).len() == n => VertexRule::Inside,
         _ => VertexRule::Kept,
+    }
+}
+
+/// A value a mask weighs: a coarse vertex, or the face point of a face (step 1).
+#[derive(Clone, Copy, Debug)]
+enum Src {
+    Vertex(u32),
+    Face(u32),
+}
+
+/// Appends the weights of `rule` at `v` (its neighbours coarse, its faces' points) to
+/// `out`; returns their denominator.
+fn rule_terms(level: &Level, v: usize, rule: VertexRule, out: &mut Vec<(Src, i128)>) -> i128 {
+    match rule {
+        VertexRule::Crease([a, b]) => {
+            out.extend([(Src::Vertex(a), 1), (Src::Vertex(v as u32), 6), (Src::Vertex(b), 1)]);
+            8
+        }
+        VertexRule::Kept => {
+            out.push((Src::Vertex(v as u32), 1));
+            1
+        }
+        VertexRule::Inside => {
+            let edges = level.v_edges(v);
+            let n = edges.len() as i128;
+            out.push((Src::Vertex(v as u32), n * (n - 2)));
+            out.extend(edges.iter().map(|&e| (Src::Vertex(level.other_end(e, v)), 1)));
+            out.extend(level.v_faces(v).iter().map(|&f| (Src::Face(f), 1)));
+            n * n
+        }
+    }
+}
+
+/// The weights of coarse vertex `v`'s new value (step 3 of SPEC.md 9.10) into `out`
+/// (cleared); returns their denominator. Where the rule one level down differs, the
+/// two rules' masks are blended by OpenSubdiv's fractional weight: the mean sharpness
+/// of the vertex and of its edges that are sharp now and smooth one level down (at
+/// most one).
+fn vertex_terms(level: &Level, v: usize, hard: Hard<'_>, out: &mut Vec<(Src, i128)>) -> i128 {
+    out.clear();
+    let parent = vertex_rule(level, v, hard, false);
+    if parent == VertexRule::Inside {
+        return rule_terms(level, v, parent, out);
+    }
+    let child = vertex_rule(level, v, hard, true);
+    if child == parent {
+        return rule_terms(level, v, parent, out);
+    }
+    let (mut sum, mut count) = (0i128, 0i128);
+    let sharp = hard.vertex(v);
+    let edges = level.v_edges(v).iter().map(|&e| hard.edge(level, e));
+    for s in std::iter::once(sharp).chain(edges) {
+        if s > 0 && s <= SHARP_ONE {
+            sum += s as i128;
+            count += 1;
+        }
+    }
+    let full = count * SHARP_ONE as i128;
+    if count == 0 {
+        return rule_terms(level, v, child, out);
+    }
+    if sum >= full {
+        return rule_terms(level, v, parent, out);
+    }
+    let dp = rule_terms(level, v, parent, out);
+    let split = out.len();
+    let dc = rule_terms(level, v, child, out);
+    for (i, t) in out.iter_mut().enumerate() {
+        t.1 *= if i < split { sum * dc } else { (full - sum) * dp };
+    }
+    dp * dc * full
+}
+
+/// The weights of edge `e`'s point (step 2 of SPEC.md 9.10) into `out` (cleared);
+/// returns their denominator. Sharpness `s` of at least one level gives the midpoint,
+/// 0 the smooth rule, and between, `s` of the way from the smooth point to the midpoint.
+fn edge_terms(level: &Level, e: usize, hard: Hard<'_>, out: &mut Vec<(Src, i128)>) -> i128 {
+    out.clear();
+    let [a, b] = level.edges[e];
+    let s = hard.edge(level, e as u32) as i128;
+    let one = SHARP_ONE as i128;
+    let [f0, f1] = level.edge_faces[e];
+    if s >= one {
+        out.extend([(Src::Vertex(a), 1), (Src::Vertex(b), 1)]);
+        2
+    } else if s == 0 {
+        out.extend([
+            (Src::Vertex(a), 1),
+            (Src::Vertex(b), 1),
+            (Src::Face(f0), 1),
+            (Src::Face(f1), 1),
+        ]);
+        4
+    } else {
+        out.extend([
+            (Src::Vertex(a), one + s),
+            (Src::Vertex(b), one + s),
+            (Src::Face(f0), one - s),
+            (Src::Face(f1), one - s),
+        ]);
+        4 * one
     }
 }
 
@@ -120,25 +293,32 @@ pub fn tags_below<T: Copy + PartialEq>(level: &Level, tags: &[T], none: T, fine:
     out
 }
 
-/// The sharp edges of `fine` (the level after `level`): both halves of every sharp
-/// edge of `level`; empty when none is sharp.
-pub fn sharp_below(level: &Level, sharp: &[bool], fine: &Level) -> Vec<bool> {
-    if !sharp.contains(&true) {
-        return Vec::new();
-    }
-    tags_below(level, sharp, false, fine)
+/// The value of weights `terms` over `d` in integers: vertices from `x`, face points
+/// from `x[faces + f]`.
+fn weigh(terms: &[(Src, i128)], d: i128, x: &[i64], faces: usize) -> i64 {
+    let s: i128 = terms
+        .iter()
+        .map(|&(src, c)| {
+            c * match src {
+                Src::Vertex(u) => x[u as usize],
+                Src::Face(f) => x[faces + f as usize],
+            } as i128
+        })
+        .sum();
+    round_div(s, d)
 }
 
 /// One Catmull-Clark refinement in integers (SPEC.md 9.10): `x` holds the coarse
 /// values (`level.nv`) and gets the fine ones (`level.fine_nv()`), every rule rounded
-/// with `[n / d]`; `hard` holds `level`'s creased edges and which boundary vertices
-/// are kept (corners, or all with linear boundaries; a kept vertex is unchanged):
+/// with `[n / d]`; `hard` holds `level`'s crease sharpnesses and which boundary
+/// vertices are kept (corners, or all with linear boundaries; a kept vertex is
+/// unchanged):
 /// * face point: `[sum of corners / k]`;
-/// * edge point: `[(a + b + f0 + f1) / 4]` inside, `[(a + b) / 2]` on a boundary or a
-///   crease;
+/// * edge point: `[(a + b + f0 + f1) / 4]` smooth, `[(a + b) / 2]` on a boundary or a
+///   crease of sharpness at least one, blended between;
 /// * vertex, inside, `n` edges: `[(n (n - 2) v + sum of neighbours + sum of the face
-///   points of its faces) / n^2]`; with two hard (boundary or sharp) edges to `a`, `b`:
-///   `[(a + 6 v + b) / 8]`; otherwise (a corner, or a vertex with no faces) unchanged.
+///   points of its faces) / n^2]`; with two sharp edges to `a`, `b`:
+///   `[(a + 6 v + b) / 8]`; a corner unchanged; blended where the rule changes.
 pub fn subdivide(level: &Level, hard: Hard<'_>, x: &mut Vec<i64>) {
     let (nv, ne) = (level.nv, level.ne());
     x.resize(level.fine_nv(), 0);
@@ -147,45 +327,18 @@ pub fn subdivide(level: &Level, hard: Hard<'_>, x: &mut Vec<i64>) {
         let s: i128 = face.iter().map(|&v| x[v as usize] as i128).sum();
         x[nv + ne + f] = round_div(s, face.len() as i128);
     }
-    for (e, &[a, b]) in level.edges.iter().enumerate() {
-        let ends = x[a as usize] as i128 + x[b as usize] as i128;
-        x[nv + e] = if level.is_boundary(e) || is_sharp(hard.edges, e as u32) {
-            round_div(ends, 2)
-        } else {
-            let [f0, f1] = level.edge_faces[e];
-            round_div(
-                ends + x[nv + ne + f0 as usize] as i128 + x[nv + ne + f1 as usize] as i128,
-                4,
-            )
-        };
+    let mut terms = Vec::new();
+    for e in 0..ne {
+        let d = edge_terms(level, e, hard, &mut terms);
+        x[nv + e] = weigh(&terms, d, x, nv + ne);
     }
-    let moved: Vec<i64> = (0..nv).map(|v| moved_vertex(level, v, hard, x)).collect();
+    let moved: Vec<i64> = (0..nv)
+        .map(|v| {
+            let d = vertex_terms(level, v, hard, &mut terms);
+            weigh(&terms, d, x, nv + ne)
+        })
+        .collect();
     x[..nv].copy_from_slice(&moved);
-}
-
-/// The vertex rule of [`subdivide`] for coarse vertex `v` (its neighbours still
-/// coarse, the face points already written).
-fn moved_vertex(level: &Level, v: usize, hard: Hard<'_>, x: &[i64]) -> i64 {
-    let xv = x[v] as i128;
-    match vertex_rule(level, v, hard) {
-        VertexRule::Crease([a, b]) => {
-            round_div(x[a as usize] as i128 + 6 * xv + x[b as usize] as i128, 8)
-        }
-        VertexRule::Kept => x[v],
-        VertexRule::Inside => {
-            let (nv, ne) = (level.nv, level.ne());
-            let edges = level.v_edges(v);
-            let n = edges.len() as i128;
-            let mut s = n * (n - 2) * xv;
-            for &e in edges {
-                s += x[level.other_end(e, v) as usize] as i128;
-            }
-            for &f in level.v_faces(v) {
-                s += x[nv + ne + f as usize] as i128;
-            }
-            round_div(s, n * n)
-        }
-    }
 }
 
 /// The corner of face `f` of `level` opposite vertex `v` (two places on), for a quad;
@@ -198,8 +351,9 @@ fn opposite(level: &Level, f: u32, v: usize) -> Option<u32> {
 
 /// The limit weights of vertex `v` of `level` (whose coarse mesh is the finest one),
 /// as `(vertex, weight)` over a common denominator: `None` where the value is kept.
+/// An edge or vertex with any sharpness left is sharp here.
 fn limit_mask(level: &Level, v: usize, hard: Hard<'_>) -> Option<(Vec<(u32, i128)>, i128)> {
-    match vertex_rule(level, v, hard) {
+    match vertex_rule(level, v, hard, false) {
         VertexRule::Crease([a, b]) => Some((vec![(a, 1), (v as u32, 4), (b, 1)], 6)),
         VertexRule::Kept => None,
         VertexRule::Inside => {
@@ -220,7 +374,7 @@ fn limit_mask(level: &Level, v: usize, hard: Hard<'_>) -> Option<(Vec<(u32, i128
 /// Places refined values on the limit surface (SPEC.md 9.10): `level` is the level
 /// whose coarse mesh is the finest one (its faces quads), `hard` its sharp features.
 /// Inside, a vertex of `n` edges becomes `[(n^2 v + 4 sum of neighbours + sum of the
-/// opposite corners of its faces) / (n (n + 5))]`; with two hard edges to `a`, `b`,
+/// opposite corners of its faces) / (n (n + 5))]`; with two sharp edges to `a`, `b`,
 /// `[(a + 4 v + b) / 6]`; otherwise (or beside a face that is not a quad) it is kept.
 pub fn place_on_limit(level: &Level, hard: Hard<'_>, x: &mut [i64]) {
     let placed: Vec<i64> = (0..level.nv)
@@ -236,12 +390,12 @@ pub fn place_on_limit(level: &Level, hard: Hard<'_>, x: &mut [i64]) {
 /// the control values and gets the finest ones. `finest` is the level after the last
 /// (`levels.last().next()`), whose coarse mesh is the finest one.
 pub fn refine(levels: &[Level], finest: &Level, rules: &Rules, x: &mut [Vec<i64>; 3]) {
-    let mut sharp = rules.sharp.clone();
+    let mut sharp = rules.base_sharpness();
     for (i, l) in levels.iter().enumerate() {
         for xs in x.iter_mut() {
             subdivide(l, rules.hard(&sharp), xs);
         }
-        sharp = sharp_below(l, &sharp, levels.get(i + 1).unwrap_or(finest));
+        sharp = sharp.below(l, levels.get(i + 1).unwrap_or(finest));
     }
     if rules.limit {
         for xs in x.iter_mut() {
@@ -260,39 +414,27 @@ fn rows(level: &Level, hard: Hard<'_>) -> Vec<Vec<(u32, f64)>> {
         let w = 1.0 / face.len() as f64;
         rows[nv + ne + f] = face.iter().map(|&v| (v, w)).collect();
     }
-    for (e, &[a, b]) in level.edges.iter().enumerate() {
-        rows[nv + e] = if level.is_boundary(e) || is_sharp(hard.edges, e as u32) {
-            vec![(a, 0.5), (b, 0.5)]
-        } else {
-            let mut r = vec![(a, 0.25), (b, 0.25)];
-            for &f in &level.edge_faces[e] {
-                for &(c, w) in &rows[nv + ne + f as usize] {
-                    r.push((c, 0.25 * w));
-                }
+    let expand = |rows: &[Vec<(u32, f64)>], terms: &[(Src, i128)], d: i128| {
+        let mut r = Vec::new();
+        for &(src, c) in terms {
+            let w = c as f64 / d as f64;
+            match src {
+                Src::Vertex(u) => r.push((u, w)),
+                Src::Face(f) => r.extend(rows[nv + ne + f as usize].iter().map(|&(u, x)| (u, w * x))),
             }
-            r
-        };
+        }
+        r
+    };
+    let mut terms = Vec::new();
+    for e in 0..ne {
+        let d = edge_terms(level, e, hard, &mut terms);
+        let r = expand(&rows, &terms, d);
+        rows[nv + e] = r;
     }
     for v in 0..nv {
-        rows[v] = match vertex_rule(level, v, hard) {
-            VertexRule::Crease([a, b]) => vec![(a, 0.125), (v as u32, 0.75), (b, 0.125)],
-            VertexRule::Kept => vec![(v as u32, 1.0)],
-            VertexRule::Inside => {
-                let edges = level.v_edges(v);
-                let n = edges.len() as f64;
-                let nn = n * n;
-                let mut r = vec![(v as u32, (n - 2.0) / n)];
-                for &e in edges {
-                    r.push((level.other_end(e, v), 1.0 / nn));
-                }
-                for &f in level.v_faces(v) {
-                    for &(c, w) in &rows[nv + ne + f as usize] {
-                        r.push((c, w / nn));
-                    }
-                }
-                r
-            }
-        };
+        let d = vertex_terms(level, v, hard, &mut terms);
+        let r = expand(&rows, &terms, d);
+        rows[v] = r;
     }
     rows
 }
@@ -331,10 +473,10 @@ impl Operator {
             m
         };
         let mut out = Vec::with_capacity(levels.len() + 1);
-        let mut sharp = rules.sharp.clone();
+        let mut sharp = rules.base_sharpness();
         for (i, l) in levels.iter().enumerate() {
             out.push(csr(rows(l, rules.hard(&sharp)), l.nv));
-            sharp = sharp_below(l, &sharp, levels.get(i + 1).unwrap_or(finest));
+            sharp = sharp.below(l, levels.get(i + 1).unwrap_or(finest));
         }
         if rules.limit {
             let limit = (0..finest.nv)
@@ -620,21 +762,33 @@ mod tests {
     }
 
     /// Every rule set of a hierarchy: plain, limit, creases (the base mesh's first
-    /// face's edges), both.
+    /// face's edges) infinitely sharp, semi-sharp (1.7 and 0.4 levels, and a vertex
+    /// crease of 0.6 at the first face's first corner), each with and without the limit.
     fn rule_sets(levels: &[Level]) -> Vec<Rules> {
         let first = levels[0].f_edges(0).to_vec();
-        let sharp: Vec<bool> = (0..levels[0].ne() as u32).map(|e| first.contains(&e)).collect();
+        let crease = |s: u32| -> Vec<u32> {
+            (0..levels[0].ne() as u32)
+                .map(|e| if first.contains(&e) { s } else { 0 })
+                .collect()
+        };
+        let mut corner = vec![0; levels[0].nv];
+        corner[levels[0].coarse.face(0)[0] as usize] = SHARP_ONE * 3 / 5;
+        let sharp = [
+            (Vec::new(), Vec::new()),
+            (crease(SHARP_INFINITE), Vec::new()),
+            (crease(SHARP_ONE * 17 / 10), Vec::new()),
+            (crease(SHARP_ONE * 2 / 5), corner),
+        ];
         [false, true]
             .into_iter()
             .flat_map(|limit| {
-                [Vec::new(), sharp.clone()]
-                    .into_iter()
-                    .map(move |sharp| Rules {
-                        limit,
-                        sharp,
-                        corners: false,
-                        linear: false,
-                    })
+                sharp.clone().into_iter().map(move |(sharpness, vertex_sharpness)| Rules {
+                    limit,
+                    sharpness,
+                    vertex_sharpness,
+                    corners: false,
+                    linear: false,
+                })
             })
             .collect()
     }
@@ -766,6 +920,7 @@ mod tests {
                     l,
                     Hard {
                         edges: &[],
+                        vertices: &[],
                         corners: false,
                         linear: false,
                     },
