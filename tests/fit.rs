@@ -402,48 +402,37 @@ fn semi_sharp_creases_are_found_with_their_sharpness() {
 #[test]
 fn auto_finds_a_creased_limit_surface() {
     // A folded sheet (a tent along a column; 5 columns, so that its hierarchy's base
-    // is this grid), its fold creased, on the limit: regular patches, so `auto` sees a
-    // surface and tries the fit.
+    // is this grid), its fold creased (infinitely sharp, and at Blender's crease 0.5,
+    // sharpness 2.5), on the limit: regular patches, so `auto` sees a surface, tries
+    // the fit and finds the crease and its sharpness.
     let (control, fold) = subwave_corpus::folded_sheet();
-    let mesh = common::to_mesh(&control.subdivision_surface(3, &fold, true), 1e6);
-    let q = subwave::Quantization::Decimal { decimals: 0 };
-    let enc = encode(&mesh, &q, TransformChoice::Auto);
-    assert!(
-        matches!(enc.header.transform, Transform::Fit { limit: true, .. }),
-        "auto chose {}",
-        enc.header.transform.name()
-    );
-    assert_eq!(enc.header.creases.len(), 4);
-    assert_exact(&enc.bytes, &mesh, "folded sheet");
-    let n = mesh.vertex_count();
-    let r = residual_bytes(&enc.bytes);
-    assert!(8 * r < n, "{r} B of residuals for {n} vertices");
-}
-
-#[test]
-fn auto_finds_a_semi_sharp_limit_surface() {
-    // The folded sheet, its fold at Blender's crease 0.5 (sharpness 2.5), on the
-    // limit: `auto` sees a surface, tries the fit and finds the crease and its
-    // sharpness.
-    let (control, fold) = subwave_corpus::folded_sheet();
-    let edges: Vec<([u32; 2], f64)> = fold.iter().map(|&e| (e, 2.5)).collect();
-    let surface = control.subdivision_surface_sharp(3, &edges, &[], true, Kept::Nothing);
-    let mesh = common::to_mesh(&surface, 1e6);
-    let q = subwave::Quantization::Decimal { decimals: 0 };
-    let enc = encode(&mesh, &q, TransformChoice::Auto);
-    assert!(
-        matches!(enc.header.transform, Transform::Fit { limit: true, .. }),
-        "auto chose {}",
-        enc.header.transform.name()
-    );
-    assert_eq!(enc.header.creases.len(), 4);
-    for &s in &enc.header.crease_sharpness {
-        assert!((s as i64 - (5 << 15)).abs() < 64, "sharpness {s}");
+    for sharpness in [subwave_corpus::INFINITELY_SHARP, 2.5] {
+        let edges: Vec<([u32; 2], f64)> = fold.iter().map(|&e| (e, sharpness)).collect();
+        let surface = control.subdivision_surface_sharp(3, &edges, &[], true, Kept::Nothing);
+        let mesh = common::to_mesh(&surface, 1e6);
+        let q = subwave::Quantization::Decimal { decimals: 0 };
+        let enc = encode(&mesh, &q, TransformChoice::Auto);
+        assert!(
+            matches!(enc.header.transform, Transform::Fit { limit: true, .. }),
+            "{sharpness}: auto chose {}",
+            enc.header.transform.name()
+        );
+        assert_eq!(enc.header.creases.len(), 4);
+        // Listed without values when infinitely sharp.
+        let want = if sharpness < 3.0 { 4 } else { 0 };
+        assert_eq!(enc.header.crease_sharpness.len(), want, "{sharpness}");
+        for &s in &enc.header.crease_sharpness {
+            let s = s as f64 / 65536.0;
+            assert!((s - sharpness).abs() < 1.0 / 1024.0, "sharpness {s}");
+        }
+        assert_exact(&enc.bytes, &mesh, "folded sheet");
+        let n = mesh.vertex_count();
+        let r = residual_bytes(&enc.bytes);
+        assert!(
+            8 * r < n,
+            "{sharpness}: {r} B of residuals for {n} vertices"
+        );
     }
-    assert_exact(&enc.bytes, &mesh, "semi-sharp folded sheet");
-    let n = mesh.vertex_count();
-    let r = residual_bytes(&enc.bytes);
-    assert!(8 * r < n, "{r} B of residuals for {n} vertices");
 }
 
 #[test]
