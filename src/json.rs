@@ -65,6 +65,7 @@ pub fn info(info: &Info) -> Value {
         "crease_sharpness": h.crease_sharpness,
         "vertex_creases": h.vertex_creases,
         "vertex_sharpness": h.vertex_sharpness,
+        "seams": h.seams.iter().map(|&(c, p)| [c, p]).collect::<Vec<_>>(),
         "quantization": quantization(&h.quantization),
         "keep_order": h.has_order,
         "value_map": h.has_value_map,

@@ -250,7 +250,7 @@ fn hostile_fit_containers_are_refused() {
         }
     }
     // Fit rules the format does not define are unsupported, not guessed at.
-    match subwave::decode_slice(&rewritten(|h| h[at + 1] |= 64, |_, _| {})) {
+    match subwave::decode_slice(&rewritten(|h| h[at + 1] |= 128, |_, _| {})) {
         Err(Error::Unsupported(what)) => assert!(what.contains("fit rules"), "{what}"),
         other => panic!("unknown fit rules: {other:?}"),
     }
@@ -567,6 +567,153 @@ fn hostile_crease_lists_are_refused() {
         },
         "past",
     );
+}
+
+/// The prism's limit surface, four levels, cut at a seam as a PLY exporter cuts a mesh
+/// at its UV seams: the top cap is its own piece (its five corners doubled), so every
+/// vertex along its rim is written twice with the same values.
+fn prism_cut_at_a_seam() -> Mesh {
+    let (control, _) = prism_and_rims();
+    let surface = control.subdivision_surface(4, &[], true);
+    let mut cut = control.clone();
+    for v in cut.faces[1].iter_mut() {
+        cut.positions.push(cut.positions[*v as usize]);
+        *v = cut.positions.len() as u32 - 1;
+    }
+    // The refinements' faces and corners correspond one to one (the cut only renames
+    // corners), so each corner of the cut refinement takes the surface's value there.
+    let mut cut = cut.refined(4);
+    for (f, g) in cut.faces.iter().zip(&surface.faces) {
+        for (&c, &s) in f.iter().zip(g) {
+            cut.positions[c as usize] = surface.positions[s as usize];
+        }
+    }
+    common::to_mesh(&cut, 1e5)
+}
+
+#[test]
+fn surfaces_cut_at_seams_are_fitted_glued() {
+    // Glued at its seam the cut surface is the fit's limit surface again: its residuals
+    // are the rounding's, and it decodes exactly, every copy along the seam included.
+    let mesh = prism_cut_at_a_seam();
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    let enc = encode(&mesh, &q, TransformChoice::Fit);
+    assert!(
+        matches!(enc.header.transform, Transform::Fit { limit: true, .. }),
+        "{:?}",
+        enc.header.transform
+    );
+    assert_eq!(enc.header.seams.len(), 5, "{:?}", enc.header.seams);
+    assert!(enc.header.seams.iter().all(|&(c, p)| p < c));
+    assert_exact(&enc.bytes, &mesh, "cut at a seam");
+    let n = mesh.vertex_count();
+    let r = residual_bytes(&enc.bytes);
+    assert!(8 * r < n, "{r} B of residuals for {n} vertices");
+    // `auto` takes the glued fit too, and coarser levels decode (the glued
+    // refinement, rounded) with every copy equal to its partner.
+    let auto = encode(&mesh, &q, TransformChoice::Auto);
+    assert_eq!(auto.header.seams, enc.header.seams);
+    let coarse = subwave::decode(&enc.bytes, &common::up_to(1)).unwrap().mesh;
+    for &(c, p) in &enc.header.seams {
+        assert_eq!(coarse.positions[c as usize], coarse.positions[p as usize]);
+    }
+    // Without the seams the same fit misses along the cut.
+    let mut h = enc.header.clone();
+    h.seams.clear();
+    match subwave::decode_slice(&common::with_header(&enc.bytes, &h)) {
+        Ok(other) => assert_ne!(
+            common::fingerprint(&other.mesh),
+            common::fingerprint(&mesh),
+            "the seams change the surface"
+        ),
+        Err(Error::CorruptLevel { .. }) => {}
+        Err(e) => panic!("without seams: {e}"),
+    }
+}
+
+#[test]
+fn blender_subdivision_exports_are_fitted_also_cut_at_seams() {
+    // Blender's undisplaced subdivision exports (the dev set): the OBJs' geometry is a
+    // fit on the limit surface, and so is the binary PLY's, which Blender cut at its UV
+    // seam, glued there; each decodes to its own values, and its geometry sections
+    // (base mesh and levels) stay under 4 bits per vertex.
+    let Some(dir) = common::shared_corpus().map(|d| d.join("blender")) else {
+        eprintln!("../shared/corpus not found; skipping");
+        return;
+    };
+    for (name, cut) in [
+        ("cylinder8_crease_cc4.obj", false),
+        ("vase_lathe_cc3_vcol.obj", false),
+        ("vase_lathe_cc3_vcol.ply", true),
+    ] {
+        let bytes = std::fs::read(dir.join(name)).unwrap();
+        let m = subwave::load(&bytes, None).unwrap();
+        let mesh = m.mesh.without_attributes();
+        let enc =
+            subwave::encode_to_vec(&mesh, &m.quantization, &EncodeOptions::default()).unwrap();
+        let h = &enc.header;
+        assert!(
+            matches!(h.transform, Transform::Fit { limit: true, .. }),
+            "{name}: {}",
+            h.transform.name()
+        );
+        assert_eq!(!h.seams.is_empty(), cut, "{name}: {:?}", h.seams);
+        assert_exact(&enc.bytes, &mesh, name);
+        let info = subwave::inspect(&enc.bytes, &Default::default()).unwrap();
+        let geometry: usize = info
+            .sections
+            .iter()
+            .filter(|s| s.kind == "BASE" || s.kind == "LEVL")
+            .map(|s| s.bytes)
+            .sum();
+        let n = mesh.vertex_count();
+        assert!(
+            8 * geometry < 4 * n,
+            "{name}: {geometry} B for {n} vertices"
+        );
+    }
+}
+
+#[test]
+fn hostile_seam_lists_are_refused() {
+    let mesh = prism_cut_at_a_seam();
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    let enc = encode(&mesh, &q, TransformChoice::Fit);
+    assert!(!enc.header.seams.is_empty());
+    let decode = |f: &dyn Fn(&mut subwave::Header)| {
+        let mut h = enc.header.clone();
+        f(&mut h);
+        subwave::decode_slice(&common::with_header(&enc.bytes, &h))
+    };
+    let malformed = |f: &dyn Fn(&mut subwave::Header), what: &str| match decode(f) {
+        Err(Error::Container(err)) => assert!(err.to_string().contains(what), "{err}"),
+        other => panic!("{what}: {other:?}"),
+    };
+    let nb = enc.header.base_vertices as u32;
+    // A copy past the base mesh, a partner not below its copy.
+    malformed(&|h| h.seams = vec![(nb, 0)], "past");
+    malformed(&|h| h.seams = vec![(3, 3)], "partner");
+    // Gluing a face's neighbouring corners (a repeated corner), or every base vertex
+    // into one: corrupt, found when the base mesh is decoded.
+    let base = subwave::decode(&enc.bytes, &common::up_to(0)).unwrap().mesh;
+    let face = &base.faces[..base.face_starts[1] as usize];
+    let (a, b) = (face[0].min(face[1]), face[0].max(face[1]));
+    for seams in [vec![(b, a)], (1..nb).map(|c| (c, c - 1)).collect()] {
+        let what = format!("{} seams", seams.len());
+        match decode(&|h| h.seams = seams.clone()) {
+            Err(e) => assert!(e.to_string().contains("glued"), "{what}: {e}"),
+            Ok(_) => panic!("{what} decoded"),
+        }
+    }
+    // A creased vertex the glued mesh does not have (the last base vertices are
+    // copies).
+    match decode(&|h| {
+        h.vertex_creases = vec![nb - 1];
+        h.vertex_sharpness = vec![1 << 16];
+    }) {
+        Err(e) => assert!(e.to_string().contains("not a base vertex"), "{e}"),
+        Ok(_) => panic!("a creased vertex past the glued mesh decoded"),
+    }
 }
 
 #[test]

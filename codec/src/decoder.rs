@@ -838,9 +838,24 @@ fn synthesise_fit(
     let mut x: [Vec<i64>; 3] =
         std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect());
     let mut level = Level::new(&topo)?;
+    // With seams, the rules refine the base mesh glued at them (SPEC.md 9.10), and
+    // `map` follows each vertex of the cut mesh to its glued vertex, level by level.
+    let mut glued = match h.seams.is_empty() {
+        true => None,
+        false => {
+            let g = fit::Glued::new(&level.coarse, &h.seams)
+                .map_err(|e| Error::corrupt("HEAD", e.to_string()))?;
+            for xs in x.iter_mut() {
+                *xs = g.gather(xs);
+            }
+            Some((g.level, g.map))
+        }
+    };
+    // The level the rules refine: the glued one, or the base mesh's.
+    let rl = glued.as_ref().map_or(&level, |g| &g.0);
     let mut sharp = fit::Sharpness::default();
     if !h.creases.is_empty() {
-        sharp.edges = vec![0; level.ne()];
+        sharp.edges = vec![0; rl.ne()];
     }
     for (i, &e) in h.creases.iter().enumerate() {
         *sharp
@@ -853,9 +868,11 @@ fn synthesise_fit(
             .unwrap_or(fit::SHARP_INFINITE);
     }
     if !h.vertex_creases.is_empty() {
-        sharp.vertices = vec![0; level.nv];
+        sharp.vertices = vec![0; rl.nv];
         for (&v, &s) in h.vertex_creases.iter().zip(&h.vertex_sharpness) {
-            sharp.vertices[v as usize] = s;
+            *sharp.vertices.get_mut(v as usize).ok_or_else(|| {
+                Error::corrupt("HEAD", format!("vertex crease {v} is not a base vertex"))
+            })? = s;
         }
     }
     for l in 0..upto as usize {
@@ -866,16 +883,34 @@ fn synthesise_fit(
                     .in_level(l + 1, c.sections[2 + l].offset),
             );
         }
-        for xs in x.iter_mut() {
-            fit::subdivide(&level, rules.hard(&sharp), xs);
-        }
         let fine = level.next();
-        sharp = sharp.below(&level, &fine);
+        let rl = glued.as_ref().map_or(&level, |g| &g.0);
+        for xs in x.iter_mut() {
+            fit::subdivide(rl, rules.hard(&sharp), xs);
+        }
+        glued = match glued {
+            None => {
+                sharp = sharp.below(&level, &fine);
+                None
+            }
+            Some((g, map)) => {
+                let gf = g.next();
+                sharp = sharp.below(&g, &gf);
+                let map = fit::glued_below(&level, &g, &map);
+                Some((gf, map))
+            }
+        };
         level = fine;
     }
     if rules.limit {
+        let rl = glued.as_ref().map_or(&level, |g| &g.0);
         for xs in x.iter_mut() {
-            fit::place_on_limit(&level, rules.hard(&sharp), xs);
+            fit::place_on_limit(rl, rules.hard(&sharp), xs);
+        }
+    }
+    if let Some((_, map)) = &glued {
+        for xs in x.iter_mut() {
+            *xs = map.iter().map(|&g| xs[g as usize]).collect();
         }
     }
     let topo = level.coarse;

@@ -199,6 +199,13 @@ pub fn fit_rules(h: &Header) -> String {
             sharpness(&h.vertex_sharpness)
         ));
     }
+    let n = h.seams.len();
+    if n > 0 {
+        rules.push(format!(
+            "glued at {n} seam cop{}",
+            if n == 1 { "y" } else { "ies" }
+        ));
+    }
     if corners {
         rules.push("boundary corners kept".to_string());
     }

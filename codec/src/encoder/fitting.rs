@@ -42,6 +42,19 @@ pub(crate) fn code_fit(
     // The level whose coarse mesh is the finest one.
     let last = canon.levels.last()?;
     let finest = last.next();
+    // Where the mesh is cut at seams, the search sees it glued.
+    let glued = glue_seams(canon, pos);
+    let target = Target {
+        canon,
+        pos,
+        finest: &finest,
+        glued: glued.as_ref(),
+    };
+    let (canon, pos, finest) = match &glued {
+        Some(g) => (&g.canon, &g.pos, &g.finest),
+        None => (canon, pos, &finest),
+    };
+    let last = canon.levels.last()?;
     let base = &canon.levels[0];
     let fine: Vec<[f64; 3]> = (0..pos[0].len())
         .map(|i| std::array::from_fn(|k| pos[k][i] as f64))
@@ -62,9 +75,9 @@ pub(crate) fn code_fit(
             && !crate::topology::sqrt2::closed(base);
         let far = mean(&|x| fit::defect(last, x)) > FIT_SCREEN
             && if canon.levels.len() < 3 {
-                chart || !near_limit(canon, &finest, &fine)
+                chart || !near_limit(canon, finest, &fine)
             } else {
-                mean(&|x| fit::roughness(&canon.levels, &finest, x)) > ROUGH_SCREEN
+                mean(&|x| fit::roughness(&canon.levels, finest, x)) > ROUGH_SCREEN
             };
         if far {
             if !chart {
@@ -84,20 +97,20 @@ pub(crate) fn code_fit(
             best = Some(p);
         }
     };
-    let sets = sets.unwrap_or_else(|| rule_sets(canon, &finest, pos));
+    let sets = sets.unwrap_or_else(|| rule_sets(canon, finest, pos));
     // The smooth rule sets' sizes and the limit surface's distances, for the search
     // for semi-sharp creases.
     let mut smooth: Vec<(usize, bool)> = Vec::new();
     let mut distances = None;
     for rules in &sets {
-        let op = fit::Operator::new(&canon.levels, &finest, rules);
+        let op = fit::Operator::new(&canon.levels, finest, rules);
         let control = robust_fit(&op, &fine, nb);
         let plain = rules.sharpness.is_empty() && !rules.corners && !rules.linear;
         if plain && rules.limit {
             distances = Some((distances_from(&op, &control, &fine), control.clone()));
         }
         drop(op);
-        if let Some(p) = code_rules(canon, pos, header, bits, rules, &control, &finest) {
+        if let Some(p) = code_rules(&target, header, bits, rules, &control) {
             if plain {
                 smooth.push((p.size(), rules.limit));
             }
@@ -105,31 +118,121 @@ pub(crate) fn code_fit(
         }
     }
     let limit = smooth.iter().min().is_none_or(|&(_, l)| l);
-    let found = distances.and_then(|(d, c)| semi_sharp(canon, &finest, pos, &fine, &d, &c, limit));
+    let found = distances.and_then(|(d, c)| semi_sharp(canon, finest, pos, &fine, &d, &c, limit));
     if let Some(rules) = found.filter(|r| !sets.contains(r)) {
-        let op = fit::Operator::new(&canon.levels, &finest, &rules);
+        let op = fit::Operator::new(&canon.levels, finest, &rules);
         let control = robust_fit(&op, &fine, nb);
         drop(op);
-        if let Some(p) = code_rules(canon, pos, header, bits, &rules, &control, &finest) {
+        if let Some(p) = code_rules(&target, header, bits, &rules, &control) {
             keep(p);
         }
     }
     best
 }
 
-/// The smallest coding of `rules` with the control values `control`, over the
-/// precisions in `bits` (B = 0 last, for values too large for any of them).
+/// What a fit codes: the hierarchy and its finest values, and, where the mesh is cut at
+/// seams, the same glued, whose levels the rules refine.
+struct Target<'a> {
+    canon: &'a Canonical,
+    pos: &'a [Vec<i64>; 3],
+    /// The level after the hierarchy's last.
+    finest: &'a Level,
+    glued: Option<&'a GluedMesh>,
+}
+
+/// A hierarchy glued at its seams (SPEC.md 9.10): the glued levels and finest values,
+/// and where each vertex of the cut one went.
+struct GluedMesh {
+    /// The seams as the header lists them.
+    pairs: Vec<(u32, u32)>,
+    /// The glued hierarchy.
+    canon: Canonical,
+    /// The level after its last.
+    finest: Level,
+    /// Its finest values.
+    pos: [Vec<i64>; 3],
+    /// Per base vertex of the cut hierarchy, its glued vertex.
+    base: Vec<u32>,
+    /// Per finest vertex of the cut hierarchy, its glued vertex.
+    map: Vec<u32>,
+}
+
+/// The hierarchy glued where base vertices on its boundary share their finest values
+/// (a file cut at its UV seams, as Blender's PLY exporter writes one), if gluing them
+/// gives a mesh that Catmull-Clark refines and every finest vertex glued together has
+/// the same values; `None` otherwise.
+fn glue_seams(canon: &Canonical, pos: &[Vec<i64>; 3]) -> Option<GluedMesh> {
+    let base = &canon.levels[0];
+    let mut boundary = vec![false; base.nv];
+    for (e, ends) in base.edges.iter().enumerate() {
+        if base.is_boundary(e) {
+            for &v in ends {
+                boundary[v as usize] = true;
+            }
+        }
+    }
+    let mut first: HashMap<[i64; 3], u32> = HashMap::new();
+    let mut pairs = Vec::new();
+    for v in (0..base.nv).filter(|&v| boundary[v]) {
+        let p = [pos[0][v], pos[1][v], pos[2][v]];
+        match first.entry(p) {
+            std::collections::hash_map::Entry::Occupied(o) => pairs.push((v as u32, *o.get())),
+            std::collections::hash_map::Entry::Vacant(o) => {
+                o.insert(v as u32);
+            }
+        }
+    }
+    if pairs.is_empty() {
+        return None;
+    }
+    let g = fit::Glued::new(&base.coarse, &pairs).ok()?;
+    let mut levels = vec![g.level];
+    let mut map = g.map.clone();
+    for (l, cut) in canon.levels.iter().enumerate() {
+        let glued = &levels[l];
+        map = fit::glued_below(cut, glued, &map);
+        let next = glued.next();
+        levels.push(next);
+    }
+    let finest = levels.pop()?;
+    // Every finest vertex glued together has the same values.
+    let mut glued_pos: [Vec<i64>; 3] = std::array::from_fn(|_| vec![0; finest.nv]);
+    let mut seen = vec![false; finest.nv];
+    for (i, &t) in map.iter().enumerate() {
+        let t = t as usize;
+        if std::mem::replace(&mut seen[t], true) {
+            if (0..3).any(|k| glued_pos[k][t] != pos[k][i]) {
+                return None;
+            }
+        } else {
+            for k in 0..3 {
+                glued_pos[k][t] = pos[k][i];
+            }
+        }
+    }
+    Some(GluedMesh {
+        pairs,
+        canon: canon.with_levels(levels),
+        finest,
+        pos: glued_pos,
+        base: g.map,
+        map,
+    })
+}
+
+/// The smallest coding of `rules` with the control values `control` (of the glued
+/// hierarchy where `target` has one), over the precisions in `bits` (B = 0 last, for
+/// values too large for any of them).
 fn code_rules(
-    canon: &Canonical,
-    pos: &[Vec<i64>; 3],
+    target: &Target<'_>,
     header: &Header,
     bits: &[u8],
     rules: &Rules,
     control: &[[f64; 3]],
-    finest: &Level,
 ) -> Option<Payloads> {
     let mut best: Option<Payloads> = None;
     let mut found = false;
+    let canon = target.canon;
     for b in bits.iter().copied().chain([0]) {
         if b == 0 && found {
             break;
@@ -141,10 +244,35 @@ fn code_rules(
             continue;
         }
         found = true;
-        let (mut h, base_bytes) = hierarchy_base(canon, &x, header);
-        fit::refine(&canon.levels, finest, rules, &mut x);
+        let residuals = match target.glued {
+            None => {
+                let (h, base_bytes) = hierarchy_base(canon, &x, header);
+                fit::refine(&canon.levels, target.finest, rules, &mut x);
+                (
+                    h,
+                    base_bytes,
+                    levl::fit::encode_residuals(&x, target.pos, b),
+                )
+            }
+            Some(g) => {
+                // Each base vertex takes its glued vertex's control value.
+                let cut: [Vec<i64>; 3] =
+                    std::array::from_fn(|k| g.base.iter().map(|&t| x[k][t as usize]).collect());
+                let (mut h, base_bytes) = hierarchy_base(canon, &cut, header);
+                h.seams = g.pairs.clone();
+                fit::refine(&g.canon.levels, &g.finest, rules, &mut x);
+                let pred: [Vec<i64>; 3] =
+                    std::array::from_fn(|k| g.map.iter().map(|&t| x[k][t as usize]).collect());
+                (
+                    h,
+                    base_bytes,
+                    levl::fit::encode_residuals(&pred, target.pos, b),
+                )
+            }
+        };
+        let (mut h, base_bytes, finest_bytes) = residuals;
         let mut level_bytes = vec![Vec::new(); canon.levels.len() - 1];
-        level_bytes.push(levl::fit::encode_residuals(&x, pos, b));
+        level_bytes.push(finest_bytes);
         h.transform = Transform::Fit {
             bits: b,
             limit: rules.limit,

@@ -317,6 +317,7 @@ pub(crate) fn flat_header(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -
         crease_sharpness: Vec::new(),
         vertex_creases: Vec::new(),
         vertex_sharpness: Vec::new(),
+        seams: Vec::new(),
         disc: DiscTransform::None,
     }
 }

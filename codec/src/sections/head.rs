@@ -164,6 +164,11 @@ pub struct Header {
     pub vertex_creases: Vec<u32>,
     /// Subdivision fits: each creased vertex's sharpness, as `crease_sharpness`.
     pub vertex_sharpness: Vec<u32>,
+    /// Subdivision fits: the base mesh's seams, `(copy, partner)` with `partner <
+    /// copy` and the copies increasing; the rules refine the base mesh with each copy
+    /// glued to its partner (SPEC.md 9.10), and its creases number the glued mesh's
+    /// edges and vertices. Empty: no seams.
+    pub seams: Vec<(u32, u32)>,
 }
 
 const FLAG_ORDER: u64 = 1;
@@ -186,6 +191,8 @@ const FIT_LINEAR: u8 = 8;
 const FIT_SEMI_SHARP: u8 = 16;
 /// Fit rules: a list of creased base vertices and their sharpnesses ends the header.
 const FIT_VERTEX_CREASES: u8 = 32;
+/// Fit rules: a list of seams ends the header.
+const FIT_SEAMS: u8 = 64;
 /// The largest crease sharpness a header holds: infinitely sharp (SPEC.md 9.10).
 const MAX_SHARPNESS: u64 = crate::transform::fit::SHARP_INFINITE as u64;
 
@@ -221,7 +228,8 @@ impl Header {
                     | flag(corners, FIT_CORNERS)
                     | flag(linear, FIT_LINEAR)
                     | flag(!self.crease_sharpness.is_empty(), FIT_SEMI_SHARP)
-                    | flag(!self.vertex_creases.is_empty(), FIT_VERTEX_CREASES),
+                    | flag(!self.vertex_creases.is_empty(), FIT_VERTEX_CREASES)
+                    | flag(!self.seams.is_empty(), FIT_SEAMS),
             );
         }
         match self.quantization {
@@ -270,6 +278,13 @@ impl Header {
             write_increasing(&mut w, &self.vertex_creases);
             for &s in &self.vertex_sharpness {
                 w.varint(s as u64);
+            }
+        }
+        if !self.seams.is_empty() {
+            let copies: Vec<u32> = self.seams.iter().map(|s| s.0).collect();
+            write_increasing(&mut w, &copies);
+            for &(c, p) in &self.seams {
+                w.varint((c - 1 - p) as u64);
             }
         }
         w.out
@@ -357,6 +372,24 @@ impl Header {
         } else {
             (Vec::new(), Vec::new())
         };
+        // Fits with seams: the copies, as gaps, then each one's partner below it.
+        let seams = if rules & FIT_SEAMS != 0 {
+            let copies = read_increasing(&mut r, "seam copy", base_vertices)?;
+            let mut seams = Vec::with_capacity(copies.len());
+            for c in copies {
+                let gap = r.varint("seam partner")?;
+                if gap >= c as u64 {
+                    return Err(malformed(
+                        r.offset(),
+                        format!("seam copy {c}'s partner is {gap} + 1 below it"),
+                    ));
+                }
+                seams.push((c, c - 1 - gap as u32));
+            }
+            seams
+        } else {
+            Vec::new()
+        };
         r.finish("the header")?;
         let h = Header {
             vertices,
@@ -382,6 +415,7 @@ impl Header {
             crease_sharpness,
             vertex_creases,
             vertex_sharpness,
+            seams,
         };
         h.check(offset, limits)?;
         Ok(h)
@@ -582,7 +616,8 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, u8)> {
                 | FIT_CORNERS
                 | FIT_LINEAR
                 | FIT_SEMI_SHARP
-                | FIT_VERTEX_CREASES;
+                | FIT_VERTEX_CREASES
+                | FIT_SEAMS;
             if rules & !known != 0 {
                 return Err(Error::Unsupported(format!(
                     "fit rules {rules:#x} (byte {at})"

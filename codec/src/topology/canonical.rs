@@ -61,6 +61,19 @@ impl Canonical {
         }
     }
 
+    /// A hierarchy of this family over `levels` (coarse first, not empty) with no
+    /// order and no poles: the subdivision fit's base mesh glued at its seams.
+    pub(crate) fn with_levels(&self, levels: Vec<Level>) -> Canonical {
+        Canonical {
+            base: levels[0].coarse.clone(),
+            levels,
+            order: Vec::new(),
+            family: self.family,
+            poles: Vec::new(),
+            stowed: 0,
+        }
+    }
+
     /// Which canonical vertices are poles (the same at every level), by number.
     fn pole_flags(&self) -> Vec<bool> {
         let n = self.poles.iter().map(|&p| p as usize + 1).max().unwrap_or(0);

@@ -11,7 +11,8 @@
 //! serve: the decoder only repeats the integer subdivision); the decoder runs only the
 //! integer rules of [`subdivide`] and [`place_on_limit`].
 
-use crate::topology::Level;
+use crate::error::{Error, Result};
+use crate::topology::{Level, Topo, NONE};
 use crate::transform::round_div;
 
 /// Most extra bits of precision the control values may carry (SPEC.md 9.10).
@@ -402,6 +403,84 @@ pub fn refine(levels: &[Level], finest: &Level, rules: &Rules, x: &mut [Vec<i64>
             place_on_limit(finest, rules.hard(&sharp), xs);
         }
     }
+}
+
+/// A base mesh glued at its seams (SPEC.md 9.10): each listed copy identified with its
+/// partner, as a file cut at its UV seams (a PLY's) was before the cut. The fit's
+/// rules refine the glued mesh; each vertex of the cut mesh takes its glued vertex's
+/// value.
+#[derive(Clone, Debug)]
+pub struct Glued {
+    /// The glued base level.
+    pub level: Level,
+    /// Per base vertex of the cut mesh, its glued vertex.
+    pub map: Vec<u32>,
+}
+
+impl Glued {
+    /// Glues `base` at `pairs`, each `(copy, partner)` with `partner < copy` and the
+    /// copies increasing (as the header lists them). The glued vertices are the base
+    /// vertices that are no copy, in order; the faces keep their order. An error where
+    /// the glued mesh is not one Catmull-Clark refines (a face with a repeated corner,
+    /// an edge with more than two faces or with one face twice).
+    pub fn new(base: &Topo, pairs: &[(u32, u32)]) -> Result<Glued> {
+        let nv = base.nv;
+        let mut rep: Vec<u32> = (0..nv as u32).collect();
+        for &(c, p) in pairs {
+            // Copies increase and partners precede them: rep[p] is final.
+            rep[c as usize] = rep[p as usize];
+        }
+        let mut id = vec![NONE; nv];
+        let mut n = 0u32;
+        for v in 0..nv {
+            if rep[v] == v as u32 {
+                id[v] = n;
+                n += 1;
+            }
+        }
+        let map: Vec<u32> = rep.iter().map(|&r| id[r as usize]).collect();
+        let mut topo = Topo::new(n as usize);
+        topo.starts = base.starts.clone();
+        topo.idx = base.idx.iter().map(|&v| map[v as usize]).collect();
+        let level = Level::new(&topo)
+            .map_err(|e| Error::InvalidMesh(format!("the mesh glued at its seams: {e}")))?;
+        if level.edge_faces.iter().any(|f| f[0] == f[1]) {
+            return Err(Error::InvalidMesh(
+                "the mesh glued at its seams has a face on both sides of an edge".into(),
+            ));
+        }
+        Ok(Glued { level, map })
+    }
+
+    /// The control values of the glued vertices from those of the cut base mesh: each
+    /// glued vertex takes the value of the first base vertex glued into it.
+    pub fn gather(&self, x: &[i64]) -> Vec<i64> {
+        let mut out = vec![0; self.level.nv];
+        let mut seen = vec![false; self.level.nv];
+        for (v, &g) in self.map.iter().enumerate() {
+            if !std::mem::replace(&mut seen[g as usize], true) {
+                out[g as usize] = x[v];
+            }
+        }
+        out
+    }
+}
+
+/// The glued vertex of each vertex of `cut.next()` (the level after `cut`), from
+/// `map`, the glued vertex of each of `cut`'s: `glued` is the glued mesh's level of
+/// the same faces. Old vertices keep theirs, an edge point takes that of the glued
+/// edge in the same place of the same face, a face point its face's.
+pub fn glued_below(cut: &Level, glued: &Level, map: &[u32]) -> Vec<u32> {
+    let mut edge = vec![0u32; cut.ne()];
+    for (&e, &g) in cut.face_edges.iter().zip(&glued.face_edges) {
+        edge[e as usize] = g;
+    }
+    let (nv, ne) = (glued.nv as u32, glued.ne() as u32);
+    let mut out = Vec::with_capacity(cut.fine_nv());
+    out.extend_from_slice(map);
+    out.extend(edge.iter().map(|&g| nv + g));
+    out.extend((0..cut.nf() as u32).map(|f| nv + ne + f));
+    out
 }
 
 /// The same refinement in floating point, without rounding, as a linear map: the
