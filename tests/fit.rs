@@ -675,6 +675,39 @@ fn blender_subdivision_exports_are_fitted_also_cut_at_seams() {
 }
 
 #[test]
+fn pieces_that_touch_at_a_point_are_not_glued() {
+    // Two limit-surface sheets, the second moved so that one of its corners lies on
+    // one of the first's: their boundaries share a position but no edge, so there is no
+    // seam to glue, and each is fitted on its own.
+    let (control, _) = subwave_corpus::folded_sheet();
+    let sheet = common::to_mesh(&control.subdivision_surface(3, &[], true), 1e5);
+    let n = sheet.vertex_count();
+    // Base vertices 0 and 5 are the sheet's corners (0, 0) and (1, 0).
+    let t: [i64; 3] = std::array::from_fn(|k| sheet.positions[5][k] - sheet.positions[0][k]);
+    let mut mesh = sheet.clone();
+    mesh.positions.extend(
+        sheet
+            .positions
+            .iter()
+            .map(|p| std::array::from_fn(|k| p[k] + t[k])),
+    );
+    for f in sheet.iter_faces() {
+        let moved: Vec<u32> = f.iter().map(|&v| v + n as u32).collect();
+        mesh.push_face(&moved);
+    }
+    assert_eq!(mesh.positions[n], mesh.positions[5]);
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    let enc = encode(&mesh, &q, TransformChoice::Fit);
+    assert!(
+        matches!(enc.header.transform, Transform::Fit { limit: true, .. }),
+        "{:?}",
+        enc.header.transform
+    );
+    assert!(enc.header.seams.is_empty(), "{:?}", enc.header.seams);
+    assert_exact(&enc.bytes, &mesh, "two sheets touching");
+}
+
+#[test]
 fn hostile_seam_lists_are_refused() {
     let mesh = prism_cut_at_a_seam();
     let q = subwave::Quantization::Decimal { decimals: 0 };

@@ -40,20 +40,40 @@ pub(crate) fn code_fit(
         return None;
     }
     // The level whose coarse mesh is the finest one.
-    let last = canon.levels.last()?;
-    let finest = last.next();
-    // Where the mesh is cut at seams, the search sees it glued.
-    let glued = glue_seams(canon, pos);
-    let target = Target {
+    let finest = canon.levels.last()?.next();
+    let mut target = Target {
         canon,
         pos,
         finest: &finest,
-        glued: glued.as_ref(),
+        glued: None,
     };
-    let (canon, pos, finest) = match &glued {
-        Some(g) => (&g.canon, &g.pos, &g.finest),
-        None => (canon, pos, &finest),
+    let cut = search(&target, canon, pos, &finest, header, bits, screen);
+    // Where the mesh is cut at seams, the search again on it glued (the cut codes
+    // smaller where the seams follow creases: its pieces have their own control
+    // values along them).
+    let Some(g) = glue_seams(canon, pos) else {
+        return cut;
     };
+    target.glued = Some(&g);
+    let glued = search(&target, &g.canon, &g.pos, &g.finest, header, bits, screen);
+    match (cut, glued) {
+        (Some(c), Some(g)) => Some(if g.size() < c.size() { g } else { c }),
+        (c, g) => c.or(g),
+    }
+}
+
+/// The fit's search for `target` on the hierarchy `canon` (the target's, or the same
+/// glued at its seams) with finest values `pos`, `finest` the level after its last:
+/// as [`code_fit`].
+fn search(
+    target: &Target<'_>,
+    canon: &Canonical,
+    pos: &[Vec<i64>; 3],
+    finest: &Level,
+    header: &Header,
+    bits: &[u8],
+    screen: bool,
+) -> Option<Payloads> {
     let last = canon.levels.last()?;
     let base = &canon.levels[0];
     let fine: Vec<[f64; 3]> = (0..pos[0].len())
@@ -110,7 +130,7 @@ pub(crate) fn code_fit(
             distances = Some((distances_from(&op, &control, &fine), control.clone()));
         }
         drop(op);
-        if let Some(p) = code_rules(&target, header, bits, rules, &control) {
+        if let Some(p) = code_rules(target, header, bits, rules, &control) {
             if plain {
                 smooth.push((p.size(), rules.limit));
             }
@@ -123,7 +143,7 @@ pub(crate) fn code_fit(
         let op = fit::Operator::new(&canon.levels, finest, &rules);
         let control = robust_fit(&op, &fine, nb);
         drop(op);
-        if let Some(p) = code_rules(&target, header, bits, &rules, &control) {
+        if let Some(p) = code_rules(target, header, bits, &rules, &control) {
             keep(p);
         }
     }
@@ -182,6 +202,25 @@ fn glue_seams(canon: &Canonical, pos: &[Vec<i64>; 3]) -> Option<GluedMesh> {
             }
         }
     }
+    // A seam joins boundary edges: a copy is kept where one of its boundary edges
+    // becomes, glued, the same edge as another (not where two pieces touch at a point).
+    let mut rep: Vec<u32> = (0..base.nv as u32).collect();
+    for &(c, p) in &pairs {
+        rep[c as usize] = p;
+    }
+    let key = |e: usize| {
+        let [a, b] = base.edges[e].map(|v| rep[v as usize]);
+        (a.min(b), a.max(b))
+    };
+    let mut sides: HashMap<(u32, u32), u32> = HashMap::new();
+    for e in (0..base.ne()).filter(|&e| base.is_boundary(e)) {
+        *sides.entry(key(e)).or_insert(0) += 1;
+    }
+    pairs.retain(|&(c, _)| {
+        base.v_edges(c as usize)
+            .iter()
+            .any(|&e| base.is_boundary(e as usize) && sides[&key(e as usize)] > 1)
+    });
     if pairs.is_empty() {
         return None;
     }
