@@ -284,7 +284,9 @@ impl Header {
             let copies: Vec<u32> = self.seams.iter().map(|s| s.0).collect();
             write_increasing(&mut w, &copies);
             for &(c, p) in &self.seams {
-                w.varint((c - 1 - p) as u64);
+                // (A partner not below its copy, which the encoder never lists, wraps
+                // to a gap the reader refuses.)
+                w.varint((c as u64).wrapping_sub(p as u64 + 1));
             }
         }
         w.out
