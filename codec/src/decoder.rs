@@ -875,6 +875,8 @@ fn synthesise_fit(
             })? = s;
         }
     }
+    // With seams, the cut mesh's finest faces (made without a level).
+    let mut finest = None;
     for l in 0..upto as usize {
         check_refinement_size(h, level.fine_nv(), level.fine_faces_with(&[]))?;
         if l + 1 < h.levels as usize && !c.sections[2 + l].payload.is_empty() {
@@ -883,24 +885,31 @@ fn synthesise_fit(
                     .in_level(l + 1, c.sections[2 + l].offset),
             );
         }
-        let fine = level.next();
         let rl = glued.as_ref().map_or(&level, |g| &g.0);
         for xs in x.iter_mut() {
             fit::subdivide(rl, rules.hard(&sharp), xs);
         }
         glued = match glued {
             None => {
+                let fine = level.next();
                 sharp = sharp.below(&level, &fine);
+                level = fine;
                 None
             }
             Some((g, map)) => {
                 let gf = g.next();
                 sharp = sharp.below(&g, &gf);
                 let map = fit::glued_below(&level, &g, &map);
+                // The rules refine the glued levels: of the cut mesh's finest, only
+                // its faces are needed.
+                if l + 1 == upto as usize {
+                    finest = Some(level.fine());
+                } else {
+                    level = level.next();
+                }
                 Some((gf, map))
             }
         };
-        level = fine;
     }
     if rules.limit {
         let rl = glued.as_ref().map_or(&level, |g| &g.0);
@@ -913,7 +922,7 @@ fn synthesise_fit(
             *xs = map.iter().map(|&g| xs[g as usize]).collect();
         }
     }
-    let topo = level.coarse;
+    let topo = finest.unwrap_or(level.coarse);
     if upto == h.levels {
         check_finest_counts(h, &topo)?;
         let s = &c.sections[1 + upto as usize];

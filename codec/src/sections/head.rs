@@ -424,15 +424,16 @@ impl Header {
     }
 
     /// An upper bound on what decoding this container allocates (SPEC.md 2.5): 128 bytes
-    /// per vertex (152 with an FBIT section, 64 more with an NRML section), 24 per corner
-    /// (56 with a CIDX section),
-    /// 8 per face. (Measured
-    /// peaks: about 110 per vertex for
-    /// the levels' values, topology, edge tables and output; the flat path's edge tables
-    /// about 20 per corner.)
+    /// per vertex (152 with an FBIT section, 64 more with an NRML section, 64 more for a
+    /// fit with seams), 24 per corner (56 with a CIDX section), 8 per face. (Measured
+    /// peaks: about 110 per vertex for the levels' values, topology, edge tables and
+    /// output; the flat path's edge tables about 20 per corner; seams add the glued
+    /// levels, the cut mesh's faces and the map between them, about 50 per vertex.)
     pub fn memory_estimate(&self) -> u64 {
+        // (A fit with seams refines its glued levels beside the cut mesh's.)
         let per_vertex = if self.has_float_bits { 152 } else { 128 }
-            + if self.has_normals { 64 } else { 0 };
+            + if self.has_normals { 64 } else { 0 }
+            + if self.seams.is_empty() { 0 } else { 64 };
         let per_corner = if self.has_corner_indices { 56 } else { 24 };
         self.vertices
             .saturating_mul(per_vertex)
