@@ -500,6 +500,20 @@ fn kept_boundary_corners_are_found() {
     }
 }
 
+/// A fit container whose header was changed to other rules (`what`) decodes to another
+/// surface than `mesh`, or its residuals, coded for other predictions, run out.
+fn assert_other_surface(bytes: &[u8], mesh: &Mesh, what: &str) {
+    match subwave::decode_slice(bytes) {
+        Ok(other) => assert_ne!(
+            common::fingerprint(&other.mesh),
+            common::fingerprint(mesh),
+            "{what}: the same surface"
+        ),
+        Err(Error::CorruptLevel { .. }) => {}
+        Err(e) => panic!("{what}: {e}"),
+    }
+}
+
 #[test]
 fn hostile_crease_lists_are_refused() {
     let (control, rims) = prism_and_rims();
@@ -530,16 +544,7 @@ fn hostile_crease_lists_are_refused() {
     h.crease_sharpness = vec![one * 3 / 2; n];
     h.vertex_creases = vec![0];
     h.vertex_sharpness = vec![one * 10];
-    // (The residuals were coded for other predictions, so they may run out.)
-    match subwave::decode_slice(&with_header(&h)) {
-        Ok(other) => assert_ne!(
-            common::fingerprint(&other.mesh),
-            common::fingerprint(&mesh),
-            "the sharpnesses change the surface"
-        ),
-        Err(Error::CorruptLevel { .. }) => {}
-        Err(e) => panic!("sharpnesses in range: {e}"),
-    }
+    assert_other_surface(&with_header(&h), &mesh, "sharpnesses in range");
     let bad = |f: &dyn Fn(&mut subwave::Header), what: &str| {
         let mut h = enc.header.clone();
         f(&mut h);
@@ -591,18 +596,24 @@ fn prism_cut_at_a_seam() -> Mesh {
     common::to_mesh(&cut, 1e5)
 }
 
-#[test]
-fn surfaces_cut_at_seams_are_fitted_glued() {
-    // Glued at its seam the cut surface is the fit's limit surface again: its residuals
-    // are the rounding's, and it decodes exactly, every copy along the seam included.
-    let mesh = prism_cut_at_a_seam();
+/// `mesh` (integers) coded by `--transform fit`, which must find the limit surface.
+fn limit_fit(mesh: &Mesh) -> subwave::Encoded {
     let q = subwave::Quantization::Decimal { decimals: 0 };
-    let enc = encode(&mesh, &q, TransformChoice::Fit);
+    let enc = encode(mesh, &q, TransformChoice::Fit);
     assert!(
         matches!(enc.header.transform, Transform::Fit { limit: true, .. }),
         "{:?}",
         enc.header.transform
     );
+    enc
+}
+
+#[test]
+fn surfaces_cut_at_seams_are_fitted_glued() {
+    // Glued at its seam the cut surface is the fit's limit surface again: its residuals
+    // are the rounding's, and it decodes exactly, every copy along the seam included.
+    let mesh = prism_cut_at_a_seam();
+    let enc = limit_fit(&mesh);
     assert_eq!(enc.header.seams.len(), 5, "{:?}", enc.header.seams);
     assert!(enc.header.seams.iter().all(|&(c, p)| p < c));
     assert_exact(&enc.bytes, &mesh, "cut at a seam");
@@ -611,6 +622,7 @@ fn surfaces_cut_at_seams_are_fitted_glued() {
     assert!(8 * r < n, "{r} B of residuals for {n} vertices");
     // `auto` takes the glued fit too, and coarser levels decode (the glued
     // refinement, rounded) with every copy equal to its partner.
+    let q = subwave::Quantization::Decimal { decimals: 0 };
     let auto = encode(&mesh, &q, TransformChoice::Auto);
     assert_eq!(auto.header.seams, enc.header.seams);
     let coarse = subwave::decode(&enc.bytes, &common::up_to(1)).unwrap().mesh;
@@ -620,15 +632,7 @@ fn surfaces_cut_at_seams_are_fitted_glued() {
     // Without the seams the same fit misses along the cut.
     let mut h = enc.header.clone();
     h.seams.clear();
-    match subwave::decode_slice(&common::with_header(&enc.bytes, &h)) {
-        Ok(other) => assert_ne!(
-            common::fingerprint(&other.mesh),
-            common::fingerprint(&mesh),
-            "the seams change the surface"
-        ),
-        Err(Error::CorruptLevel { .. }) => {}
-        Err(e) => panic!("without seams: {e}"),
-    }
+    assert_other_surface(&common::with_header(&enc.bytes, &h), &mesh, "without seams");
 }
 
 #[test]
@@ -696,13 +700,7 @@ fn pieces_that_touch_at_a_point_are_not_glued() {
         mesh.push_face(&moved);
     }
     assert_eq!(mesh.positions[n], mesh.positions[5]);
-    let q = subwave::Quantization::Decimal { decimals: 0 };
-    let enc = encode(&mesh, &q, TransformChoice::Fit);
-    assert!(
-        matches!(enc.header.transform, Transform::Fit { limit: true, .. }),
-        "{:?}",
-        enc.header.transform
-    );
+    let enc = limit_fit(&mesh);
     assert!(enc.header.seams.is_empty(), "{:?}", enc.header.seams);
     assert_exact(&enc.bytes, &mesh, "two sheets touching");
 }
