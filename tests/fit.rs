@@ -580,20 +580,7 @@ fn hostile_crease_lists_are_refused() {
 fn prism_cut_at_a_seam() -> Mesh {
     let (control, _) = prism_and_rims();
     let surface = control.subdivision_surface(4, &[], true);
-    let mut cut = control.clone();
-    for v in cut.faces[1].iter_mut() {
-        cut.positions.push(cut.positions[*v as usize]);
-        *v = cut.positions.len() as u32 - 1;
-    }
-    // The refinements' faces and corners correspond one to one (the cut only renames
-    // corners), so each corner of the cut refinement takes the surface's value there.
-    let mut cut = cut.refined(4);
-    for (f, g) in cut.faces.iter().zip(&surface.faces) {
-        for (&c, &s) in f.iter().zip(g) {
-            cut.positions[c as usize] = surface.positions[s as usize];
-        }
-    }
-    common::to_mesh(&cut, 1e5)
+    common::to_mesh(&subwave_corpus::cut_off(&control, &[1], &surface, 4), 1e5)
 }
 
 /// `mesh` (integers) coded by `--transform fit`, which must find the limit surface.

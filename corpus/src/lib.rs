@@ -7,7 +7,7 @@
 // Numeric kernels index several arrays (axes, positions, weights) in lockstep.
 #![allow(clippy::needless_range_loop)]
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::fmt::Write;
 
 /// A polygon mesh with `f64` positions.
@@ -906,7 +906,50 @@ pub fn small_corpus() -> Vec<(&'static str, Vec<u8>)> {
     let (sheet, fold) = folded_sheet();
     let surface = sheet.subdivision_surface(3, &fold, true);
     out.push(("limit_creased_cc3.obj", surface.to_obj(6).into_bytes()));
+    // The same cut at a seam as a PLY exporter writes it (its right two columns of
+    // faces a piece of their own), in binary32 (SPEC.md 9.10's seams).
+    let right: Vec<usize> = (0..20).filter(|f| f % 5 >= 3).collect();
+    out.push((
+        "limit_seams_cc3.ply",
+        cut_off(&sheet, &right, &surface, 3).to_ply_f32(&[]),
+    ));
     out
+}
+
+/// `surface`, made from `control` by `levels` Catmull-Clark steps (as
+/// [`PolyMesh::subdivision_surface`] or [`PolyMesh::refined`] number it), cut as an
+/// exporter cuts a mesh at its UV seams: control faces `piece` become a piece of their
+/// own (each corner they share with the other faces doubled), so every vertex along the
+/// cut is written twice with the same position. The cut refinement's faces and corners
+/// correspond one to one with the surface's (the cut only renames corners), so each
+/// corner takes the surface's value.
+pub fn cut_off(control: &PolyMesh, piece: &[usize], surface: &PolyMesh, levels: u32) -> PolyMesh {
+    let inside: HashSet<usize> = piece.iter().copied().collect();
+    let used_outside: HashSet<u32> = (0..control.faces.len())
+        .filter(|f| !inside.contains(f))
+        .flat_map(|f| control.faces[f].iter().copied())
+        .collect();
+    let mut cut = control.clone();
+    let mut copy: HashMap<u32, u32> = HashMap::new();
+    for &f in piece {
+        for i in 0..cut.faces[f].len() {
+            let v = cut.faces[f][i];
+            if used_outside.contains(&v) {
+                let c = *copy.entry(v).or_insert_with(|| {
+                    cut.positions.push(control.positions[v as usize]);
+                    cut.positions.len() as u32 - 1
+                });
+                cut.faces[f][i] = c;
+            }
+        }
+    }
+    let mut cut = cut.refined(levels);
+    for (f, g) in cut.faces.iter().zip(&surface.faces) {
+        for (&c, &s) in f.iter().zip(g) {
+            cut.positions[c as usize] = surface.positions[s as usize];
+        }
+    }
+    cut
 }
 
 /// A large polar mesh for benchmarks: a displaced latitude-longitude sphere (two poles
