@@ -436,14 +436,17 @@ fn auto_finds_a_creased_limit_surface() {
 }
 
 #[test]
-fn auto_finds_the_limit_surface_of_a_shallow_hierarchy() {
+fn auto_finds_limit_surfaces_the_roughness_screen_cannot_tell() {
     // One or two levels (Blender's "levels=2", a stand of two 16-gons and a side),
     // smooth, on the limit: no five finest vertices in a row within a level-1 face,
     // so the roughness screen cannot tell; one quick fit does, and `auto` codes the
-    // fit. The same control mesh with detail added after refining keeps its wavelet.
+    // fit. Three and four levels of the same prism, whose every base vertex is
+    // extraordinary (valence-3 corners, pentagons), leave few regular runs for the
+    // roughness screen: the quick fit decides again (on the first two levels). The
+    // same control mesh with detail added after refining keeps its wavelet.
     let (control, _) = prism_and_rims();
     let q = subwave::Quantization::Decimal { decimals: 0 };
-    for levels in [1, 2] {
+    for levels in [1, 2, 3, 4] {
         let surface = control.subdivision_surface(levels, &[], true);
         let mesh = common::to_mesh(&surface, 1e6);
         let enc = encode(&mesh, &q, TransformChoice::Auto);

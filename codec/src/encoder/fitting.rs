@@ -95,9 +95,15 @@ fn search(
             && !crate::topology::sqrt2::closed(base);
         let far = mean(&|x| fit::defect(last, x)) > FIT_SCREEN
             && if canon.levels.len() < 3 {
-                chart || !near_limit(canon, finest, &fine)
+                chart || !near_limit(&canon.levels, finest, &fine)
             } else {
+                // Many extraordinary vertices leave few regular runs: the limit fit
+                // decides then, on the first two levels alone (the vertices of level
+                // two keep their limit positions at every level below: a prefix of
+                // the finest values).
+                let two = &canon.levels[2];
                 mean(&|x| fit::roughness(&canon.levels, finest, x)) > ROUGH_SCREEN
+                    && (chart || !near_limit(&canon.levels[..2], two, &fine[..two.nv]))
             };
         if far {
             if !chart {
@@ -369,13 +375,13 @@ const NEAR_ITERATIONS: usize = 10;
 
 /// Whether the finest values `fine` of `canon` are near the limit surface of a control
 /// mesh (one least-squares fit with the limit rules: cheap next to coding the fit).
-fn near_limit(canon: &Canonical, finest: &Level, fine: &[[f64; 3]]) -> bool {
+fn near_limit(levels: &[Level], finest: &Level, fine: &[[f64; 3]]) -> bool {
     let rules = Rules {
         limit: true,
         ..Rules::default()
     };
-    let op = fit::Operator::new(&canon.levels, finest, &rules);
-    let nb = canon.base.nv;
+    let op = fit::Operator::new(levels, finest, &rules);
+    let nb = levels[0].nv;
     let control = op.fit(fine, &fine[..nb], &[], NEAR_ITERATIONS, FIT_TOLERANCE);
     let mut dist: Vec<f64> = op
         .apply(&control)
