@@ -919,7 +919,7 @@ fn synthesise_fit(
     }
     if let Some((_, map)) = &glued {
         for xs in x.iter_mut() {
-            *xs = map.iter().map(|&g| xs[g as usize]).collect();
+            *xs = fit::spread(map, xs);
         }
     }
     let topo = finest.unwrap_or(level.coarse);

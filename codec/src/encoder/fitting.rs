@@ -47,7 +47,7 @@ pub(crate) fn code_fit(
         finest: &finest,
         glued: None,
     };
-    let cut = search(&target, canon, pos, &finest, header, bits, screen);
+    let cut = search(&target, header, bits, screen);
     // Where the mesh is cut at seams, the search again on it glued (the cut codes
     // smaller where the seams follow creases: its pieces have their own control
     // values along them).
@@ -55,25 +55,20 @@ pub(crate) fn code_fit(
         return cut;
     };
     target.glued = Some(&g);
-    let glued = search(&target, &g.canon, &g.pos, &g.finest, header, bits, screen);
+    let glued = search(&target, header, bits, screen);
     match (cut, glued) {
         (Some(c), Some(g)) => Some(if g.size() < c.size() { g } else { c }),
         (c, g) => c.or(g),
     }
 }
 
-/// The fit's search for `target` on the hierarchy `canon` (the target's, or the same
-/// glued at its seams) with finest values `pos`, `finest` the level after its last:
-/// as [`code_fit`].
-fn search(
-    target: &Target<'_>,
-    canon: &Canonical,
-    pos: &[Vec<i64>; 3],
-    finest: &Level,
-    header: &Header,
-    bits: &[u8],
-    screen: bool,
-) -> Option<Payloads> {
+/// The fit's search for `target`, on its hierarchy or, where it has one, the same
+/// glued at its seams: as [`code_fit`].
+fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Option<Payloads> {
+    let (canon, pos, finest) = match target.glued {
+        Some(g) => (&g.canon, &g.pos, &g.finest),
+        None => (target.canon, target.pos, target.finest),
+    };
     let last = canon.levels.last()?;
     let base = &canon.levels[0];
     let fine: Vec<[f64; 3]> = (0..pos[0].len())
@@ -189,17 +184,9 @@ struct GluedMesh {
 /// the same values; `None` otherwise.
 fn glue_seams(canon: &Canonical, pos: &[Vec<i64>; 3]) -> Option<GluedMesh> {
     let base = &canon.levels[0];
-    let mut boundary = vec![false; base.nv];
-    for (e, ends) in base.edges.iter().enumerate() {
-        if base.is_boundary(e) {
-            for &v in ends {
-                boundary[v as usize] = true;
-            }
-        }
-    }
     let mut first: HashMap<[i64; 3], u32> = HashMap::new();
     let mut pairs = Vec::new();
-    for v in (0..base.nv).filter(|&v| boundary[v]) {
+    for v in (0..base.nv).filter(|&v| base.boundary_edges(v).0 > 0) {
         let p = [pos[0][v], pos[1][v], pos[2][v]];
         match first.entry(p) {
             std::collections::hash_map::Entry::Occupied(o) => pairs.push((v as u32, *o.get())),
@@ -241,19 +228,9 @@ fn glue_seams(canon: &Canonical, pos: &[Vec<i64>; 3]) -> Option<GluedMesh> {
     }
     let finest = levels.pop()?;
     // Every finest vertex glued together has the same values.
-    let mut glued_pos: [Vec<i64>; 3] = std::array::from_fn(|_| vec![0; finest.nv]);
-    let mut seen = vec![false; finest.nv];
-    for (i, &t) in map.iter().enumerate() {
-        let t = t as usize;
-        if std::mem::replace(&mut seen[t], true) {
-            if (0..3).any(|k| glued_pos[k][t] != pos[k][i]) {
-                return None;
-            }
-        } else {
-            for k in 0..3 {
-                glued_pos[k][t] = pos[k][i];
-            }
-        }
+    let glued_pos = pos.each_ref().map(|xs| fit::gather(&map, finest.nv, xs));
+    if (0..3).any(|k| fit::spread(&map, &glued_pos[k]) != pos[k]) {
+        return None;
     }
     Some(GluedMesh {
         pairs,
@@ -289,33 +266,25 @@ fn code_rules(
             continue;
         }
         found = true;
-        let residuals = match target.glued {
-            None => {
-                let (h, base_bytes) = hierarchy_base(canon, &x, header);
-                fit::refine(&canon.levels, target.finest, rules, &mut x);
-                (
-                    h,
-                    base_bytes,
-                    levl::fit::encode_residuals(&x, target.pos, b),
-                )
-            }
+        // With seams, each base vertex takes its glued vertex's control value, and each
+        // finest vertex its glued vertex's refined value.
+        let (mut h, base_bytes) = match target.glued {
+            None => hierarchy_base(canon, &x, header),
+            Some(g) => hierarchy_base(
+                canon,
+                &x.each_ref().map(|xs| fit::spread(&g.base, xs)),
+                header,
+            ),
+        };
+        match target.glued {
+            None => fit::refine(&canon.levels, target.finest, rules, &mut x),
             Some(g) => {
-                // Each base vertex takes its glued vertex's control value.
-                let cut: [Vec<i64>; 3] =
-                    std::array::from_fn(|k| g.base.iter().map(|&t| x[k][t as usize]).collect());
-                let (mut h, base_bytes) = hierarchy_base(canon, &cut, header);
                 h.seams = g.pairs.clone();
                 fit::refine(&g.canon.levels, &g.finest, rules, &mut x);
-                let pred: [Vec<i64>; 3] =
-                    std::array::from_fn(|k| g.map.iter().map(|&t| x[k][t as usize]).collect());
-                (
-                    h,
-                    base_bytes,
-                    levl::fit::encode_residuals(&pred, target.pos, b),
-                )
+                x = x.each_ref().map(|xs| fit::spread(&g.map, xs));
             }
-        };
-        let (mut h, base_bytes, finest_bytes) = residuals;
+        }
+        let finest_bytes = levl::fit::encode_residuals(&x, target.pos, b);
         let mut level_bytes = vec![Vec::new(); canon.levels.len() - 1];
         level_bytes.push(finest_bytes);
         h.transform = Transform::Fit {

@@ -455,15 +455,27 @@ impl Glued {
     /// The control values of the glued vertices from those of the cut base mesh: each
     /// glued vertex takes the value of the first base vertex glued into it.
     pub fn gather(&self, x: &[i64]) -> Vec<i64> {
-        let mut out = vec![0; self.level.nv];
-        let mut seen = vec![false; self.level.nv];
-        for (v, &g) in self.map.iter().enumerate() {
-            if !std::mem::replace(&mut seen[g as usize], true) {
-                out[g as usize] = x[v];
-            }
-        }
-        out
+        gather(&self.map, self.level.nv, x)
     }
+}
+
+/// The values of `n` glued vertices from those of the cut vertices, `map` the glued
+/// vertex of each: each takes the value of the first cut vertex glued into it.
+pub fn gather(map: &[u32], n: usize, x: &[i64]) -> Vec<i64> {
+    let mut out = vec![0; n];
+    let mut seen = vec![false; n];
+    for (&g, &v) in map.iter().zip(x) {
+        if !std::mem::replace(&mut seen[g as usize], true) {
+            out[g as usize] = v;
+        }
+    }
+    out
+}
+
+/// The values of the cut vertices from those of the glued ones, `map` the glued
+/// vertex of each.
+pub fn spread(map: &[u32], x: &[i64]) -> Vec<i64> {
+    map.iter().map(|&g| x[g as usize]).collect()
 }
 
 /// The glued vertex of each vertex of `cut.next()` (the level after `cut`), from
