@@ -4,7 +4,7 @@
 //! the share of nonzero residuals and their order-0 entropy.
 //! `cargo run --release --example fit_probe -- MESH [Q | exact]`
 use subwave_codec::topology::{canonicalise, cc, Topo};
-use subwave_codec::transform::fit::{defect, refine, roughness, Operator, Rules};
+use subwave_codec::transform::fit::{defect, refine, Operator, Rules, Runs};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -38,9 +38,14 @@ fn main() {
             .iter()
             .map(|x| defect(last, x).unwrap_or(f64::NAN))
             .collect();
+        let runs = Runs::new(&canon.levels, &finest);
         let r: Vec<f64> = y
             .iter()
-            .map(|x| roughness(&canon.levels, &finest, x).unwrap_or(f64::NAN))
+            .map(|x| {
+                runs.as_ref()
+                    .and_then(|r| r.roughness(x))
+                    .unwrap_or(f64::NAN)
+            })
             .collect();
         println!(
             "V {} base {nb} levels {}: defect {d:.2?}, roughness {r:.2?}",

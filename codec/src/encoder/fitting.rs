@@ -97,7 +97,8 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
                 // two keep their limit positions at every level below: a prefix of
                 // the finest values).
                 let two = &canon.levels[2];
-                mean(&|x| fit::roughness(&canon.levels, finest, x)) > ROUGH_SCREEN
+                let runs = fit::Runs::new(&canon.levels, finest);
+                mean(&|x| runs.as_ref()?.roughness(x)) > ROUGH_SCREEN
                     && (chart || !near_limit(&canon.levels[..2], two, &fine[..two.nv]))
             };
         if far {

@@ -67,8 +67,10 @@ pub struct EncodeOptions {
     /// best of them in every level mode, ranks the polar discs' transforms, and tries
     /// the best coding again without the rotated modes; each lower effort leaves out
     /// one more search: 8 the retry without rotated modes, 7 the candidates but the
-    /// preferred one, 6 ranks a short list of transforms, 5 a shorter one, 4 none, 3 no
-    /// disc ranking, 2 no rotated level modes, 1 no subdivision fit. The container is
+    /// preferred one, 6 codes only the transform of a short list whose details take
+    /// the fewest bits (an estimate, no coding) and chooses a large level's mode on a
+    /// sample of its details, 5 a shorter list, 4 no list, 3 no disc ranking, 2 no
+    /// rotated level modes, 1 no subdivision fit. The container is
     /// the same for a given effort whatever the thread count, and every effort decodes
     /// the same way (it is the encoder's choice only).
     pub effort: u8,
@@ -98,27 +100,48 @@ pub(crate) struct Effort {
     /// [`Effort::SHORTER_LIST`] at 5, [`Effort::SHORT_LIST`] at 6, every one (`None`)
     /// from 7.
     pub rank: Option<&'static [Wavelet]>,
-    /// The family's other transforms are ranked by their details' bits
-    /// ([`search::detail_bits`], no coding) rather than by coding them: at 5 and 6.
+    /// The family's first and listed transforms are ranked by their details' bits
+    /// ([`search::detail_bits`], no coding) and the fewest coded alone, rather than
+    /// ranked by coding them: at 5 and 6.
     pub estimated: bool,
     /// Every candidate hierarchy of a family is coded (a mesh and its dual; else the
     /// one recovery prefers): from 8.
     pub candidates: bool,
     /// The best coding is tried again without the rotated modes: at 9.
     pub unrotated: bool,
+    /// A large level's mode is chosen by coding a sample of its details in each open
+    /// mode, not all of them: below 7.
+    pub sampled: bool,
+}
+
+/// How a coding chooses each level's mode (the encoder's choice, not part of the
+/// format).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct ModeSearch {
+    /// The rotated modes are tried (SPEC.md 10.5).
+    pub rotated: bool,
+    /// A large level's mode is chosen on a sample of its details.
+    pub sampled: bool,
+}
+
+impl ModeSearch {
+    /// Every mode, each coded whole.
+    #[cfg(test)]
+    pub(crate) const ALL: ModeSearch = ModeSearch {
+        rotated: true,
+        sampled: false,
+    };
 }
 
 impl Effort {
-    /// The transforms ranked at effort 6: those that win most often beside each family's
-    /// first (Catmull-Clark: interp6, interp4, lazy; sqrt(2): ir2w).
-    pub(crate) const SHORT_LIST: &'static [Wavelet] = &[
-        Wavelet::Interp6,
-        Wavelet::Interp4,
-        Wavelet::Lazy,
-        Wavelet::Ir2w,
-    ];
+    /// The transforms ranked at effort 6 beside each family's first: the Catmull-Clark
+    /// ones that win most often (interp6, interp4, lazy). None of the sqrt(2) family:
+    /// the details' bits do not see sqrt2-lazy's phases, and on the shared corpus ir2w
+    /// never codes smaller (0.8 % to 48 % larger).
+    pub(crate) const SHORT_LIST: &'static [Wavelet] =
+        &[Wavelet::Interp6, Wavelet::Interp4, Wavelet::Lazy];
     /// The transforms ranked at effort 5.
-    pub(crate) const SHORTER_LIST: &'static [Wavelet] = &[Wavelet::Interp6, Wavelet::Ir2w];
+    pub(crate) const SHORTER_LIST: &'static [Wavelet] = &[Wavelet::Interp6];
 
     pub(crate) fn of(effort: u8) -> Effort {
         let e = effort.clamp(1, MAX_EFFORT);
@@ -135,6 +158,15 @@ impl Effort {
             estimated: (5..=6).contains(&e),
             candidates: e >= 8,
             unrotated: e >= 9,
+            sampled: e <= 6,
+        }
+    }
+
+    /// How its codings choose level modes.
+    pub(crate) fn modes(self) -> ModeSearch {
+        ModeSearch {
+            rotated: self.rotated,
+            sampled: self.sampled,
         }
     }
 }
@@ -1175,7 +1207,7 @@ mod tests {
                 w,
                 d,
                 &header,
-                true,
+                ModeSearch::ALL,
                 None,
                 UNBOUNDED,
                 &Progress::default(),
@@ -1189,7 +1221,7 @@ mod tests {
                     w,
                     d,
                     &header,
-                    true,
+                    ModeSearch::ALL,
                     modes.clone(),
                     UNBOUNDED,
                     &Progress::default(),
@@ -1202,7 +1234,7 @@ mod tests {
                     w,
                     d,
                     &header,
-                    true,
+                    ModeSearch::ALL,
                     modes.clone(),
                     n,
                     &Progress::default(),
@@ -1216,7 +1248,7 @@ mod tests {
                         w,
                         d,
                         &header,
-                        true,
+                        ModeSearch::ALL,
                         modes,
                         n - 1,
                         &Progress::default()

@@ -4,7 +4,7 @@
 use super::*;
 
 /// Codes a canonical hierarchy of `mesh` with wavelet `w` (SPEC.md 9, 10), trying the rotated
-/// level modes (10.5) when `rotated`, each level in its mode from `modes` where given
+/// level modes (10.5) as `search` says, each level in its mode from `modes` where given
 /// (every open mode where not); `None` if a lifted value leaves the supported range or
 /// the BASE and LEVL payloads would take more than `bound` bytes.
 #[allow(clippy::too_many_arguments)]
@@ -14,16 +14,17 @@ pub(crate) fn code_hierarchy(
     w: Wavelet,
     disc: DiscTransform,
     header: &Header,
-    rotated: bool,
+    search: ModeSearch,
     modes: Option<Vec<u8>>,
     bound: usize,
     progress: &Progress,
 ) -> Option<Payloads> {
     let scheme = scheme_of(canon, w, disc);
-    let (mut x, phases) = analyse_all(canon, mesh, &scheme)?;
+    let (mut x, phases) = analyse_all(canon, mesh, &scheme, true)?;
     let (mut header, base_bytes) = hierarchy_base(canon, &x, header);
     let mut models = levl::LevelModels::new();
-    models.rotated = rotated;
+    models.rotated = search.rotated;
+    models.sampled = search.sampled;
     models.only = modes.map(Vec::into_iter);
     // Bytes the levels may take: a coding over the bound is not wanted.
     let mut room = bound.checked_sub(base_bytes.len())?;
@@ -92,8 +93,15 @@ fn scheme_of(canon: &Canonical, w: Wavelet, disc: DiscTransform) -> Scheme<'_> {
 type Analysis = ([Vec<i64>; 3], Vec<Option<crate::transform::phase::Phases>>);
 
 /// A hierarchy's analysis with `scheme` (SPEC.md 9), fine to coarse, as the decoder
-/// undoes it; `None` if a lifted value leaves the supported range.
-fn analyse_all(canon: &Canonical, mesh: &Mesh, scheme: &Scheme<'_>) -> Option<Analysis> {
+/// undoes it, and the phases of its Catmull-Clark levels where `with_phases` (else
+/// none: an estimate does not read them); `None` if a lifted value leaves the
+/// supported range.
+fn analyse_all(
+    canon: &Canonical,
+    mesh: &Mesh,
+    scheme: &Scheme<'_>,
+    with_phases: bool,
+) -> Option<Analysis> {
     // The positions in canonical order, gathered for each coding rather than held
     // beside the hierarchy (the memory of large meshes).
     let mut x = canonical_positions(mesh, canon);
@@ -109,9 +117,10 @@ fn analyse_all(canon: &Canonical, mesh: &Mesh, scheme: &Scheme<'_>) -> Option<An
         // them as it reads the level).
         phases[l] = match t.take_phases() {
             Some(p) => Some(p),
-            None => t
+            None if with_phases => t
                 .phaser(level)
                 .map(|p| p.phases(&x, level.ne() + level.nf(), true)),
+            None => None,
         };
         t.analyse(level, canon.family.fine_nv(level), &mut x);
     }
@@ -130,9 +139,42 @@ pub(crate) fn detail_bits(
     w: Wavelet,
     disc: DiscTransform,
 ) -> Option<u64> {
-    let (x, _) = analyse_all(canon, mesh, &scheme_of(canon, w, disc))?;
+    let (x, _) = analyse_all(canon, mesh, &scheme_of(canon, w, disc), false)?;
     Some(value_bits(&x, canon.base.nv))
 }
+
+/// `first` and `others` ranked by the bits their details take on hierarchy `canon`
+/// ([`detail_bits`]), fewest first (`first` first on ties); those out of range last, in
+/// their order. The analyses run on up to `threads` threads.
+fn by_bits(
+    canon: &Canonical,
+    mesh: &Mesh,
+    first: Wavelet,
+    others: &[Wavelet],
+    disc: DiscTransform,
+    threads: usize,
+) -> Vec<Wavelet> {
+    let all: Vec<Wavelet> = std::iter::once(first)
+        .chain(others.iter().copied())
+        .collect();
+    if all.len() == 1 {
+        return all;
+    }
+    let bits = par_map(&all, threads, |&w| detail_bits(canon, mesh, w, disc));
+    let mut ranked: Vec<(u64, Wavelet)> = all
+        .into_iter()
+        .zip(bits)
+        .map(|(w, b)| (b.unwrap_or(u64::MAX), w))
+        .collect();
+    // (A stable sort: equal bits keep their order.)
+    ranked.sort_by_key(|&(b, _)| b);
+    ranked.into_iter().map(|(_, w)| w).collect()
+}
+
+/// Meshes up to this many vertices are small: at the estimated efforts `auto` codes
+/// the family's first transform and the two its estimate ranks best, not the best
+/// alone (the estimate misses by a few percent, and their codings take little time).
+const SMALL_MESH: usize = 32_768;
 
 /// The bits of `x[k][from..]` as a plain integer code spends them: each nonzero value
 /// its bit length and a sign.
@@ -170,8 +212,9 @@ pub(crate) fn hierarchy_base(
 /// No bound on a hierarchy coding's size ([`code_hierarchy`]).
 pub(crate) const UNBOUNDED: usize = usize::MAX;
 
-/// `auto` codes the best-ranked other transform of a family in every mode when its
-/// ranking size is below this many hundredths of the first transform's size.
+/// `auto`, ranking by coding, codes the best-ranked other transform of a family in
+/// every mode when its ranking size is below this many hundredths of the first
+/// transform's size.
 pub(crate) const RANK_MARGIN: usize = 103;
 
 /// A hierarchy's coding and the hierarchy.
@@ -233,7 +276,7 @@ fn best_candidate(
             first,
             disc,
             flat_h,
-            effort.rotated,
+            effort.modes(),
             None,
             bound,
             &opts.progress,
@@ -270,6 +313,31 @@ pub(crate) fn code_family(
         TransformChoice::Fixed(w) => w,
     };
     let effort = Effort::of(opts.effort);
+    let auto = opts.transform == TransformChoice::Auto;
+    // The listed transforms besides the first (all of them without a list).
+    let listed: Vec<Wavelet> = others
+        .iter()
+        .copied()
+        .filter(|&w| w != first && effort.rank.is_none_or(|r| r.contains(&w)))
+        .collect();
+    // At the estimated efforts the transform with the fewest details' bits on the
+    // preferred candidate is the one coded (the first on ties), on a small mesh also
+    // the runner-up and the first; at the others, the others are ranked by coding them.
+    let (first, also) = match (auto && effort.estimated, canons.first()) {
+        (true, Some(canon)) => {
+            let disc = opts.disc.unwrap_or(DiscTransform::None);
+            let ranked = by_bits(canon, mesh, first, &listed, disc, threads);
+            let mut also = Vec::new();
+            if mesh.vertex_count() <= SMALL_MESH {
+                also.extend(ranked.get(1).copied());
+                also.push(first);
+                also.retain(|&w| w != ranked[0]);
+                also.dedup();
+            }
+            (ranked[0], also)
+        }
+        _ => (first, Vec::new()),
+    };
     let fam_best = best_candidate(mesh, opts, flat_h, canons, first)?;
     let Some((mut p, canon)) = fam_best else {
         return Ok(None);
@@ -282,16 +350,13 @@ pub(crate) fn code_family(
         threads,
     };
     let disc = p.header.disc;
-    if opts.transform == TransformChoice::Auto {
-        let pairs: Vec<_> = others
-            .iter()
-            .filter(|&&w| w != first && effort.rank.is_none_or(|r| r.contains(&w)))
-            .map(|&w| (w, disc))
-            .collect();
-        if !pairs.is_empty() && effort.estimated {
-            coder.estimate_then_code(&mut p, &pairs, first, effort.rotated);
-        } else if !pairs.is_empty() {
-            coder.rank_then_code(&mut p, &pairs, effort.rotated);
+    for w in also {
+        coder.try_code(&mut p, w, disc, effort.modes());
+    }
+    if auto && !effort.estimated {
+        let pairs: Vec<_> = listed.iter().map(|&w| (w, disc)).collect();
+        if !pairs.is_empty() {
+            coder.rank_then_code(&mut p, &pairs, effort.modes());
         }
     }
     // A polar hierarchy: the other disc transforms, with the best transform.
@@ -307,7 +372,7 @@ pub(crate) fn code_family(
             .filter(|&d| d != d0)
             .map(|d| (w, d))
             .collect();
-        coder.rank_then_code(&mut p, &pairs, effort.rotated);
+        coder.rank_then_code(&mut p, &pairs, effort.modes());
     }
     // Each level keeps its smallest mode, but a rotated level hands the next one
     // models learnt in another frame: the best coding without the rotated modes
@@ -316,7 +381,11 @@ pub(crate) fn code_family(
     let rotated = p.modes().iter().any(|&m| levl::rotated(&[m]));
     if let (true, Transform::Wavelet(w), true) = (rotated, p.header.transform, effort.unrotated) {
         let d = p.header.disc;
-        coder.try_code(&mut p, w, d, false);
+        let search = ModeSearch {
+            rotated: false,
+            ..effort.modes()
+        };
+        coder.try_code(&mut p, w, d, search);
     }
     Ok(Some((p, canon)))
 }
@@ -340,7 +409,7 @@ impl Recoder<'_> {
     fn code(
         &self,
         (w, d): (Wavelet, DiscTransform),
-        rotated: bool,
+        search: ModeSearch,
         modes: Option<Vec<u8>>,
         bound: usize,
     ) -> Option<Payloads> {
@@ -350,7 +419,7 @@ impl Recoder<'_> {
             w,
             d,
             self.flat_h,
-            rotated,
+            search,
             modes,
             bound,
             &self.opts.progress,
@@ -358,9 +427,9 @@ impl Recoder<'_> {
     }
 
     /// Codes the hierarchy with (w, d) in every mode and keeps it in `p` if smaller.
-    fn try_code(&self, p: &mut Payloads, w: Wavelet, d: DiscTransform, rotated: bool) {
+    fn try_code(&self, p: &mut Payloads, w: Wavelet, d: DiscTransform, search: ModeSearch) {
         let bound = p.coded().saturating_sub(1);
-        if let Some(mut q) = self.code((w, d), rotated, None, bound) {
+        if let Some(mut q) = self.code((w, d), search, None, bound) {
             q.order = p.order.clone();
             if q.coded() < p.coded() {
                 *p = q;
@@ -368,38 +437,15 @@ impl Recoder<'_> {
         }
     }
 
-    /// Other (transform, disc) pairs are ranked by their details' bits
-    /// ([`detail_bits`]); the best of them is coded in every mode if its bits are within
-    /// [`RANK_MARGIN`] of those of `first`, p's transform, and kept if smaller.
-    fn estimate_then_code(
-        &self,
-        p: &mut Payloads,
-        pairs: &[(Wavelet, DiscTransform)],
-        first: Wavelet,
-        rotated: bool,
-    ) {
-        let bits = |&(w, d): &(Wavelet, DiscTransform)| detail_bits(self.canon, self.mesh, w, d);
-        let Some(mine) = bits(&(first, p.header.disc)) else {
-            return;
-        };
-        let ranked = par_map(pairs, self.threads, bits);
-        // The fewest bits, the first in `pairs` on ties.
-        let best = pairs
-            .iter()
-            .zip(ranked)
-            .filter_map(|(pair, b)| Some((b?, *pair)))
-            .min_by_key(|&(b, _)| b);
-        if let Some((b, (w, d))) = best {
-            if b * 100 <= mine * RANK_MARGIN as u64 {
-                self.try_code(p, w, d, rotated);
-            }
-        }
-    }
-
     /// Other (transform, disc) pairs are ranked coding each level in the mode p chose
     /// for it (a fraction of the work of trying every mode); the best of them is then
     /// coded in every mode. Whichever coding is smallest is kept.
-    fn rank_then_code(&self, p: &mut Payloads, pairs: &[(Wavelet, DiscTransform)], rotated: bool) {
+    fn rank_then_code(
+        &self,
+        p: &mut Payloads,
+        pairs: &[(Wavelet, DiscTransform)],
+        search: ModeSearch,
+    ) {
         let modes = p.modes();
         let mut ranked: Option<(usize, Wavelet, DiscTransform)> = None;
         // The largest ranking size that leads to coding in every mode.
@@ -409,7 +455,7 @@ impl Recoder<'_> {
         // each coding only where it fits its own bound, as coded alone it would have
         // (a coding within a bound is the same coding under any wider one).
         let code = |&pair: &(Wavelet, DiscTransform), bound: usize| {
-            self.code(pair, rotated, Some(modes.clone()), bound)
+            self.code(pair, search, Some(modes.clone()), bound)
         };
         let widest = p.coded().saturating_sub(1).max(margin);
         let mut ahead = if self.threads > 1 {
@@ -437,7 +483,7 @@ impl Recoder<'_> {
             }
         }
         if let Some((_, w, d)) = ranked.filter(|&(s, ..)| s <= margin) {
-            self.try_code(p, w, d, rotated);
+            self.try_code(p, w, d, search);
         }
     }
 }

@@ -740,8 +740,48 @@ pub fn defect(level: &Level, x: &[i64]) -> Option<f64> {
 /// and its limit points make cubic runs whose fourth difference is only the rounding's
 /// (about 70 / 12 in variance, a median square near 3); detail makes it far larger.
 /// `levels` is the hierarchy, `finest` the level after its last; `None` without such
-/// runs (fewer than three levels).
+/// runs (fewer than three levels). (The encoder finds the runs once for every axis,
+/// [`Runs`].)
+#[cfg(test)]
 pub fn roughness(levels: &[Level], finest: &Level, x: &[i64]) -> Option<f64> {
+    Runs::new(levels, finest)?.roughness(x)
+}
+
+/// The runs [`roughness`] measures, found once for every axis.
+pub struct Runs(Vec<[usize; 5]>);
+
+impl Runs {
+    /// The runs of five finest vertices of `finest`, the level after the hierarchy
+    /// `levels`' last (at most about 40,000: a sample of vertices); `None` without any.
+    pub fn new(levels: &[Level], finest: &Level) -> Option<Runs> {
+        let runs = five_runs(levels, finest)?;
+        (!runs.is_empty()).then_some(Runs(runs))
+    }
+
+    /// [`roughness`] of the values `x`.
+    pub fn roughness(&self, x: &[i64]) -> Option<f64> {
+        let mut squares: Vec<f64> = self
+            .0
+            .iter()
+            .map(|r| {
+                let d = [1i128, -4, 6, -4, 1]
+                    .iter()
+                    .zip(r)
+                    .map(|(&c, &v)| c * x[v] as i128)
+                    .sum::<i128>() as f64;
+                d * d
+            })
+            .collect();
+        if squares.is_empty() {
+            return None;
+        }
+        let mid = squares.len() / 2;
+        Some(*squares.select_nth_unstable_by(mid, f64::total_cmp).1)
+    }
+}
+
+/// The runs of [`Runs::new`]; `None` without a level.
+fn five_runs(levels: &[Level], finest: &Level) -> Option<Vec<[usize; 5]>> {
     // The level-1 face each finest face lies in (faces are numbered by their coarse
     // face's corners, SPEC.md 8.1).
     let mut piece: Vec<u32> = (0..levels.first()?.coarse.idx.len() as u32).collect();
@@ -768,7 +808,7 @@ pub fn roughness(levels: &[Level], finest: &Level, x: &[i64]) -> Option<f64> {
         Some((o, finest.other_end(o, v) as usize))
     };
     let step = (finest.nv / 20_000).max(1);
-    let mut squares = Vec::new();
+    let mut runs = Vec::new();
     for v2 in (0..finest.nv).step_by(step).filter(|&v| regular(v)) {
         for &e in &finest.v_edges(v2)[..2] {
             let run = (|| {
@@ -784,21 +824,10 @@ pub fn roughness(levels: &[Level], finest: &Level, x: &[i64]) -> Option<f64> {
                     run.iter().all(|&v| in_piece(v, piece[f as usize]))
                 }).then_some(run)
             })();
-            if let Some(r) = run {
-                let d = [1i128, -4, 6, -4, 1]
-                    .iter()
-                    .zip(r)
-                    .map(|(&c, v)| c * x[v] as i128)
-                    .sum::<i128>() as f64;
-                squares.push(d * d);
-            }
+            runs.extend(run);
         }
     }
-    if squares.is_empty() {
-        return None;
-    }
-    let mid = squares.len() / 2;
-    Some(*squares.select_nth_unstable_by(mid, f64::total_cmp).1)
+    Some(runs)
 }
 
 #[cfg(test)]

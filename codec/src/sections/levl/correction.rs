@@ -118,10 +118,24 @@ pub(super) fn joint_correction(n: [i128; 3], frac: [i16; 3]) -> Option<([i64; 3]
 /// `x[k][nv..]`; `None` if a correction (mode 8's) is beyond the bound of a detail (the
 /// numerators then fit 64 bits).
 pub(super) fn corrections(level: &Level, x: &[Vec<i64>; 3], w: &Weights) -> Option<Vec<[i64; 3]>> {
+    sampled_corrections(level, x, w, Sample::All)
+}
+
+/// [`corrections`] of the details in `sample` (0 for the others).
+pub(super) fn sampled_corrections(
+    level: &Level,
+    x: &[Vec<i64>; 3],
+    w: &Weights,
+    sample: Sample,
+) -> Option<Vec<[i64; 3]>> {
     // Sized once (collecting into an Option would grow the vector to twice its length).
     let nd = level.ne() + level.nf();
     let mut out = Vec::with_capacity(nd);
     for i in 0..nd {
+        if !sample.has(i) {
+            out.push([0; 3]);
+            continue;
+        }
         let n = correction_sums(level, x, w, i);
         correction(n)?;
         out.push(n.map(|v| v as i64));
@@ -158,12 +172,22 @@ pub(super) fn read_weights(rest: &[u8], joint_open: bool) -> Result<(Weights, Ro
 /// The encoder's mode 8 weights for a level whose details are `x[k][nv..]`: per class and
 /// axis, the least-squares fit of the details by their features, in 32nds; `None` when
 /// every weight rounds to 0.
+#[cfg(test)]
 pub(super) fn corr_weights(level: &Level, x: &[Vec<i64>; 3]) -> Option<Weights> {
+    sampled_corr_weights(level, x, Sample::All)
+}
+
+/// [`corr_weights`] fitted on the details in `sample`.
+pub(super) fn sampled_corr_weights(
+    level: &Level,
+    x: &[Vec<i64>; 3],
+    sample: Sample,
+) -> Option<Weights> {
     let nd = level.ne() + level.nf();
     // Per class and axis: the normal equations, F^T F and F^T y.
     let mut a = [[[[0f64; NFEAT]; NFEAT]; 3]; 2];
     let mut b = [[[0f64; NFEAT]; 3]; 2];
-    for i in 0..nd {
+    for i in (0..nd).filter(|&i| sample.has(i)) {
         let class = (i >= level.ne()) as usize;
         let f = corr_features(level, x, i);
         for k in 0..3 {

@@ -411,10 +411,21 @@ impl NormalFrame {
 /// framed and rotated modes: detail `i` is frame detail `fd` = `i` (Catmull-Clark,
 /// polar) or the edge count plus `i` (sqrt(2): every detail is a face point).
 pub(super) fn normal_frames(level: &Level, coarse: &[Vec<i64>; 3], family: Family) -> Vec<NormalFrame> {
+    sampled_normal_frames(level, coarse, family, Sample::All)
+}
+
+/// [`normal_frames`] of the details in `sample` (none, `NormalFrame::pack(None)`, for
+/// the others).
+pub(super) fn sampled_normal_frames(
+    level: &Level,
+    coarse: &[Vec<i64>; 3],
+    family: Family,
+    sample: Sample,
+) -> Vec<NormalFrame> {
     let normals = face_normals(level, coarse);
     let ne = if family == Family::Sqrt2 { level.ne() } else { 0 };
     (0..family.details(level))
-        .map(|i| NormalFrame::pack(frame(level, &normals, ne + i)))
+        .map(|i| NormalFrame::pack(sample.has(i).then(|| frame(level, &normals, ne + i)).flatten()))
         .collect()
 }
 

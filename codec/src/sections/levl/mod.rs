@@ -108,6 +108,24 @@ pub fn rotated(payload: &[u8]) -> bool {
     matches!(mode_of(payload), Some(4 | 5))
 }
 
+/// Which of a level's details a sample holds (the encoder's mode trials, not part of the
+/// format): all, or every [`SAMPLE_STRIDE`]-th block of [`SAMPLE_BLOCK`] details.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Sample {
+    All,
+    Blocks,
+}
+
+const SAMPLE_BLOCK: usize = 64;
+const SAMPLE_STRIDE: usize = 8;
+
+impl Sample {
+    /// Whether detail `i` is in the sample.
+    fn has(self, i: usize) -> bool {
+        self == Sample::All || (i / SAMPLE_BLOCK) % SAMPLE_STRIDE == 0
+    }
+}
+
 /// What [`encode`] makes once per level for the modes that read it.
 #[derive(Default)]
 struct Prepared {

@@ -55,6 +55,9 @@ pub struct LevelModels {
     /// a level is coded in that mode only (mode 5 with its own weights; every open mode
     /// if that one is not open to the level).
     pub only: Option<std::vec::IntoIter<u8>>,
+    /// Whether a large level without a planned mode chooses it by coding a sample of
+    /// its details in each mode rather than all of them (not part of the format).
+    pub sampled: bool,
     /// The mode the encoder chose for the previous level (not part of the format).
     pub(super) prev_mode: Option<u8>,
     /// Whether the previous level was coded in a phased mode (6, 7 or 9): only such a
@@ -70,6 +73,7 @@ impl LevelModels {
             mags: Vec::new(),
             rotated: true,
             only: None,
+            sampled: false,
             prev_mode: None,
             last_phased: false,
         }

@@ -62,6 +62,11 @@ pub(super) fn put(
     Some(mags)
 }
 
+/// The fewest details of a level whose mode the encoder chooses on a sample, when asked
+/// ([`LevelModels::sampled`]): an eighth of them, [`Sample::Blocks`] (not part of the
+/// format).
+const SAMPLE_FROM: usize = 16_384;
+
 /// Codes the details `x[k][nv..]` of one level (a sqrt(2) step when `sqrt2`). `coarse`
 /// holds the level's coarse values (what the decoder has when it reads this level).
 /// The payload starts with a mode byte, and the encoder keeps the mode that codes
@@ -91,7 +96,18 @@ pub fn encode(
     let plain = |m: u8| matches!(m, 0 | 6);
     let open = |m: u8| only.is_none_or(|o| o == m || (plain(o) && plain(m)));
     let rotated = models.rotated && (open(4) || open(5));
-    let (modes, prep) = candidates(level, family, x, coarse, targets, phases, rotated, open);
+    // Without a plan, the open modes binned, then the best of them unbinned (kept only
+    // if strictly smaller); on a large level, when asked, all of them on a sample,
+    // what the modes read made for the sample alone, and the chosen one then whole.
+    let unbinned_trial = plan_unbinned.is_none();
+    let nd = family.details(level);
+    let sample = match models.sampled && unbinned_trial && nd >= SAMPLE_FROM {
+        true => Sample::Blocks,
+        false => Sample::All,
+    };
+    let (modes, prep) = candidates(
+        level, family, x, coarse, targets, phases, rotated, open, sample,
+    );
     let start = models.start();
     // The smallest mode's payload, with the magnitudes and models it leaves.
     struct Tried {
@@ -107,7 +123,11 @@ pub fn encode(
     // Codes the level in mode `i` (unbinned or not) and keeps it in `best` if smaller.
     // A stream longer than `cap` or than the best so far is abandoned; ties go to the
     // first mode in `modes`' order whatever the order of trying.
-    let attempt = |best: &mut Option<(usize, Tried)>, i: usize, unbinned: bool, cap: usize| {
+    let attempt = |best: &mut Option<(usize, Tried)>,
+                   prep: &Prepared,
+                   i: usize,
+                   unbinned: bool,
+                   cap: usize| {
         let mode = modes[i];
         let mut bytes = mode.bytes();
         if unbinned {
@@ -123,7 +143,8 @@ pub fn encode(
             let mut mg = models.mags.clone();
             let mut m = models.ready(start.clone(), mode);
             let body = encode_mode(
-                level, family, x, coarse, &prep, phases, &mut mg, mode, unbinned, &mut m, room, zero,
+                level, family, x, coarse, prep, phases, &mut mg, mode, unbinned, &mut m, room, zero,
+                Sample::All,
             )?;
             let mut mode_bytes = bytes.clone();
             mode_bytes[0] |= zero << ZERO_SHIFT;
@@ -134,7 +155,7 @@ pub fn encode(
                 models: m,
             })
         };
-        let Some(mut tried) = code(axis_zero_slots(level, family, x, mode, &prep, phases)) else {
+        let Some(mut tried) = code(axis_zero_slots(level, family, x, mode, prep, phases)) else {
             return;
         };
         // A mode whose slots are not the axes (a frame's) shows its zero slots once coded,
@@ -158,17 +179,55 @@ pub fn encode(
             *best = Some((i, tried));
         }
     };
-    // Without a plan, the open modes binned, then the best of them unbinned (kept only
-    // if strictly smaller). While that trial is to come, the binned ones are not cut at
-    // the limit: their best is the mode tried unbinned, which may fit where they do not.
-    let unbinned_trial = plan_unbinned.is_none();
+    // While the unbinned trial is to come, the binned codings are not cut at the
+    // limit: their best is the mode tried unbinned, which may fit where they do not.
     let cap = if unbinned_trial { usize::MAX } else { limit };
     let mut best: Option<(usize, Tried)> = None;
-    for i in order {
-        attempt(&mut best, i, plan_unbinned.unwrap_or(false), cap);
-    }
-    if let Some(j) = best.as_ref().map(|(j, _)| *j).filter(|_| unbinned_trial) {
-        attempt(&mut best, j, true, limit);
+    if sample == Sample::Blocks {
+        // Mode i's sample in bytes, if within `cap`.
+        let sampled = |i: usize, unbinned: bool, cap: usize| {
+            let mode = modes[i];
+            let mut mg = models.mags.clone();
+            let mut m = models.ready(start.clone(), mode);
+            let zero = axis_zero_slots(level, family, x, mode, &prep, phases);
+            let head = mode.bytes().len();
+            encode_mode(
+                level, family, x, coarse, &prep, phases, &mut mg, mode, unbinned, &mut m,
+                cap.saturating_sub(head), zero, sample,
+            )
+            .map(|b| b.len() + head)
+        };
+        // The fewest bytes, the first in `modes` on ties; in the order of trying, a
+        // sample is abandoned once past the fewest so far.
+        let mut chosen: Option<(usize, usize)> = None;
+        for i in order {
+            let cap = chosen.map_or(usize::MAX, |(b, _)| b);
+            if let Some(b) = sampled(i, false, cap) {
+                if chosen.is_none_or(|c| (b, i) < c) {
+                    chosen = Some((b, i));
+                }
+            }
+        }
+        if let Some((size, j)) = chosen {
+            let unbinned = sampled(j, true, size.saturating_sub(1)).is_some();
+            if let Some(whole) = whole_prep(level, family, x, coarse, modes[j]) {
+                attempt(&mut best, &whole, j, unbinned, usize::MAX);
+            }
+        }
+        // A value out of range outside the sample: every mode whole instead.
+        if best.is_none() {
+            models.sampled = false;
+            let out = encode(level, family, x, coarse, models, targets, phases, limit);
+            models.sampled = true;
+            return out;
+        }
+    } else {
+        for i in order {
+            attempt(&mut best, &prep, i, plan_unbinned.unwrap_or(false), cap);
+        }
+        if let Some(j) = best.as_ref().map(|(j, _)| *j).filter(|_| unbinned_trial) {
+            attempt(&mut best, &prep, j, true, limit);
+        }
     }
     let best = best.map(|(i, t)| {
         models.prev_mode = Some(modes[i].byte());
@@ -204,6 +263,7 @@ fn candidates<'t>(
     phases: Option<&Phases>,
     rotated: bool,
     open: impl Fn(u8) -> bool,
+    sample: Sample,
 ) -> (Vec<Mode<'t>>, Prepared) {
     let mut modes = vec![Mode::Plain, Mode::Framed];
     if let Some(t) = targets {
@@ -215,7 +275,8 @@ fn candidates<'t>(
     }
     let mut prep = Prepared::default();
     if family != Family::Sqrt2 && (open(8) || open(9)) {
-        let made = corr_weights(level, x).and_then(|w| Some((w, corrections(level, x, &w)?)));
+        let made = sampled_corr_weights(level, x, sample)
+            .and_then(|w| Some((w, sampled_corrections(level, x, &w, sample)?)));
         if let Some((w, c)) = made {
             modes.push(Mode::Corrected(w));
             if phases.is_some() {
@@ -227,7 +288,7 @@ fn candidates<'t>(
     }
     if rotated {
         modes.push(Mode::Rotated);
-        prep.normals = normal_frames(level, coarse, family);
+        prep.normals = sampled_normal_frames(level, coarse, family, sample);
         prep.frames = rot_frames(level, coarse, &prep.normals, family);
         match shift_weights(level, x, &prep.frames) {
             (0, 0) => {}
@@ -239,9 +300,31 @@ fn candidates<'t>(
     }
     // The normals, once for every mode that reads them.
     if prep.normals.is_empty() && modes.iter().any(|m| m.framed()) {
-        prep.normals = normal_frames(level, coarse, family);
+        prep.normals = sampled_normal_frames(level, coarse, family, sample);
     }
     (modes, prep)
+}
+
+/// What `mode` reads beside the details, for every detail of the level (its weights
+/// as chosen on a sample); `None` if a correction is beyond the bound of a detail.
+fn whole_prep(
+    level: &Level,
+    family: Family,
+    x: &[Vec<i64>; 3],
+    coarse: &[Vec<i64>; 3],
+    mode: Mode<'_>,
+) -> Option<Prepared> {
+    let mut prep = Prepared::default();
+    if mode.framed() {
+        prep.normals = normal_frames(level, coarse, family);
+    }
+    if matches!(mode, Mode::Rotated | Mode::Shifted(..)) {
+        prep.frames = rot_frames(level, coarse, &prep.normals, family);
+    }
+    if let Mode::Corrected(w) | Mode::CorrectedPhased(w, _) = mode {
+        prep.corrections = corrections(level, x, &w)?;
+    }
+    Some(prep)
 }
 
 /// The order modes are tried in: the previous level's mode first (a mode is abandoned
@@ -273,6 +356,7 @@ pub(super) fn encode_mode(
     m: &mut Models,
     limit: usize,
     zero: u8,
+    sample: Sample,
 ) -> Option<Vec<u8>> {
     let mut enc = Encoder::new();
     let (nv, nd) = (level.nv, family.details(level));
@@ -300,6 +384,9 @@ pub(super) fn encode_mode(
     mags.resize(nv, [UNKNOWN; 3]);
     mags.resize(nv + nd, [0; 3]);
     for i in 0..nd {
+        if !sample.has(i) {
+            continue;
+        }
         let (class, bins, _) = contexts(level, mags, family, i);
         let mut d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
         let fr = if framed {
