@@ -313,6 +313,40 @@ fn coarsen(t: &Topo, colours: &[u8], side: u8) -> Option<Coarse> {
     Some(Coarse { topo, points })
 }
 
+/// `t` with the vertices some face uses numbered `0..` in their order, and each new
+/// number's old one.
+fn compact(t: &Topo) -> (Topo, Vec<u32>) {
+    let mut new = vec![NONE; t.nv];
+    for &v in &t.idx {
+        new[v as usize] = 0;
+    }
+    let mut back = Vec::new();
+    for (v, n) in new.iter_mut().enumerate() {
+        if *n == 0 {
+            *n = back.len() as u32;
+            back.push(v as u32);
+        }
+    }
+    let dense = Topo {
+        nv: back.len(),
+        starts: t.starts.clone(),
+        idx: t.idx.iter().map(|&v| new[v as usize]).collect(),
+    };
+    (dense, back)
+}
+
+impl Coarse {
+    /// This coarsening in the numbers `back` maps its vertices to, of a mesh of `nv`
+    /// vertices.
+    fn renumbered(mut self, back: &[u32], nv: usize) -> Coarse {
+        self.topo.nv = nv;
+        for v in self.topo.idx.iter_mut().chain(&mut self.points) {
+            *v = back[*v as usize];
+        }
+        self
+    }
+}
+
 /// Vertices some face uses.
 fn used(t: &Topo) -> usize {
     let mut seen = vec![false; t.nv];
@@ -338,7 +372,14 @@ fn search(t: &Topo, max: usize, keep: usize) -> Vec<Vec<Coarse>> {
         let Some(c) = coarsen(t, &colours, side) else {
             continue;
         };
-        let rests = search(&c.topo, max - 1, keep);
+        // The coarser steps are searched on the coarse mesh with its vertices numbered
+        // densely (its arrays then shrink with its faces), in their order: the same
+        // colours and choices, in this mesh's numbers once mapped back.
+        let (dense, back) = compact(&c.topo);
+        let rests: Vec<Vec<Coarse>> = search(&dense, max - 1, keep)
+            .into_iter()
+            .map(|chain| chain.into_iter().map(|x| x.renumbered(&back, t.nv)).collect())
+            .collect();
         if rests.is_empty() {
             found.push((1, used(&c.topo), vec![c]));
             continue;
