@@ -524,3 +524,64 @@ fn tangent_mode_codes_fitted_sqrt2_levels_exactly() {
         assert_eq!(dec.mesh, m.mesh, "{w:?}");
     }
 }
+
+/// A mesh that reaches near the edge of the coordinates' range (|x| <= 2^44 - 1), as
+/// binary float quantisation places one (the grid's largest exponent just above the
+/// values), coded with the update-step transforms (bicubic, biquintic: their coarse
+/// values carry 1/g of the geometry per level and approach the control cage, beyond the
+/// smooth surface): every coarser level decodes, its values clamped into the range
+/// (SPEC.md 9.4), and the finest level comes back exactly.
+#[test]
+fn coarser_levels_of_a_mesh_at_the_range_edge_are_clamped_not_refused() {
+    let max = (1i64 << 44) - 1;
+    let path = common::own_corpus()
+        .into_iter()
+        .find(|p| p.ends_with("cube_cc4.obj"))
+        .unwrap();
+    let input = subwave::load(&std::fs::read(path).unwrap(), None).unwrap();
+    let mut mesh = input.mesh.clone();
+    mesh.attributes.clear();
+    // The smooth cube at 8/9 of the range: its octahedral cage passes the edge.
+    let reach = mesh
+        .positions
+        .iter()
+        .flatten()
+        .map(|v| v.abs())
+        .max()
+        .unwrap();
+    let scale = max / 9 * 8 / reach;
+    for v in mesh.positions.iter_mut().flatten() {
+        *v *= scale;
+    }
+    for w in [Wavelet::Bicubic, Wavelet::Biquintic] {
+        let opts = EncodeOptions {
+            transform: TransformChoice::Fixed(w),
+            ..Default::default()
+        };
+        let enc =
+            subwave::encode_to_vec(&mesh, &Quantization::Decimal { decimals: 0 }, &opts).unwrap();
+        let levels = enc.header.levels;
+        assert!(levels >= 2, "{w:?}: {levels} levels");
+        let full = subwave::decode_slice(&enc.bytes).unwrap();
+        assert_eq!(
+            common::fingerprint(&full.mesh),
+            common::fingerprint(&mesh),
+            "{w:?}"
+        );
+        let mut clamped = 0;
+        for k in 0..levels {
+            let dec = subwave::decode(&enc.bytes, &common::up_to(k))
+                .unwrap_or_else(|e| panic!("{w:?} level {k}: {e}"));
+            let pos = &dec.mesh.positions;
+            assert!(
+                pos.iter().flatten().all(|v| v.abs() <= max),
+                "{w:?} level {k}"
+            );
+            clamped += pos.iter().flatten().filter(|v| v.abs() == max).count();
+        }
+        assert!(
+            clamped > 0,
+            "{w:?}: no coarser value reached the range's edge"
+        );
+    }
+}

@@ -791,7 +791,9 @@ impl Synthesis<'_> {
 }
 
 /// The mesh of level `upto` from its values `x` and topology: a coarser level's values
-/// carry 1/gain of the geometry per level still above it.
+/// carry 1/gain of the geometry per level still above it, and are clamped into the
+/// coordinates' range (SPEC.md 9.4: an update step's approximations may pass a mesh
+/// that reaches the range's edge).
 fn coarse_mesh(h: &Header, w: Wavelet, upto: u8, x: &[Vec<i64>; 3], topo: Topo) -> Result<Mesh> {
     let gain: i64 = match w {
         Wavelet::Bicubic => 4,
@@ -807,10 +809,7 @@ fn coarse_mesh(h: &Header, w: Wavelet, upto: u8, x: &[Vec<i64>; 3], topo: Topo) 
     for i in 0..topo.nv {
         let mut p = [0i64; 3];
         for k in 0..3 {
-            p[k] = x[k][i]
-                .checked_mul(scale)
-                .filter(|v| v.abs() <= MAX_COORD)
-                .ok_or_else(|| Error::corrupt("LEVL", "reconstructed coordinate out of range"))?;
+            p[k] = x[k][i].saturating_mul(scale).clamp(-MAX_COORD, MAX_COORD);
         }
         mesh.positions.push(p);
     }
@@ -929,16 +928,11 @@ fn synthesise_fit(
         levl::fit::decode_residuals(s.payload, &mut x, bits, MAX_COORD)
             .map_err(|e| e.in_level(upto as usize, s.offset))?;
     } else {
-        // A coarser level: the control mesh's refinement, rounded to the grid.
+        // A coarser level: the control mesh's refinement, rounded to the grid and
+        // clamped into the coordinates' range (SPEC.md 9.10).
         let half = (1i64 << bits) >> 1;
         for v in x.iter_mut().flatten() {
-            *v = (*v + half) >> bits;
-            if v.abs() > MAX_COORD {
-                return Err(Error::corrupt(
-                    "LEVL",
-                    "reconstructed coordinate out of range",
-                ));
-            }
+            *v = ((*v + half) >> bits).clamp(-MAX_COORD, MAX_COORD);
         }
     }
     let mut mesh = Mesh::new();
