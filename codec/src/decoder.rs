@@ -790,11 +790,12 @@ impl Synthesis<'_> {
     }
 }
 
-/// The mesh of level `upto` from its values `x` and topology: a coarser level's values
-/// carry 1/gain of the geometry per level still above it, and are clamped into the
-/// coordinates' range (SPEC.md 9.4: an update step's approximations may pass a mesh
-/// that reaches the range's edge).
+/// The mesh of level `upto` from its values `x` and topology. The finest level's values
+/// must lie in the coordinates' range, else corrupt; a coarser level's carry 1/gain of
+/// the geometry per level still above it and are clamped into the range (SPEC.md 9.4:
+/// an update step's approximations may pass a mesh that reaches the range's edge).
 fn coarse_mesh(h: &Header, w: Wavelet, upto: u8, x: &[Vec<i64>; 3], topo: Topo) -> Result<Mesh> {
+    let finest = upto == h.levels;
     let gain: i64 = match w {
         Wavelet::Bicubic => 4,
         Wavelet::Biquintic => 16,
@@ -809,7 +810,14 @@ fn coarse_mesh(h: &Header, w: Wavelet, upto: u8, x: &[Vec<i64>; 3], topo: Topo) 
     for i in 0..topo.nv {
         let mut p = [0i64; 3];
         for k in 0..3 {
-            p[k] = x[k][i].saturating_mul(scale).clamp(-MAX_COORD, MAX_COORD);
+            let v = x[k][i].saturating_mul(scale);
+            if finest && v.abs() > MAX_COORD {
+                return Err(Error::corrupt(
+                    "LEVL",
+                    "reconstructed coordinate out of range",
+                ));
+            }
+            p[k] = v.clamp(-MAX_COORD, MAX_COORD);
         }
         mesh.positions.push(p);
     }
@@ -994,4 +1002,29 @@ fn restore_order(mesh: &Mesh, o: &ordr::InputOrder) -> Mesh {
     out.faces = faces;
     out.face_starts = starts;
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A value past the coordinates' range is corrupt at the finest level and clamped
+    /// at a coarser one (SPEC.md 9.4).
+    #[test]
+    fn only_coarser_levels_clamp_into_the_range() {
+        let opts = crate::EncodeOptions::default();
+        let q = crate::Quantization::Decimal { decimals: 0 };
+        let mut h = crate::encoder::flat_header(&Mesh::new(), &q, &opts);
+        h.levels = 2;
+        let past = MAX_COORD + 1;
+        let x = [vec![past, -past], vec![1, 2], vec![3, 4]];
+        let w = Wavelet::Bicubic;
+        assert!(coarse_mesh(&h, w, 2, &x, Topo::new(2)).is_err());
+        let inside = [vec![MAX_COORD, -MAX_COORD], vec![1, 2], vec![3, 4]];
+        let m = coarse_mesh(&h, w, 2, &inside, Topo::new(2)).unwrap();
+        assert_eq!(m.positions, vec![[MAX_COORD, 1, 3], [-MAX_COORD, 2, 4]]);
+        // One level down the values carry a quarter of the geometry: 4 x past.
+        let m = coarse_mesh(&h, w, 1, &x, Topo::new(2)).unwrap();
+        assert_eq!(m.positions, vec![[MAX_COORD, 4, 12], [-MAX_COORD, 8, 16]]);
+    }
 }
