@@ -375,23 +375,29 @@ fn search(t: &Topo, max: usize, keep: usize) -> Vec<Vec<Coarse>> {
         // The coarser steps are searched on the coarse mesh with its vertices numbered
         // densely (its arrays then shrink with its faces), in their order: the same
         // colours and choices, in this mesh's numbers once mapped back.
+        // Each chain's base vertices are counted there too (the count is the same in
+        // any numbering).
         let (dense, back) = compact(&c.topo);
-        let rests: Vec<Vec<Coarse>> = search(&dense, max - 1, keep)
+        let rests: Vec<(usize, Vec<Coarse>)> = search(&dense, max - 1, keep)
             .into_iter()
-            .map(|chain| chain.into_iter().map(|x| x.renumbered(&back, t.nv)).collect())
+            .map(|chain| {
+                let base = chain.last().map_or(dense.nv, |r| used(&r.topo));
+                let chain = chain.into_iter().map(|x| x.renumbered(&back, t.nv)).collect();
+                (base, chain)
+            })
             .collect();
         if rests.is_empty() {
-            found.push((1, used(&c.topo), vec![c]));
+            // (compact numbered the vertices its faces use.)
+            found.push((1, dense.nv, vec![c]));
             continue;
         }
         // The coarsening heads each deeper chain: copied for all but the last.
         let last = rests.len() - 1;
         let mut c = Some(c);
-        for (i, rest) in rests.into_iter().enumerate() {
+        for (i, (base, rest)) in rests.into_iter().enumerate() {
             let Some(head) = (if i == last { c.take() } else { c.clone() }) else {
                 break;
             };
-            let base = used(rest.last().map_or(&head.topo, |r| &r.topo));
             let chain: Vec<Coarse> = std::iter::once(head).chain(rest).collect();
             found.push((chain.len(), base, chain));
         }
