@@ -54,22 +54,115 @@ pub(super) fn face_normal_64(level: &Level, coarse: &[Vec<i64>; 3], f: usize) ->
     Some(n)
 }
 
-/// Every coarse face's normal, once per level.
-pub(super) fn face_normals(level: &Level, coarse: &[Vec<i64>; 3]) -> Vec<[i128; 3]> {
-    (0..level.nf())
-        .map(|f| face_normal(level, coarse, f))
-        .collect()
+/// [`face_normal_64`] of a face of at most eight corners whose values are below 2^28
+/// in magnitude: no product or sum can overflow.
+#[inline]
+fn face_normal_small(level: &Level, coarse: &[Vec<i64>; 3], f: usize) -> [i64; 3] {
+    let c = level.coarse.face(f);
+    let [x, y, z] = coarse;
+    let mut n = [0i64; 3];
+    let Some(&last) = c.last() else {
+        return n;
+    };
+    let mut a = last as usize;
+    for &b in c {
+        let b = b as usize;
+        let (px, py, pz) = (x[a], y[a], z[a]);
+        let (qx, qy, qz) = (x[b], y[b], z[b]);
+        n[0] += (py - qy) * (pz + qz);
+        n[1] += (pz - qz) * (px + qx);
+        n[2] += (px - qx) * (py + qy);
+        a = b;
+    }
+    n
+}
+
+/// Every coarse face's normal, once per level: in 64 bits when each fits in 62 (so that
+/// an edge's two faces sum in 64 bits), as coordinates below about 2^29 give; else in
+/// 128.
+pub(super) enum FaceNormals {
+    Narrow(Vec<[i64; 3]>),
+    Wide(Vec<[i128; 3]>),
+}
+
+/// Largest magnitude of a face normal kept in 64 bits.
+const NARROW_NORMAL: i64 = (1 << 62) - 1;
+
+pub(super) fn face_normals(level: &Level, coarse: &[Vec<i64>; 3]) -> FaceNormals {
+    let mut narrow = Vec::with_capacity(level.nf());
+    // Values below 2^28: a face of up to eight corners sums its terms (each below 2^58)
+    // without a check.
+    let small = coarse
+        .iter()
+        .all(|xk| xk[..level.nv.min(xk.len())].iter().all(|v| v.unsigned_abs() < 1 << 28));
+    for f in 0..level.nf() {
+        if small && level.coarse.face(f).len() <= 8 {
+            narrow.push(face_normal_small(level, coarse, f));
+            continue;
+        }
+        match face_normal_64(level, coarse, f) {
+            Some(n) if n.iter().all(|v| v.abs() <= NARROW_NORMAL) => narrow.push(n),
+            _ => {
+                return FaceNormals::Wide(
+                    (0..level.nf())
+                        .map(|f| face_normal(level, coarse, f))
+                        .collect(),
+                )
+            }
+        }
+    }
+    FaceNormals::Narrow(narrow)
 }
 
 /// The coding frame of a detail (SPEC.md 10.2): the axis where the coarse normal is
 /// largest (coded first) and the normal reduced to at most 24 bits, or `None` when the
 /// normal is zero.
+#[inline]
 pub(super) fn frame(
     level: &Level,
-    normals: &[[i128; 3]],
+    normals: &FaceNormals,
     detail: usize,
 ) -> Option<(usize, [i64; 3])> {
-    let mut n = [0i128; 3];
+    match normals {
+        FaceNormals::Narrow(n) => frame_of(level, n, detail),
+        FaceNormals::Wide(n) => frame_of(level, n, detail),
+    }
+}
+
+/// An integer wide enough for a detail's coarse normal.
+trait NormalSum: Copy + Default + std::ops::AddAssign {
+    /// Bit length of the magnitude.
+    fn bits(self) -> u32;
+    /// `self >> shift`, which fits 64 bits.
+    fn shr(self, shift: u32) -> i64;
+}
+
+impl NormalSum for i64 {
+    #[inline]
+    fn bits(self) -> u32 {
+        64 - self.unsigned_abs().leading_zeros()
+    }
+    #[inline]
+    fn shr(self, shift: u32) -> i64 {
+        self >> shift
+    }
+}
+
+impl NormalSum for i128 {
+    #[inline]
+    fn bits(self) -> u32 {
+        128 - self.unsigned_abs().leading_zeros()
+    }
+    #[inline]
+    fn shr(self, shift: u32) -> i64 {
+        (self >> shift) as i64
+    }
+}
+
+/// [`frame`] for normals of type `T` (the same integers in either width).
+#[inline(always)]
+fn frame_of<T: NormalSum>(level: &Level, normals: &[[T; 3]], detail: usize) -> Option<(usize, [i64; 3])> {
+    let mut n = [T::default(); 3];
     if detail < level.ne() {
         for &f in &level.edge_faces[detail] {
             if f != crate::topology::NONE {
@@ -82,13 +175,12 @@ pub(super) fn frame(
     } else {
         n = normals[detail - level.ne()];
     }
-    let big = n.iter().map(|v| v.unsigned_abs()).max().unwrap_or(0);
-    if big == 0 {
+    let bits = n.iter().map(|v| v.bits()).max().unwrap_or(0);
+    if bits == 0 {
         return None;
     }
-    let bits = 128 - big.leading_zeros();
     let shift = bits.saturating_sub(24);
-    let r = n.map(|v| (v >> shift) as i64);
+    let r = n.map(|v| v.shr(shift));
     // The first axis of largest magnitude (after reduction it is still non-zero).
     let mut k = 0;
     for d in 1..3 {
@@ -194,8 +286,37 @@ impl Givens {
     /// The rotation that turns `(a, b)` to within half a table step of the positive
     /// first axis (SPEC.md 10.5): the quarter turns that leave `a' >= |b'|`, `a' > 0`,
     /// then the table's rotation for `m = [|b'| 2^10 / a']`, negated when `b' < 0`.
-    /// Only the ratio of `a` and `b` matters (|a|, |b| < 2^40).
+    /// Only the ratio of `a` and `b` matters (|a|, |b| < 2^40). Without a branch on the
+    /// quadrant (normals point every way): the same rotation as
+    /// [`Givens::towards_by_cases`], SPEC.md's cases in order.
+    #[inline]
     pub(super) fn towards(a: i64, b: i64) -> Givens {
+        // Steep when |b| > |a|: one turn (b > 0) or three; else none (a >= 0) or two.
+        // (a = b = 0 takes no turn and table entry 0, which is no rotation.)
+        let steep = b.unsigned_abs() > a.unsigned_abs();
+        let turns = if steep {
+            1 + 2 * (b < 0) as u8
+        } else {
+            2 * (a < 0) as u8
+        };
+        let (c, s) = TURN[turns as usize];
+        let (a, b) = (c * a + s * b, c * b - s * a);
+        // 0 <= |b| <= a: m in 0..=2^10, one division.
+        let d = 2 * (a.max(1) as u64);
+        let m = (((b.unsigned_abs() << (TURN_BITS + 1)) + a as u64) / d) as usize;
+        let (p, u) = TURNS[m.min(1 << TURN_BITS)];
+        let neg = -((b < 0) as i32);
+        // (x ^ -1) - -1 = -x; (x ^ 0) - 0 = x.
+        Givens {
+            turns,
+            p: (p ^ neg) - neg,
+            u: (u ^ neg) - neg,
+        }
+    }
+
+    /// [`Givens::towards`] as SPEC.md 10.5 states it, case by case.
+    #[cfg(test)]
+    pub(super) fn towards_by_cases(a: i64, b: i64) -> Givens {
         let (turns, a, b) = if a > 0 && b.abs() <= a {
             (0, a, b)
         } else if b > 0 && a.abs() < b {
@@ -208,7 +329,6 @@ impl Givens {
             // a = b = 0: no rotation.
             return Givens { turns: 0, p: 0, u: 0 };
         };
-        // 0 <= |b| <= a, a > 0: m in 0..=2^10, one division.
         let m = (((b.unsigned_abs() << (TURN_BITS + 1)) + a as u64) / (2 * a as u64)) as usize;
         let (p, u) = TURNS[m];
         let (p, u) = if b < 0 { (-p, -u) } else { (p, u) };
@@ -239,18 +359,23 @@ impl Givens {
 }
 
 /// `v` shifted so that its largest magnitude has 24 bits (unchanged when zero).
-pub(super) fn to_24_bits(v: [i128; 3]) -> [i64; 3] {
+pub(super) fn to_24_bits(v: [i64; 3]) -> [i64; 3] {
     let big = v.iter().map(|x| x.unsigned_abs()).max().unwrap_or(0);
     if big == 0 {
         return [0; 3];
     }
-    let bits = 128 - big.leading_zeros() as i32;
+    let bits = 64 - big.leading_zeros() as i32;
     let shift = bits - 24;
     if shift >= 0 {
-        v.map(|x| (x >> shift) as i64)
+        v.map(|x| x >> shift)
     } else {
-        v.map(|x| (x << -shift) as i64)
+        v.map(|x| x << -shift)
     }
+}
+
+/// A level's values per axis as slices (what the frames read of the coarse values).
+pub(super) fn slices(x: &[Vec<i64>; 3]) -> [&[i64]; 3] {
+    [&x[0], &x[1], &x[2]]
 }
 
 /// The rotation of a detail into its orthonormal frame (SPEC.md 10.5): normal `n` onto
@@ -259,7 +384,7 @@ pub(super) fn to_24_bits(v: [i128; 3]) -> [i64; 3] {
 pub(super) struct Rotation(pub(super) [Givens; 3]);
 
 impl Rotation {
-    pub(super) fn new(n: [i64; 3], t: [i128; 3]) -> Rotation {
+    pub(super) fn new(n: [i64; 3], t: [i64; 3]) -> Rotation {
         let g0 = Givens::towards(n[0], n[1]);
         let (n0, _) = g0.apply(n[0], n[1]);
         let g1 = Givens::towards(n0, n[2]);
@@ -293,7 +418,8 @@ impl Rotation {
 /// The tangent reference of detail `fd` (SPEC.md 10.5): an edge point's coarse edge,
 /// from its first end to its second; a face point's diagonal from its face's first
 /// corner to its third (to the second for a triangle).
-pub(super) fn tangent_ref(level: &Level, coarse: &[Vec<i64>; 3], fd: usize) -> [i128; 3] {
+/// (Values are at most 2^52 in magnitude, 9.3: their differences fit 64 bits.)
+pub(super) fn tangent_ref(level: &Level, coarse: [&[i64]; 3], fd: usize) -> [i64; 3] {
     let (a, b) = if fd < level.ne() {
         let [a, b] = level.edges[fd];
         (a, b)
@@ -301,13 +427,13 @@ pub(super) fn tangent_ref(level: &Level, coarse: &[Vec<i64>; 3], fd: usize) -> [
         let c = level.coarse.face(fd - level.ne());
         (c[0], if c.len() >= 4 { c[2] } else { c[1] })
     };
-    std::array::from_fn(|k| coarse[k][b as usize] as i128 - coarse[k][a as usize] as i128)
+    std::array::from_fn(|k| coarse[k][b as usize] - coarse[k][a as usize])
 }
 
 /// Format 17's along-edge offset (SPEC.md 10.5): sixteen times the offset of the mean of
 /// an interior edge's two coarse face centroids from the edge's midpoint, rounded; `None`
 /// for a boundary edge or a component above 2^52.
-pub(super) fn edge_offset(level: &Level, coarse: &[Vec<i64>; 3], e: usize) -> Option<[i64; 3]> {
+pub(super) fn edge_offset(level: &Level, coarse: [&[i64]; 3], e: usize) -> Option<[i64; 3]> {
     let [f1, f2] = level.edge_faces[e];
     if f1 == crate::topology::NONE || f2 == crate::topology::NONE {
         return None;
@@ -346,7 +472,7 @@ impl RotFrame {
     /// unless `offset` (only [`Mode::Shifted`] reads it).
     pub(super) fn new(
         level: &Level,
-        coarse: &[Vec<i64>; 3],
+        coarse: [&[i64]; 3],
         family: Family,
         fd: usize,
         n: [i64; 3],
@@ -474,7 +600,7 @@ pub(super) fn rot_frames(
     };
     for (i, f) in frames.iter().enumerate() {
         let fd = ne + i;
-        let made = f.get().map(|(_, n)| RotFrame::new(level, coarse, family, fd, n, true));
+        let made = f.get().map(|(_, n)| RotFrame::new(level, slices(coarse), family, fd, n, true));
         out.rots.push(made.map(|r| r.rot));
         if i < edges {
             out.offsets.push(made.and_then(|r| r.offset));

@@ -64,6 +64,52 @@ pub(super) fn get(
     Ok((d, mags))
 }
 
+/// [`get`] without a frame or phases (the plain, corrected and rotated modes): the same
+/// values, with the model of each decided without the frame's and phases' cases.
+#[inline]
+fn get_plain(
+    dec: &mut Decoder,
+    m: &mut Models,
+    class: usize,
+    nbr: [usize; 3],
+    unbinned: bool,
+    zero: u8,
+) -> Result<([i64; 3], [u8; 3])> {
+    let mut d = [0i64; 3];
+    let mut mags = [0u8; 3];
+    let mut prev = 0;
+    for slot in 0..3 {
+        // A zero slot's values are not in the stream, and no model learns them.
+        let v = if zero >> slot & 1 == 1 {
+            0
+        } else if unbinned {
+            let c = Ctx {
+                class,
+                slot,
+                prev,
+                nbr: nbr[slot],
+                bin: None,
+                unbinned,
+            };
+            let v = dec.int(m.model(c))?;
+            m.learn(c, v);
+            v
+        } else {
+            // A binned level: the context model codes, the shared model learns.
+            let v = dec.int(m.get(class, slot, prev, nbr[slot]))?;
+            m.observe(class, slot, v);
+            v
+        };
+        prev = class_of(v);
+        mags[slot] = prev as u8;
+        if v.abs() > MAX_LIFTED {
+            return Err(Error::corrupt("LEVL", "detail out of range"));
+        }
+        d[slot] = v;
+    }
+    Ok((d, mags))
+}
+
 /// Decodes what [`encode`] wrote into `x[k][nv..]`; `x[k][..nv]` are the coarse values.
 /// `targets` are the level's tangent targets (modes 2 and 7), `phasing` its phases (mode
 /// 6), each where the level has them. With `threads` above 1 a rotated level's rotations
@@ -102,7 +148,7 @@ pub fn decode(
     let normals = if framed {
         face_normals(level, x)
     } else {
-        Vec::new()
+        FaceNormals::Narrow(Vec::new())
     };
     for xs in x.iter_mut() {
         xs.resize(nv + nd, 0);
@@ -121,9 +167,11 @@ pub fn decode(
     // Mode 9 with joint rounding also reads the predictions' fractions.
     let joint = matches!(mode, Mode::CorrectedPhased(_, Rounding::Joint));
     let (mut preds, mut cc_phases) = edge_predictions(phasing.as_ref(), corr_phased, x, ne.min(nd), joint);
+    // A rotated level reads every value first, then makes and undoes the rotations
+    // (none predicts a value: their models see the rotated values).
     let rotated = matches!(mode, Mode::Rotated | Mode::Shifted(..));
-    if rotated && threads > 1 && nd >= BESIDE_MIN {
-        return decode_rotated(&mut dec, &mut m, level, family, x, mags, &normals, mode, (unbinned, zero))
+    if rotated {
+        return decode_rotated(&mut dec, &mut m, level, family, x, mags, &normals, mode, (unbinned, zero), threads)
             .map(|()| models.last = Some(m));
     }
     for i in 0..nd {
@@ -142,7 +190,6 @@ pub fn decode(
         } else {
             None
         };
-        let rotation = rotation_of(level, x, family, fd, fr, mode);
         let (offset, joint_phases) = detail_offset(level, x, mode, i, fr, &cc_phases)?;
         let ph = match (joint_phases, &phasing, mode, offset) {
             (Some(q), ..) => Phased::Axes(q),
@@ -162,24 +209,15 @@ pub fn decode(
             }
             _ => Phased::No,
         };
-        let (r, mg) = get(
-            &mut dec,
-            &mut m,
-            class,
-            bins,
-            fr.filter(|_| rotation.is_none()),
-            ph,
-            unbinned,
-            zero,
-        )?;
+        let (r, mg) = match (fr, ph) {
+            (None, Phased::No) => get_plain(&mut dec, &mut m, class, bins, unbinned, zero)?,
+            _ => get(&mut dec, &mut m, class, bins, fr, ph, unbinned, zero)?,
+        };
         mags[nv + i] = mg;
-        let mut d = r;
-        if let Some(rot) = rotation {
-            d = unrotate(r, rot)?;
-        }
-        if let Some(c) = offset {
-            d = in_range(plus(r, c))?;
-        }
+        let d = match offset {
+            Some(c) => in_range(plus(r, c))?,
+            None => r,
+        };
         for k in 0..3 {
             x[k][nv + i] = d[k].wrapping_add(fine[k]);
         }
@@ -196,7 +234,7 @@ pub fn decode(
 /// `fr` is not zero; else `None`.
 fn rotation_of(
     level: &Level,
-    coarse: &[Vec<i64>; 3],
+    coarse: [&[i64]; 3],
     family: Family,
     fd: usize,
     fr: Option<(usize, [i64; 3])>,
@@ -226,10 +264,12 @@ pub const BESIDE_MIN: usize = 4096;
 /// the values of the one before are read (a bounded store, whatever the level's size).
 const ROT_BLOCK: usize = 16384;
 
-/// A rotated level (modes 4 and 5, SPEC.md 10.5) read as [`decode`] reads it, on two
-/// threads: no value read depends on a rotation (their models see the rotated values,
-/// and no frame predicts), so each block's rotations are made beside the reading of its
-/// values, and applied after. The coarse values `x[k][..nv]` are read-only meanwhile.
+/// A rotated level (modes 4 and 5, SPEC.md 10.5) read as [`decode`] reads it: no value
+/// read depends on a rotation (their models see the rotated values, and no frame
+/// predicts), so the values are read first, then each detail's rotation is made and
+/// undone, in blocks. With `threads` above 1 and enough details, each block's rotations
+/// are made on another thread beside the reading of its values, and applied after. The
+/// coarse values `x[k][..nv]` are read-only meanwhile.
 #[allow(clippy::too_many_arguments)]
 fn decode_rotated(
     dec: &mut Decoder,
@@ -238,45 +278,58 @@ fn decode_rotated(
     family: Family,
     x: &mut [Vec<i64>; 3],
     mags: &mut [[u8; 3]],
-    normals: &[[i128; 3]],
+    normals: &FaceNormals,
     mode: Mode<'_>,
     (unbinned, zero): (bool, u8),
+    threads: usize,
 ) -> Result<()> {
     let (nv, nd) = (level.nv, family.details(level));
     let [x0, x1, x2] = x;
     let (c0, f0) = x0.split_at_mut(nv);
     let (c1, f1) = x1.split_at_mut(nv);
     let (c2, f2) = x2.split_at_mut(nv);
-    // `RotFrame::new` reads the coarse values as whole arrays: a copy of them.
-    let coarse: [Vec<i64>; 3] = [c0.to_vec(), c1.to_vec(), c2.to_vec()];
-    let coarse = &coarse;
-    let rotations = |lo: usize, hi: usize| -> Vec<Option<(Rotation, [i64; 3])>> {
-        (lo..hi)
-            .map(|i| {
-                let fd = frame_detail(level, family, i);
-                rotation_of(level, coarse, family, fd, frame(level, normals, fd), mode)
-            })
-            .collect()
+    let coarse: [&[i64]; 3] = [c0, c1, c2];
+    let rotation = |i: usize| {
+        let fd = frame_detail(level, family, i);
+        rotation_of(level, coarse, family, fd, frame(level, normals, fd), mode)
     };
+    let mut read = |lo: usize, hi: usize, f: [&mut [i64]; 3]| -> Result<()> {
+        let [f0, f1, f2] = f;
+        for i in lo..hi {
+            let (class, bins, _) = contexts(level, mags, family, i);
+            let (r, mg) = get_plain(dec, m, class, bins, unbinned, zero)?;
+            mags[nv + i] = mg;
+            f0[i] = r[0];
+            f1[i] = r[1];
+            f2[i] = r[2];
+        }
+        Ok(())
+    };
+    let undo = |i: usize, rot: Option<(Rotation, [i64; 3])>, f: [&mut [i64]; 3]| -> Result<()> {
+        if let Some(rot) = rot {
+            let [f0, f1, f2] = f;
+            let d = unrotate([f0[i], f1[i], f2[i]], rot)?;
+            (f0[i], f1[i], f2[i]) = (d[0], d[1], d[2]);
+        }
+        Ok(())
+    };
+    let beside = threads > 1 && nd >= BESIDE_MIN;
     let mut lo = 0;
     while lo < nd {
         let hi = (lo + ROT_BLOCK).min(nd);
-        let rots = std::thread::scope(|s| -> Result<_> {
-            let made = s.spawn(|| rotations(lo, hi));
-            for i in lo..hi {
-                let (class, bins, _) = contexts(level, mags, family, i);
-                let (r, mg) = get(dec, m, class, bins, None, Phased::No, unbinned, zero)?;
-                mags[nv + i] = mg;
-                f0[i] = r[0];
-                f1[i] = r[1];
-                f2[i] = r[2];
+        if beside {
+            let rots = std::thread::scope(|s| -> Result<_> {
+                let made = s.spawn(|| (lo..hi).map(rotation).collect::<Vec<_>>());
+                read(lo, hi, [&mut *f0, &mut *f1, &mut *f2])?;
+                Ok(made.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            })?;
+            for (i, rot) in (lo..hi).zip(rots) {
+                undo(i, rot, [&mut *f0, &mut *f1, &mut *f2])?;
             }
-            Ok(made.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-        })?;
-        for (i, rot) in (lo..hi).zip(rots) {
-            if let Some(rot) = rot {
-                let d = unrotate([f0[i], f1[i], f2[i]], rot)?;
-                (f0[i], f1[i], f2[i]) = (d[0], d[1], d[2]);
+        } else {
+            read(lo, hi, [&mut *f0, &mut *f1, &mut *f2])?;
+            for i in lo..hi {
+                undo(i, rotation(i), [&mut *f0, &mut *f1, &mut *f2])?;
             }
         }
         lo = hi;

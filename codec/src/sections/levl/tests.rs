@@ -89,8 +89,18 @@ fn face_normals_agree_with_128_bit_arithmetic() {
                 n[2] += (p(0, a) - p(0, b)) * (p(1, a) + p(1, b));
             }
             assert_eq!(face_normal(&level, &x, f), n, "face {f}, {bits}-bit values");
-            assert_eq!(all[f], n, "face {f} of all, {bits}-bit values");
+            let kept = match &all {
+                FaceNormals::Narrow(v) => v[f].map(i128::from),
+                FaceNormals::Wide(v) => v[f],
+            };
+            assert_eq!(kept, n, "face {f} of all, {bits}-bit values");
             wide += face_normal_64(&level, &x, f).is_none() as usize;
+        }
+        // 64-bit normals where every one fits, and the same frames as from 128-bit ones.
+        assert_eq!(matches!(all, FaceNormals::Narrow(_)), bits <= 29, "{bits}-bit values");
+        let exact = FaceNormals::Wide((0..level.nf()).map(|f| face_normal(&level, &x, f)).collect());
+        for d in 0..level.ne() + level.nf() {
+            assert_eq!(frame(&level, &all, d), frame(&level, &exact, d), "detail {d}, {bits}-bit values");
         }
         // Small values never need 128 bits; 53-bit ones always do.
         match bits {
@@ -266,16 +276,35 @@ fn the_rotation_table_follows_its_angles() {
     }
 }
 
+/// The branch-free rotation choice is SPEC.md's case by case: every quadrant, the
+/// diagonals and axes, zero, and random pairs up to 2^40.
+#[test]
+fn rotation_choice_without_branches_is_the_cases() {
+    let raw = pseudo(21, 4000, 40);
+    let small = pseudo(22, 4000, 4);
+    let k = 1i64 << 39;
+    let mut pairs: Vec<(i64, i64)> = raw.chunks(2).map(|c| (c[0], c[1])).collect();
+    pairs.extend(small.chunks(2).map(|c| (c[0], c[1])));
+    for a in [-k, -3, -1, 0, 1, 3, k] {
+        for b in [-k, -3, -1, 0, 1, 3, k, a, -a] {
+            pairs.push((a, b));
+        }
+    }
+    for (a, b) in pairs {
+        assert_eq!(Givens::towards(a, b), Givens::towards_by_cases(a, b), "({a}, {b})");
+    }
+}
+
 /// Rotations are exact on integers, take the normal onto the first component and the
 /// tangent reference's tangential part onto the second.
 #[test]
 fn rotations_are_exact_and_align_the_frame() {
     let raw = pseudo(11, 600, 24);
     let big = pseudo(12, 600, 52);
-    let mut cases: Vec<([i64; 3], [i128; 3])> = (0..100)
+    let mut cases: Vec<([i64; 3], [i64; 3])> = (0..100)
         .map(|c| {
             let n = [raw[6 * c], raw[6 * c + 1], raw[6 * c + 2]];
-            let t = [raw[6 * c + 3], raw[6 * c + 4], raw[6 * c + 5]].map(|v| v as i128 >> 5);
+            let t = [raw[6 * c + 3], raw[6 * c + 4], raw[6 * c + 5]].map(|v| v >> 5);
             (n, t)
         })
         .collect();
@@ -289,9 +318,9 @@ fn rotations_are_exact_and_align_the_frame() {
         [3, -4, 0],
     ] {
         for t in [
-            [1i128, 2, 3],
+            [1i64, 2, 3],
             [0, 0, 0],
-            [n[0] as i128, n[1] as i128, n[2] as i128],
+            n,
         ] {
             cases.push((n, t));
         }
@@ -433,7 +462,7 @@ fn rotated_modes_round_trip() {
 /// (Catmull-Clark's edge rule, tangentially; the offset is sixteen times it).
 fn follow_faces(level: &Level, coarse: &[Vec<i64>; 3], x: &mut [Vec<i64>; 3]) {
     for e in 0..level.ne() {
-        if let Some(off) = edge_offset(level, coarse, e) {
+        if let Some(off) = edge_offset(level, slices(coarse), e) {
             for k in 0..3 {
                 x[k][level.nv + e] += crate::transform::round_div(off[k] as i128, 32);
             }

@@ -355,10 +355,19 @@ pub fn predictions_with(
         codes: std::array::from_fn(|_| Vec::with_capacity(nf)),
         fracs: Default::default(),
     });
+    // Small values: each coarse vertex's three values side by side, so that a ring term
+    // reads one place (the same sums as `face_prediction`'s).
+    let pts: Vec<[i64; 3]> = if small {
+        (0..level.nv).map(|v| [x[0][v], x[1][v], x[2][v]]).collect()
+    } else {
+        Vec::new()
+    };
     for f in 0..nf {
-        let (p, q) = match ph {
-            Some(_) => face_prediction::<true>(&level.coarse, &nb, f, x, small),
-            None => face_prediction::<false>(&level.coarse, &nb, f, x, small),
+        let (p, q) = match (ph.is_some(), small) {
+            (true, true) => face_prediction_small::<true>(&level.coarse, &nb, f, &pts),
+            (false, true) => face_prediction_small::<false>(&level.coarse, &nb, f, &pts),
+            (true, false) => face_prediction::<true>(&level.coarse, &nb, f, x, small),
+            (false, false) => face_prediction::<false>(&level.coarse, &nb, f, x, small),
         };
         for (o, p) in out.iter_mut().zip(p) {
             o.push(p);
@@ -380,6 +389,49 @@ fn small_values(x: &[Vec<i64>; 3], nv: usize) -> bool {
             .iter()
             .all(|v| v.unsigned_abs() < 1 << 40)
     })
+}
+
+/// [`face_prediction`] of values that [`small_values`] finds small, given as `pts[v]`,
+/// the three values of coarse vertex `v`: the same numbers.
+#[inline]
+fn face_prediction_small<const PHASES: bool>(
+    topo: &Topo,
+    nb: &Neighbours<'_>,
+    f: usize,
+    pts: &[[i64; 3]],
+) -> ([i64; 3], [u8; 3]) {
+    let s = topo.starts[f] as usize;
+    let k = topo.starts[f + 1] as usize - s;
+    let d = k as i128 * ONE;
+    if k > 8 {
+        // (Sums of more than eight corners may pass 64 bits.)
+        let mut acc = [0i128; 3];
+        corner_terms(topo, nb, s..s + k, |u, w| {
+            for (a, &xa) in acc.iter_mut().zip(&pts[u]) {
+                *a += w as i128 * xa as i128;
+            }
+        });
+        let p = acc.map(|a| crate::transform::round_div(a, d));
+        let q = match PHASES {
+            true => std::array::from_fn(|i| phase(acc[i] - p[i] as i128 * d, d)),
+            false => [0; 3],
+        };
+        return (p, q);
+    }
+    let mut acc = [0i64; 3];
+    corner_terms(topo, nb, s..s + k, |u, w| {
+        let (p, w) = (pts[u], w as i64);
+        acc[0] += w * p[0];
+        acc[1] += w * p[1];
+        acc[2] += w * p[2];
+    });
+    let p = acc.map(|a| crate::transform::round_div(a as i128, d));
+    if !PHASES {
+        return (p, [0; 3]);
+    }
+    // |a| < 2^61 and |p d| <= |a| + d: the remainder fits 64 bits.
+    let q = std::array::from_fn(|i| phase((acc[i] - p[i] * d as i64) as i128, d));
+    (p, q)
 }
 
 /// `P_f` of face f on the three axes (SPEC.md 9.7, eq. 1), from the coarse values
