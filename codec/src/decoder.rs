@@ -12,7 +12,7 @@ use crate::topology::Family;
 use crate::topology::{self, Level, Topo};
 use crate::transform::fit;
 use crate::transform::level::{LevelTransform, Scheme};
-use crate::transform::Wavelet;
+use crate::transform::{Stencils, Wavelet};
 use crate::Limits;
 use subwave_container::{Container, SectionKind};
 
@@ -630,8 +630,10 @@ fn synthesise_levels(
         pole: pole_flags(h, &topo)?,
         threads,
     };
-    // A level's successor, derived from it (cheaper than from its fine faces).
+    // A level's successor, derived from it (cheaper than from its fine faces), and the
+    // successor's stencils, derived from the level's where they can be.
     let mut next: Option<Level> = None;
+    let mut stencils: Option<Stencils> = None;
     let family = s.scheme.family;
     let lists = w == Wavelet::Sqrt2Sym;
     for l in 0..upto as usize {
@@ -650,22 +652,29 @@ fn synthesise_levels(
             && (family == Family::Sqrt2 || s.pole.is_empty())
             && family.details(&level) >= levl::BESIDE_MIN
         {
+            let given = stencils.take();
             let (read, made) = std::thread::scope(|sc| {
                 let made = sc.spawn(|| match family {
-                    Family::Sqrt2 => topology::sqrt2::next_level_of(&level, lists),
-                    _ => Ok(level.next()),
+                    Family::Sqrt2 => {
+                        topology::sqrt2::next_level_of(&level, lists).map(|n| (n, None))
+                    }
+                    _ => Ok(level.next_mapped()).map(|(n, m)| (n, Some(m))),
                 });
-                let read = s.read(&level, l, section.payload, last);
+                let read = s.read(&level, l, section.payload, last, given);
                 (
                     read,
                     made.join().unwrap_or_else(|e| std::panic::resume_unwind(e)),
                 )
             });
-            read.map_err(at)?;
-            next = Some(made?);
+            let st = read.map_err(at)?;
+            let (made, map) = made?;
+            stencils = st.zip(map).map(|(st, map)| st.next(&level, &made, &map, w));
+            next = Some(made);
             continue;
         }
-        s.read(&level, l, section.payload, last).map_err(at)?;
+        let st = s
+            .read(&level, l, section.payload, last, stencils.take())
+            .map_err(at)?;
         match family {
             // Only sqrt2-sym reads the per-vertex lists: the others' levels are made
             // without them.
@@ -675,7 +684,11 @@ fn synthesise_levels(
             // The finest topology needs only the level's edges: its other arrays go first.
             Family::Sqrt2 => topo = topology::sqrt2::fine_owned(level),
             // A Catmull-Clark level's successor, derived from it (no edge lookups).
-            _ if s.pole.is_empty() && !last => next = Some(level.next()),
+            _ if s.pole.is_empty() && !last => {
+                let (made, map) = level.next_mapped();
+                stencils = st.map(|st| st.next(&level, &made, &map, w));
+                next = Some(made);
+            }
             _ => {
                 topo = level.fine_with(&s.pole);
                 if !s.pole.is_empty() {
@@ -722,8 +735,17 @@ impl Synthesis<'_> {
     }
 
     /// Reads level `l`'s details from `payload` and synthesises the level's fine
-    /// values (SPEC.md 9, 10); `level` went through [`Synthesis::prepare`].
-    fn read(&mut self, level: &Level, l: usize, payload: &[u8], last: bool) -> Result<()> {
+    /// values (SPEC.md 9, 10); `level` went through [`Synthesis::prepare`]. A
+    /// Catmull-Clark level's transform takes `given` stencils if there are any; the
+    /// level's stencils come back unless it is the `last` read.
+    fn read(
+        &mut self,
+        level: &Level,
+        l: usize,
+        payload: &[u8],
+        last: bool,
+        given: Option<Stencils>,
+    ) -> Result<Option<Stencils>> {
         let family = self.scheme.family;
         let x = &mut self.x;
         // Made before the details are decoded: while the coarse values alone are in
@@ -743,7 +765,9 @@ impl Synthesis<'_> {
             let coarse = x.clone();
             let scheme = &self.scheme;
             let t = std::thread::scope(|s| -> Result<LevelTransform<'_>> {
-                let made = s.spawn(|| LevelTransform::new(scheme, level, l, &coarse, false));
+                let made = s.spawn(|| {
+                    LevelTransform::with_stencils(scheme, level, l, &coarse, false, given)
+                });
                 let read = levl::decode(payload, level, family, x, models, None, None, threads);
                 let t = made.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
                 read.map(|()| t)
@@ -751,7 +775,7 @@ impl Synthesis<'_> {
             t.synthesise(level, x);
             t
         } else {
-            let t = LevelTransform::new(&self.scheme, level, l, x, phased);
+            let t = LevelTransform::with_stencils(&self.scheme, level, l, x, phased, given);
             // Tangent targets only for a level coded in tangent mode (SPEC.md 10.3).
             let targets = levl::reads_targets(payload)
                 .then(|| t.tangent_targets(level, x))
@@ -782,11 +806,10 @@ impl Synthesis<'_> {
             // The last level read: its magnitudes serve no later level.
             *models = levl::LevelModels::new();
         }
-        drop(t);
         if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
             return Err(Error::corrupt("LEVL", "reconstructed value out of range"));
         }
-        Ok(())
+        Ok(if last { None } else { t.into_stencils() })
     }
 }
 

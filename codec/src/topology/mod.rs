@@ -464,6 +464,11 @@ impl Level {
     /// its face point), numbered as `Level::new` numbers them, by first appearance in
     /// the fine faces' corner order.
     pub fn next(&self) -> Level {
+        self.next_mapped().0
+    }
+
+    /// [`Level::next`] and where its edges came from ([`NextMap`]).
+    pub fn next_mapped(&self) -> (Level, NextMap) {
         let fine = self.fine();
         let (nv, ne) = (self.nv as u32, self.ne());
         let (e0, f0) = (nv, nv + ne as u32);
@@ -473,6 +478,7 @@ impl Level {
         let mut edge_faces: Vec<[u32; 2]> = Vec::with_capacity(edges.capacity());
         let mut face_edges = Vec::with_capacity(fine.idx.len());
         let (mut q, mut spoke) = (0u32, Vec::new());
+        let mut spokes = Vec::with_capacity(self.coarse.idx.len());
         // A fine edge `a -> b` seen in fine face q: its number (new if `*id` is NONE).
         let mut visit = |id: &mut u32, a: u32, b: u32, q: u32| {
             if *id == NONE {
@@ -507,8 +513,10 @@ impl Level {
                 visit(&mut half[ep][hp], b, c, q);
                 q += 1;
             }
+            spokes.extend_from_slice(&spoke);
         }
-        Level::from_edges(fine, edges, edge_faces, face_edges, true)
+        let level = Level::from_edges(fine, edges, edge_faces, face_edges, true);
+        (level, NextMap { half, spokes })
     }
 
     /// The number of faces [`Level::fine_with`] makes.
@@ -521,6 +529,19 @@ impl Level {
             .count();
         self.coarse.idx.len() + splits
     }
+}
+
+/// Where [`Level::next_mapped`]'s fine edges came from: per coarse edge, the fine edges
+/// of its halves at its first and second end; per coarse face corner (numbered as in
+/// the coarse `idx`), the fine edge from the edge point of the corner's edge (the edge
+/// from that corner to the next) to the face point.
+#[derive(Debug, Clone)]
+pub struct NextMap {
+    /// Per coarse edge, its halves' fine edges at its first and second end.
+    pub half: Vec<[u32; 2]>,
+    /// Per coarse face corner, the fine edge from its edge's edge point to the face
+    /// point.
+    pub spokes: Vec<u32>,
 }
 
 /// Per vertex of `topo`: the faces it is a corner of, once per corner, in face order

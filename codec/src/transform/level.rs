@@ -67,6 +67,19 @@ impl<'a> LevelTransform<'a> {
         x: &[Vec<i64>; 3],
         phases: bool,
     ) -> LevelTransform<'a> {
+        Self::with_stencils(scheme, level, index, x, phases, None)
+    }
+
+    /// [`LevelTransform::new`] with a Catmull-Clark level's [`Stencils`] for the
+    /// scheme's wavelet made beforehand (`stencils`; made here if `None`).
+    pub(crate) fn with_stencils(
+        scheme: &Scheme<'_>,
+        level: &'a Level,
+        index: usize,
+        x: &[Vec<i64>; 3],
+        phases: bool,
+        stencils: Option<Stencils>,
+    ) -> LevelTransform<'a> {
         let w = scheme.wavelet;
         match scheme.family {
             Family::Sqrt2 => match w {
@@ -84,7 +97,7 @@ impl<'a> LevelTransform<'a> {
                 let (discs, owned) = polar::discs(level, scheme.poles, index as u32, scheme.disc);
                 LevelTransform::Cc {
                     w,
-                    stencils: Stencils::new(level, w),
+                    stencils: stencils.unwrap_or_else(|| Stencils::new(level, w)),
                     discs,
                     owned,
                     disc: scheme.disc,
@@ -104,6 +117,14 @@ impl<'a> LevelTransform<'a> {
                 phased: true,
                 ..
             } => Phaser::new(level, *w, stencils),
+            _ => None,
+        }
+    }
+
+    /// A Catmull-Clark level's stencils, taken out (`None` for the other families).
+    pub(crate) fn into_stencils(self) -> Option<Stencils> {
+        match self {
+            LevelTransform::Cc { stencils, .. } => Some(stencils),
             _ => None,
         }
     }

@@ -17,7 +17,16 @@ pub(super) struct Interp4 {
     pub(super) edge2: Vec<[u32; 2]>,
     /// interp6: per quad face, per edge the edge beyond its beyond edge.
     pub(super) face2: Vec<[u32; 4]>,
+    /// Per edge end, the edge that leads to its beyond vertex ([`NONE`] where there is
+    /// none): what [`Interp4::derive`] reads.
+    pub(super) via: Vec<[u32; 2]>,
+    /// Whether no interior edge end of valence 4 had the same edge beside it in both
+    /// quads (a fold): then the next level's tables follow from these.
+    pub(super) unique: bool,
 }
+
+/// No quad across an edge (see [`Interp4::finish`]).
+const NO_QUAD: (u32, u8) = (NONE, u8::MAX);
 
 /// Per edge and side k (the face `edge_faces[e][k]`): the edge's slot in that face when
 /// it is a quad (the edge runs from corner slot to corner slot + 1), `u8::MAX` otherwise.
@@ -41,7 +50,7 @@ impl Interp4 {
     /// are those that `beyond_vertex` and `beyond_edge` give at every edge end and face
     /// edge (the test's `Interp4::reference`).
     pub(super) fn new(level: &Level, six: bool) -> Interp4 {
-        let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
+        let (nv, ne) = (level.nv, level.ne());
         let slot = quad_slots(level);
         // The slot of edge e in the quad on its side k, and that quad.
         let quad_slot = |e: usize, k: usize| {
@@ -52,7 +61,8 @@ impl Interp4 {
             .map(|v| level.v_edges(v).iter().any(|&e| level.is_boundary(e as usize)))
             .collect();
         let mut edge = Vec::with_capacity(ne);
-        let mut via = Vec::with_capacity(if six { ne } else { 0 });
+        let mut via = Vec::with_capacity(ne);
+        let mut unique = true;
         for e in 0..ne {
             let boundary = level.is_boundary(e);
             // An interior edge's other edge at each end in each quad beside it (NONE
@@ -85,6 +95,7 @@ impl Interp4 {
                     if on_boundary[a] || edges.len() != 4 || side.contains(&NONE) {
                         continue;
                     }
+                    unique &= side[0] != side[1];
                     match edges
                         .iter()
                         .copied()
@@ -96,42 +107,184 @@ impl Interp4 {
                 };
             }
             edge.push(found.map(|b| b.0));
-            if six {
-                via.push(found.map(|b| b.1));
+            via.push(found.map(|b| b.1));
+        }
+        Self::with_edges(level, &slot, six, edge, via, unique)
+    }
+
+    /// The stencils of `fine`, the level [`Level::next_mapped`] made of `coarse` with
+    /// `map`, from `coarse`'s stencils `st`, by index arithmetic where `coarse` is all
+    /// quads (then every fine vertex's neighbourhood is a coarse one's, an edge point's
+    /// or a quad's face point's): per half of a coarse edge, at its coarse end the half
+    /// of the coarse beyond edge, at the edge point the other half; per spoke, at the face
+    /// point the opposite spoke, at the edge point the spoke across the edge. The same
+    /// tables as [`Interp4::new`] of `fine` (test `derived_stencils_are_the_next_levels`);
+    /// `None` where `coarse` is not all quads or folds on itself.
+    pub(super) fn derive(coarse: &Level, st: &Interp4, fine: &Level, map: &NextMap) -> Option<Interp4> {
+        let (nv, ne, nf) = (coarse.nv, coarse.ne(), coarse.nf());
+        if !st.unique
+            || st.via.len() != ne
+            || coarse.face_edges.len() != 4 * nf
+            || !coarse.coarse.all_quads()
+            || map.half.len() != ne
+            || map.spokes.len() != 4 * nf
+        {
+            return None;
+        }
+        let (e0, f0) = (nv as u32, (nv + ne) as u32);
+        let mut edge = vec![[NONE; 2]; fine.ne()];
+        let mut via = vec![[NONE; 2]; fine.ne()];
+        // Fine edge `id`'s beyond vertex `b` at its end `x`, reached by fine edge `g`.
+        let mut put = |id: u32, x: u32, b: u32, g: u32| {
+            let id = id as usize;
+            let end = (fine.edges[id][0] != x) as usize;
+            edge[id][end] = b;
+            via[id][end] = g;
+        };
+        for (e, ends) in coarse.edges.iter().enumerate() {
+            for end in 0..2 {
+                let (v, w) = (ends[end], ends[1 - end]);
+                let h = map.half[e][end];
+                // At the coarse vertex: the half, at the same vertex, of the coarse edge
+                // beyond (its edge point is the beyond vertex).
+                let g = st.via[e][end];
+                if g != NONE {
+                    let gi = (coarse.edges[g as usize][0] != v) as usize;
+                    put(h, v, e0 + g, map.half[g as usize][gi]);
+                }
+                // At the edge point: straight on, the other half.
+                put(h, e0 + e as u32, w, map.half[e][1 - end]);
             }
         }
-        // Quad f's edge i: the quad on its other side and the slot opposite it there.
-        let beyond = |f: usize, i: usize| {
-            let e = level.f_edges(f)[i] as usize;
-            let [f1, f2] = level.edge_faces[e];
-            if f2 == NONE {
-                return None;
+        for f in 0..nf {
+            let s = 4 * f;
+            let fe = coarse.f_edges(f);
+            for i in 0..4 {
+                let (e, sp) = (fe[i] as usize, map.spokes[s + i]);
+                // At the face point: the opposite spoke, to the opposite edge point.
+                let o = (i + 2) % 4;
+                put(sp, f0 + f as u32, e0 + fe[o], map.spokes[s + o]);
+                // At the edge point of an interior edge: across the edge, the other
+                // face's spoke (none on a boundary, whose edge points lie on it).
+                let [f1, f2] = coarse.edge_faces[e];
+                if f2 == NONE {
+                    continue;
+                }
+                let g = if f1 as usize == f { f2 } else { f1 } as usize;
+                if g == f {
+                    return None;
+                }
+                let j = coarse.f_edges(g).iter().position(|&x| x as usize == e)?;
+                put(sp, e0 + e as u32, f0 + g as u32, map.spokes[4 * g + j]);
             }
-            quad_slot(e, (f1 as usize == f) as usize).map(|(g, j)| (g, (j + 2) % 4))
-        };
+        }
+        // Fine quad 4 f + i (at corner i of coarse face f) has the edges: the half of
+        // coarse edge e_i at the corner, the spokes of e_i and of e_(i-1), the half of
+        // e_(i-1) at the corner.
+        let nq = 4 * nf;
+        let mut face = vec![[NONE; 4]; nq];
+        let mut across = vec![[NO_QUAD; 4]; if st.six { nq } else { 0 }];
+        let half_at = |e: u32, v: u32| map.half[e as usize][(coarse.edges[e as usize][0] != v) as usize];
+        for f in 0..nf {
+            let (c, fe) = (coarse.coarse.face(f), coarse.f_edges(f));
+            for i in 0..4 {
+                let (n, p, pp) = ((i + 1) % 4, (i + 3) % 4, (i + 2) % 4);
+                let q = 4 * f + i;
+                let mut y = [NONE; 4];
+                let mut h = [NO_QUAD; 4];
+                // Across the spokes, the quads of the same face at the next corner and
+                // the previous: the halves there of the next edge and of the one before
+                // the previous.
+                y[1] = half_at(fe[n], c[n]);
+                h[1] = ((4 * f + n) as u32, 0);
+                y[2] = half_at(fe[pp], c[p]);
+                h[2] = ((4 * f + p) as u32, 3);
+                // Across the halves (of e_i, slot 0; of e_(i-1), slot 3), the quad of the
+                // edge's other face g at the corner: its spoke opposite the half.
+                for (slot, e) in [(0, fe[i]), (3, fe[p])] {
+                    let [f1, f2] = coarse.edge_faces[e as usize];
+                    if f2 == NONE {
+                        continue;
+                    }
+                    let g = if f1 as usize == f { f2 } else { f1 } as usize;
+                    let (gc, ge) = (coarse.coarse.face(g), coarse.f_edges(g));
+                    let jg = ge.iter().position(|&x| x == e)?;
+                    // The edge runs from g's corner jg to jg + 1: the corner is one of them.
+                    let (jc, at) = if gc[jg] == c[i] { (jg, 0) } else { ((jg + 1) % 4, 3) };
+                    let opposite = (at + 2) % 4;
+                    y[slot] = map.spokes[4 * g + if opposite == 2 { (jc + 3) % 4 } else { jc }];
+                    h[slot] = ((4 * g + jc) as u32, opposite as u8);
+                }
+                face[q] = y;
+                if st.six {
+                    across[q] = h;
+                }
+            }
+        }
+        Some(Self::finish(fine, st.six, edge, via, face, &across, true))
+    }
+
+    /// The stencils of `level` from its beyond vertices `edge` and their edges `via`:
+    /// the beyond edges of its quads (from the edges' slots in them, `slot`) and, with
+    /// `six`, the far tables.
+    fn with_edges(
+        level: &Level,
+        slot: &[[u8; 2]],
+        six: bool,
+        edge: Vec<[u32; 2]>,
+        via: Vec<[u32; 2]>,
+        unique: bool,
+    ) -> Interp4 {
+        let nf = level.nf();
         let mut face = Vec::with_capacity(nf);
-        let mut quad = Vec::with_capacity(if six { nf } else { 0 });
+        let mut across = Vec::with_capacity(if six { nf } else { 0 });
         for f in 0..nf {
             let mut y = [NONE; 4];
-            let mut h = [NONE; 4];
-            if level.f_edges(f).len() == 4 {
+            let mut h = [NO_QUAD; 4];
+            let fe = level.f_edges(f);
+            if fe.len() == 4 {
                 for i in 0..4 {
-                    if let Some((g, j)) = beyond(f, i) {
-                        y[i] = level.f_edges(g)[j];
-                        h[i] = g as u32;
+                    // The quad on the edge's other side and the slot opposite it there.
+                    let e = fe[i] as usize;
+                    let [f1, f2] = level.edge_faces[e];
+                    if f2 == NONE {
+                        continue;
+                    }
+                    let k = (f1 as usize == f) as usize;
+                    let j = slot[e][k];
+                    if j != u8::MAX {
+                        let g = level.edge_faces[e][k];
+                        let j = (j + 2) % 4;
+                        y[i] = level.f_edges(g as usize)[j as usize];
+                        h[i] = (g, j);
                     }
                 }
             }
             face.push(y);
             if six {
-                quad.push(h);
+                across.push(h);
             }
         }
+        Self::finish(level, six, edge, via, face, &across, unique)
+    }
+
+    /// The stencils from the beyond vertices `edge`, their edges `via`, the beyond
+    /// edges `face` and (with `six`) per quad edge the quad across it and the slot of
+    /// the beyond edge there (`across`): with `six`, the far tables made.
+    fn finish(
+        level: &Level,
+        six: bool,
+        edge: Vec<[u32; 2]>,
+        via: Vec<[u32; 2]>,
+        face: Vec<[u32; 4]>,
+        across: &[[(u32, u8); 4]],
+        unique: bool,
+    ) -> Interp4 {
         let (mut edge2, mut face2) = (Vec::new(), Vec::new());
         if six {
             // Edge e's beyond vertex b at an end, reached by edge g: b's beyond vertex on
             // g (b is g's end other than e's).
-            edge2.reserve(ne);
+            edge2.reserve(edge.len());
             for (e, b) in edge.iter().enumerate() {
                 edge2.push(std::array::from_fn(|end| match (b[end], via[e][end]) {
                     (NONE, _) => NONE,
@@ -140,11 +293,11 @@ impl Interp4 {
             }
             // Face f's beyond edge y of an edge, in quad h at slot j: the beyond edge of
             // h's edge y.
-            face2.reserve(nf);
-            for f in 0..nf {
-                face2.push(std::array::from_fn(|i| match face[f][i] {
-                    NONE => NONE,
-                    _ => beyond(f, i).map_or(NONE, |(h, j)| face[h][j]),
+            face2.reserve(face.len());
+            for (y, h) in face.iter().zip(across) {
+                face2.push(std::array::from_fn(|i| match (y[i], h[i]) {
+                    (NONE, _) | (_, NO_QUAD) => NONE,
+                    (_, (h, j)) => face[h as usize][j as usize],
                 }));
             }
         }
@@ -154,6 +307,8 @@ impl Interp4 {
             face,
             edge2,
             face2,
+            via,
+            unique,
         }
     }
 
@@ -231,6 +386,8 @@ impl Interp4 {
             face,
             edge2,
             face2,
+            via,
+            unique: false,
         }
     }
 }

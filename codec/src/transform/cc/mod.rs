@@ -10,7 +10,7 @@ mod tests;
 pub use interp::Phaser;
 use interp::{interp4, Interp4};
 
-use crate::topology::{flag, Level, NONE};
+use crate::topology::{flag, Level, NextMap, NONE};
 use crate::transform::{Sample, Wavelet};
 
 /// Which lifting operation.
@@ -204,6 +204,23 @@ impl Stencils {
             Wavelet::Interp6 => Some(Interp4::new(level, true)),
             _ => None,
         })
+    }
+
+    /// The stencils of wavelet `w` on `fine`, the level that [`Level::next_mapped`]
+    /// made of `coarse` with `map`, given these (of `w` on `coarse`): derived from them
+    /// where they follow by index arithmetic ([`Interp4::derive`]), else made afresh;
+    /// the same tables either way.
+    pub fn next(&self, coarse: &Level, fine: &Level, map: &NextMap, w: Wavelet) -> Stencils {
+        let derived = match (&self.0, w) {
+            (Some(st), Wavelet::Interp4 | Wavelet::Interp6) if st.six == (w == Wavelet::Interp6) => {
+                Interp4::derive(coarse, st, fine, map)
+            }
+            _ => None,
+        };
+        match derived {
+            Some(st) => Stencils(Some(st)),
+            None => Stencils::new(fine, w),
+        }
     }
 
     /// interp4's stencils (`six`: interp6's): these, or made now if they were made for

@@ -240,11 +240,9 @@ fn obj_topology(text: &str) -> Topo {
     t
 }
 
-#[test]
-fn stencil_tables_equal_their_definitions() {
-    // Every level of corpus/'s hierarchies (quads, triangles and pentagons, open
-    // and closed, polar fans) and of ../shared/corpus when it is there, and the
-    // refined grids: the one-pass tables are the definitions' tables.
+/// Every level of corpus/'s hierarchies (quads, triangles and pentagons, open and
+/// closed, polar fans) and of ../shared/corpus when it is there, and refined grids.
+fn stencil_levels() -> Vec<(String, Level)> {
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
     let mut files: Vec<std::path::PathBuf> = Vec::new();
     for dir in ["corpus", "../shared/corpus"] {
@@ -281,6 +279,13 @@ fn stencil_tables_equal_their_definitions() {
         before >= 10,
         "only {before} levels found under {root}/corpus"
     );
+    levels
+}
+
+#[test]
+fn stencil_tables_equal_their_definitions() {
+    // The one-pass tables are the definitions' tables.
+    let levels = stencil_levels();
     let mut sides = 0;
     for (name, level) in &levels {
         for six in [false, true] {
@@ -374,4 +379,40 @@ fn constant_and_linear_data_give_zero_detail_for_predictions() {
     let mut y = x.clone();
     analyse(&level, Wavelet::Bilinear, &mut y);
     assert!(y[25..].iter().all(|&d| d == 0));
+}
+
+/// The stencils of a level's successor derived from its own are the successor's tables
+/// (every table, interp4 and interp6), on every level that is all quads; a level with a
+/// triangle or pentagon derives none.
+#[test]
+fn derived_stencils_are_the_next_levels() {
+    let mut levels = stencil_levels();
+    // Boundaries, corners and extraordinary vertices two levels down.
+    let mut t = crate::topology::fixtures::prism_with_triangles();
+    for _ in 0..3 {
+        let level = Level::new(&t).unwrap();
+        t = level.fine();
+        levels.push(("prism".to_string(), level));
+    }
+    let (mut derived, mut refused) = (0, 0);
+    for (name, level) in &levels {
+        let (fine, map) = level.next_mapped();
+        for six in [false, true] {
+            let st = Interp4::new(level, six);
+            let Some(got) = Interp4::derive(level, &st, &fine, &map) else {
+                assert!(!level.coarse.all_quads() || !st.unique, "{name}: not derived");
+                refused += 1;
+                continue;
+            };
+            let want = Interp4::new(&fine, six);
+            assert!(got.edge == want.edge, "{name}: beyond vertices ({six})");
+            assert!(got.via == want.via, "{name}: their edges ({six})");
+            assert!(got.face == want.face, "{name}: beyond edges ({six})");
+            assert!(got.edge2 == want.edge2, "{name}: far vertices ({six})");
+            assert!(got.face2 == want.face2, "{name}: far edges ({six})");
+            assert_eq!((got.six, got.unique), (six, want.unique), "{name}");
+            derived += 1;
+        }
+    }
+    assert!(derived >= 20 && refused >= 2, "derived {derived}, refused {refused}");
 }
