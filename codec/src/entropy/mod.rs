@@ -307,6 +307,12 @@ impl IntModel {
     /// [`IntModel::reseed`] (the shared models, SPEC.md 10.1).
     pub fn observe(&mut self, v: i64) {
         let (s, c) = joint_symbol(v);
+        self.count_symbol(s, c);
+    }
+
+    /// [`IntModel::observe`] of a value whose joint symbol is `s` and class `c`.
+    #[inline]
+    fn count_symbol(&mut self, s: usize, c: usize) {
         self.sym.count(s);
         if s == ESCAPE_SYMBOL {
             self.big.count(c);
@@ -632,6 +638,9 @@ impl Decoder {
 
     /// Decodes `k` raw bits.
     pub fn bits(&mut self, k: u32) -> Result<u64> {
+        if (1..=16).contains(&k) {
+            return self.next(RawBits(k)).map(u64::from);
+        }
         let mut v = 0u64;
         let mut k = k;
         while k > 0 {
@@ -644,11 +653,27 @@ impl Decoder {
     }
 
     /// Decodes what [`Encoder::int`] wrote.
+    #[inline]
     pub fn int(&mut self, m: &mut IntModel) -> Result<i64> {
+        self.int_symbol(m).map(|(v, ..)| v)
+    }
+
+    /// [`Decoder::int`], and `learner` counts the value as [`IntModel::observe`] would
+    /// (from the symbols read rather than the value).
+    #[inline]
+    pub fn int_observed(&mut self, m: &mut IntModel, learner: &mut IntModel) -> Result<i64> {
+        let (v, s, c) = self.int_symbol(m)?;
+        learner.count_symbol(s, c);
+        Ok(v)
+    }
+
+    /// [`Decoder::int`]'s value, its joint symbol and its magnitude class.
+    #[inline]
+    fn int_symbol(&mut self, m: &mut IntModel) -> Result<(i64, usize, usize)> {
         let s = self.symbol(&mut m.sym)?;
         let (c, neg, top) = match s {
-            0 => return Ok(0),
-            1 | 2 => return Ok(if s == 2 { -1 } else { 1 }),
+            0 => return Ok((0, 0, 0)),
+            1 | 2 => return Ok((if s == 2 { -1 } else { 1 }, s, 1)),
             ESCAPE_SYMBOL => {
                 let c = self.symbol(&mut m.big)?;
                 if c <= JOINT_MAX_CLASS || c > 62 {
@@ -656,7 +681,7 @@ impl Decoder {
                 }
                 let neg = self.bits(1)? == 1;
                 let v = ((1u64 << (c - 1)) | self.bits(c as u32 - 1)?) as i64;
-                return Ok(if neg { -v } else { v });
+                return Ok((if neg { -v } else { v }, s, c));
             }
             _ => {
                 let t = s - 3;
@@ -665,7 +690,7 @@ impl Decoder {
         };
         let a = ((2 | top) << (c - 2)) | self.bits(c as u32 - 2)?;
         let v = a as i64;
-        Ok(if neg { -v } else { v })
+        Ok((if neg { -v } else { v }, s, c))
     }
 }
 

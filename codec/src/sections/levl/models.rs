@@ -187,6 +187,25 @@ impl Models {
         &mut self.m[i]
     }
 
+    /// [`Models::get`]'s context model and the shared model of `class` and `slot`,
+    /// which learns what the context model codes in a binned level.
+    #[inline]
+    pub(super) fn get_and_shared(
+        &mut self,
+        class: usize,
+        slot: usize,
+        prev: usize,
+        nbr: usize,
+    ) -> (&mut IntModel, &mut IntModel) {
+        let i = self.context(class, slot, prev, nbr);
+        let j = class * 3 + slot;
+        if !self.used[i] {
+            self.used[i] = true;
+            self.m[i] = seeded(&self.parents[j]);
+        }
+        (&mut self.m[i], &mut self.parents[j])
+    }
+
     /// The model a value in context `c` is coded with (SPEC.md 10.1, 10.6): its context
     /// model, or in an unbinned level its shared model.
     pub(super) fn model(&mut self, c: Ctx) -> &mut IntModel {

@@ -96,9 +96,8 @@ fn get_plain(
             v
         } else {
             // A binned level: the context model codes, the shared model learns.
-            let v = dec.int(m.get(class, slot, prev, nbr[slot]))?;
-            m.observe(class, slot, v);
-            v
+            let (model, shared) = m.get_and_shared(class, slot, prev, nbr[slot]);
+            dec.int_observed(model, shared)?
         };
         prev = class_of(v);
         mags[slot] = prev as u8;
