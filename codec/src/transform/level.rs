@@ -190,6 +190,14 @@ impl<'a> LevelTransform<'a> {
                 disc,
                 ..
             } => {
+                // (Without poles an interp4 or interp6 level runs its three axes at once.)
+                if discs.is_empty()
+                    && !owned.contains(&true)
+                    && fine == level.fine_nv()
+                    && stencils.lift_axes(level, *w, x, true)
+                {
+                    return;
+                }
                 for xs in x.iter_mut() {
                     for d in discs {
                         polar::analyse(d, *disc, &mut xs[..fine]);
@@ -223,6 +231,9 @@ impl<'a> LevelTransform<'a> {
                 disc,
                 ..
             } => {
+                if discs.is_empty() && !owned.contains(&true) && stencils.lift_axes(level, *w, x, false) {
+                    return;
+                }
                 for xs in x.iter_mut() {
                     synthesise_with(level, *w, stencils, xs, owned);
                     for d in discs.iter().rev() {

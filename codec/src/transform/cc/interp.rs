@@ -629,3 +629,118 @@ pub(super) fn interp4<T: Sample>(level: &Level, st: &Interp4, x: &mut [T], forwa
         }
     }
 }
+
+/// An edge point's interp4 / interp6 terms (SPEC.md 9.11, 9.12) and divisor: the
+/// terms of [`interp4_edge_sum`], padded with zero weights to six.
+#[inline(always)]
+fn edge_stencil(level: &Level, st: &Interp4, e: usize) -> ([(usize, i64); 6], i128) {
+    let [a, b] = level.edges[e];
+    let (a, b) = (a as usize, b as usize);
+    if st.six {
+        let ([a2, b2], [a3, b3]) = (st.edge[e], st.edge2[e]);
+        if a3 != NONE && b3 != NONE {
+            let (a2, b2, a3, b3) = (a2 as usize, b2 as usize, a3 as usize, b3 as usize);
+            return ([(a, 150), (b, 150), (a2, -25), (b2, -25), (a3, 3), (b3, 3)], 256);
+        }
+    }
+    match st.edge[e] {
+        [a2, b2] if a2 != NONE && b2 != NONE => {
+            let (a2, b2) = (a2 as usize, b2 as usize);
+            ([(a, 9), (b, 9), (a2, -1), (b2, -1), (a, 0), (a, 0)], 16)
+        }
+        _ => ([(a, 1), (b, 1), (a, 0), (a, 0), (a, 0), (a, 0)], 2),
+    }
+}
+
+/// A quad's face point terms and divisor as [`interp4_face_sum`] takes them (both
+/// pairs of opposite edges, padded with zero weights to twelve); `None` for a face that
+/// is not a quad.
+#[inline(always)]
+fn face_stencil(level: &Level, st: &Interp4, f: usize) -> Option<([(usize, i64); 12], i128)> {
+    let e0 = level.nv;
+    let fe = level.f_edges(f);
+    if fe.len() != 4 {
+        return None;
+    }
+    let beyond = st.face[f];
+    let (k, div) = if st.six { (16, 512) } else { (1, 32) };
+    let mut t = [(e0, 0i64); 12];
+    for d in 0..2 {
+        let (m, m2) = (e0 + fe[d] as usize, e0 + fe[d + 2] as usize);
+        let (y, y2) = (beyond[d], beyond[d + 2]);
+        let far = st.face2.get(f).map_or([NONE; 2], |z| [z[d], z[d + 2]]);
+        let part = &mut t[6 * d..6 * d + 6];
+        if far.iter().all(|&z| z != NONE) {
+            let (y, y2) = (e0 + y as usize, e0 + y2 as usize);
+            let (z, z2) = (e0 + far[0] as usize, e0 + far[1] as usize);
+            part.copy_from_slice(&[(m, 150), (m2, 150), (y, -25), (y2, -25), (z, 3), (z2, 3)]);
+        } else if y != NONE && y2 != NONE {
+            let (y, y2) = (e0 + y as usize, e0 + y2 as usize);
+            part[..4].copy_from_slice(&[(m, 9 * k), (m2, 9 * k), (y, -k), (y2, -k)]);
+        } else {
+            part[..2].copy_from_slice(&[(m, 8 * k), (m2, 8 * k)]);
+        }
+    }
+    Some((t, div))
+}
+
+/// `sum of w x[i]` over `terms`, in 64 bits when `narrow` (values within 2^52, weights
+/// summing to at most 712 in magnitude), else 128.
+#[inline(always)]
+fn stencil_sum<const N: usize>(x: &[i64], terms: &[(usize, i64); N], narrow: bool) -> i128 {
+    if narrow {
+        let mut s = 0i64;
+        for &(i, w) in terms {
+            s += x[i] * w;
+        }
+        return s as i128;
+    }
+    terms.iter().map(|&(i, w)| x[i] as i128 * w as i128).sum()
+}
+
+/// [`interp4`] on the three axes at once (integers, no skipped values): each stencil
+/// looked up once for the three. The same values.
+pub(super) fn interp4_axes(level: &Level, st: &Interp4, x: &mut [Vec<i64>; 3], forward: bool) {
+    let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
+    let (e0, f0) = (nv, nv + ne);
+    let narrow = |x: &[Vec<i64>; 3], n: usize| x.each_ref().map(|xk| i64::narrow(&xk[..n]));
+    let step = |v: i64, p: i64| if forward { v.wrapping_sub(p) } else { v.wrapping_add(p) };
+    let edges = |x: &mut [Vec<i64>; 3]| {
+        let wide = narrow(x, e0);
+        for e in 0..ne {
+            let (t, d) = edge_stencil(level, st, e);
+            for (xk, &n) in x.iter_mut().zip(&wide) {
+                let p = round_div(stencil_sum(xk, &t, n), d);
+                xk[e0 + e] = step(xk[e0 + e], p);
+            }
+        }
+    };
+    let faces = |x: &mut [Vec<i64>; 3]| {
+        let wide = narrow(x, f0);
+        for f in 0..nf {
+            match face_stencil(level, st, f) {
+                Some((t, d)) => {
+                    for (xk, &n) in x.iter_mut().zip(&wide) {
+                        let p = round_div(stencil_sum(xk, &t, n), d);
+                        xk[f0 + f] = step(xk[f0 + f], p);
+                    }
+                }
+                None => {
+                    for (xk, &n) in x.iter_mut().zip(&wide) {
+                        let p = interp4_face(level, st, xk, f, n);
+                        xk[f0 + f] = step(xk[f0 + f], p);
+                    }
+                }
+            }
+        }
+    };
+    // The edge points read coarse values, the face points edge points: analysis makes
+    // the face points' details first, synthesis the edge points' values first.
+    if forward {
+        faces(x);
+        edges(x);
+    } else {
+        edges(x);
+        faces(x);
+    }
+}

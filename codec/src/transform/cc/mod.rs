@@ -8,7 +8,7 @@ mod interp;
 mod tests;
 
 pub use interp::Phaser;
-use interp::{interp4, Interp4};
+use interp::{interp4, interp4_axes, Interp4};
 
 use crate::topology::{flag, Level, NextMap, NONE};
 use crate::transform::{Sample, Wavelet};
@@ -220,6 +220,22 @@ impl Stencils {
         match derived {
             Some(st) => Stencils(Some(st)),
             None => Stencils::new(fine, w),
+        }
+    }
+
+    /// Analysis (`forward`) or synthesis of an interp4 or interp6 level on the three
+    /// axes at once, with these stencils, where they are `w`'s and no value is skipped:
+    /// the same values as [`analyse_with`] or [`synthesise_with`] on each axis. False
+    /// (nothing done) otherwise.
+    pub fn lift_axes(&self, level: &Level, w: Wavelet, x: &mut [Vec<i64>; 3], forward: bool) -> bool {
+        match (&self.0, w) {
+            (Some(st), Wavelet::Interp4 | Wavelet::Interp6)
+                if st.six == (w == Wavelet::Interp6) && x.iter().all(|xk| xk.len() >= level.fine_nv()) =>
+            {
+                interp4_axes(level, st, x, forward);
+                true
+            }
+            _ => false,
         }
     }
 

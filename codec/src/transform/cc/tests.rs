@@ -416,3 +416,38 @@ fn derived_stencils_are_the_next_levels() {
     }
     assert!(derived >= 20 && refused >= 2, "derived {derived}, refused {refused}");
 }
+
+/// interp4 and interp6 on the three axes at once are each axis alone, both ways: a
+/// level of triangles, a pentagon and quads, and an all-quad one; values that sum in 64
+/// bits and values that need 128.
+#[test]
+fn stencils_on_three_axes_are_each_axis() {
+    let t = crate::topology::fixtures::prism_with_triangles();
+    let first = Level::new(&t).unwrap();
+    let second = first.next();
+    for (name, level) in [("prism", &first), ("refined prism", &second)] {
+        for w in [Wavelet::Interp4, Wavelet::Interp6] {
+            let st = Stencils::new(level, w);
+            for (seed, bits) in [(3u64, 20u32), (4, 53), (5, 60)] {
+                let x: [Vec<i64>; 3] = std::array::from_fn(|k| {
+                    crate::topology::fixtures::pseudo(seed + k as u64, level.fine_nv(), bits)
+                });
+                for forward in [true, false] {
+                    let mut one = x.clone();
+                    for xk in one.iter_mut() {
+                        match forward {
+                            true => analyse_with(level, w, &st, xk, &[]),
+                            false => synthesise_with(level, w, &st, xk, &[]),
+                        }
+                    }
+                    let mut all = x.clone();
+                    assert!(st.lift_axes(level, w, &mut all, forward));
+                    assert_eq!(all, one, "{name}, {w:?}, {bits}-bit values, forward {forward}");
+                }
+            }
+        }
+        // Another wavelet's stencils do not serve.
+        let st = Stencils::new(level, Wavelet::Interp4);
+        assert!(!st.lift_axes(level, Wavelet::Interp6, &mut [vec![0; level.fine_nv()], vec![0; level.fine_nv()], vec![0; level.fine_nv()]], true));
+    }
+}
