@@ -409,30 +409,10 @@ pub(super) fn interp4_edge_sum<T: Sample>(
     e: usize,
     narrow: bool,
 ) -> (T::Acc, i128) {
-    let [a, b] = level.edges[e];
-    let (a, b) = (a as usize, b as usize);
-    if st.six {
-        let ([a2, b2], [a3, b3]) = (st.edge[e], st.edge2[e]);
-        if a3 != NONE && b3 != NONE {
-            // Both far vertices imply both beyond vertices.
-            let (a2, b2, a3, b3) = (a2 as usize, b2 as usize, a3 as usize, b3 as usize);
-            let t = [(a, 150), (b, 150), (a2, -25), (b2, -25), (a3, 3), (b3, 3)];
-            return (T::sum_terms(x, t, narrow), 256);
-        }
-    }
-    match st.edge[e] {
-        [a2, b2] if a2 != NONE && b2 != NONE => {
-            let t = [(a, 9), (b, 9), (a2 as usize, -1), (b2 as usize, -1)];
-            (T::sum_terms(x, t, narrow), 16)
-        }
-        _ => (T::sum_terms(x, [(a, 1), (b, 1)], narrow), 2),
-    }
+    let (t, d) = edge_stencil(level, st, e);
+    (T::sum_terms(x, t.map(|(i, w)| (i, w as i32)), narrow), d)
 }
 
-/// Face point `f`'s prediction from its coarse corners and the fine edge points: for a
-/// quad, the sum over its two pairs of opposite edges (m, m') of `-y + 9 m + 9 m' - y'`
-/// with both beyond edge points y, y', else `8 (m + m')`, over 32; for other faces the
-/// lazy rule `[(2 sum of edge points - sum of corners) / k]`.
 #[inline]
 pub(super) fn interp4_face<T: Sample>(level: &Level, st: &Interp4, x: &[T], f: usize, narrow: bool) -> T {
     let (s, d) = interp4_face_sum(level, st, x, f, narrow);
@@ -448,35 +428,11 @@ pub(super) fn interp4_face_sum<T: Sample>(
     f: usize,
     narrow: bool,
 ) -> (T::Acc, i128) {
+    if let Some((t, d)) = face_stencil(level, st, f) {
+        return (T::sum_terms(x, t.map(|(i, w)| (i, w as i32)), narrow), d);
+    }
     let e0 = level.nv;
     let fe = level.f_edges(f);
-    if fe.len() == 4 {
-        // Each pair of opposite edges by the widest rule it has: interp6's 6-point rule
-        // over 256, else the 4-point rule over 16, else the mean; interp6 scales the
-        // narrower two to 256 (by `k` = 16) so both pairs share the divisor 512.
-        let beyond = st.face[f];
-        let (k, div) = if st.six { (16, 512) } else { (1, 32) };
-        let mut s = T::Acc::default();
-        for d in 0..2 {
-            let (m, m2) = (e0 + fe[d] as usize, e0 + fe[d + 2] as usize);
-            let (y, y2) = (beyond[d], beyond[d + 2]);
-            let far = st.face2.get(f).map_or([NONE; 2], |z| [z[d], z[d + 2]]);
-            if far.iter().all(|&z| z != NONE) {
-                // A far edge implies its beyond edge.
-                let (y, y2) = (e0 + y as usize, e0 + y2 as usize);
-                let (z, z2) = (e0 + far[0] as usize, e0 + far[1] as usize);
-                let t = [(m, 150), (m2, 150), (y, -25), (y2, -25), (z, 3), (z2, 3)];
-                s += T::sum_terms(x, t, narrow);
-            } else if y != NONE && y2 != NONE {
-                let (y, y2) = (e0 + y as usize, e0 + y2 as usize);
-                let t = [(m, 9 * k), (m2, 9 * k), (y, -k), (y2, -k)];
-                s += T::sum_terms(x, t, narrow);
-            } else {
-                s += T::sum_terms(x, [(m, 8 * k), (m2, 8 * k)], narrow);
-            }
-        }
-        return (s, div);
-    }
     let mut s = T::Acc::default();
     for &e in fe {
         s += x[e0 + e as usize].weighted(2);
@@ -630,8 +586,9 @@ pub(super) fn interp4<T: Sample>(level: &Level, st: &Interp4, x: &mut [T], forwa
     }
 }
 
-/// An edge point's interp4 / interp6 terms (SPEC.md 9.11, 9.12) and divisor: the
-/// terms of [`interp4_edge_sum`], padded with zero weights to six.
+/// An edge point's interp4 / interp6 terms (SPEC.md 9.11, 9.12) and divisor, padded
+/// with zero weights to six: the 6-point rule where both far vertices are there (they
+/// imply the beyond vertices), else the 4-point rule, else the mean of the ends.
 #[inline(always)]
 fn edge_stencil(level: &Level, st: &Interp4, e: usize) -> ([(usize, i64); 6], i128) {
     let [a, b] = level.edges[e];
@@ -652,9 +609,11 @@ fn edge_stencil(level: &Level, st: &Interp4, e: usize) -> ([(usize, i64); 6], i1
     }
 }
 
-/// A quad's face point terms and divisor as [`interp4_face_sum`] takes them (both
-/// pairs of opposite edges, padded with zero weights to twelve); `None` for a face that
-/// is not a quad.
+/// A quad's face point terms and divisor (both pairs of opposite edges, padded with
+/// zero weights to twelve); `None` for a face that is not a quad. Each pair by the
+/// widest rule it has: interp6's 6-point rule over 256 (a far edge implies its beyond
+/// edge), else the 4-point rule over 16, else the mean; interp6 scales the narrower two
+/// to 256 (by `k` = 16) so both pairs share the divisor 512.
 #[inline(always)]
 fn face_stencil(level: &Level, st: &Interp4, f: usize) -> Option<([(usize, i64); 12], i128)> {
     let e0 = level.nv;
