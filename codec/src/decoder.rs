@@ -668,7 +668,9 @@ fn synthesise_levels(
             });
             let st = read.map_err(at)?;
             let (made, map) = made?;
-            stencils = st.zip(map).map(|(st, map)| st.next(&level, &made, &map, w));
+            stencils = st
+                .zip(map)
+                .and_then(|(st, map)| st.next(&level, &made, &map, w));
             next = Some(made);
             continue;
         }
@@ -686,7 +688,7 @@ fn synthesise_levels(
             // A Catmull-Clark level's successor, derived from it (no edge lookups).
             _ if s.pole.is_empty() && !last => {
                 let (made, map) = level.next_mapped();
-                stencils = st.map(|st| st.next(&level, &made, &map, w));
+                stencils = st.and_then(|st| st.next(&level, &made, &map, w));
                 next = Some(made);
             }
             _ => {

@@ -220,6 +220,20 @@ impl Models {
         }
     }
 
+    /// Decodes a value in context `c` with [`Self::model`]'s model, and the model that
+    /// [`Self::learn`] names learns it (in a binned level without phases, the shared
+    /// model counts the symbols just read).
+    #[inline]
+    pub(super) fn read(&mut self, dec: &mut Decoder, c: Ctx) -> Result<i64> {
+        if !c.unbinned && c.bin.is_none() {
+            let (model, shared) = self.get_and_shared(c.class, c.slot, c.prev, c.nbr);
+            return dec.int_observed(model, shared);
+        }
+        let v = dec.int(self.model(c))?;
+        self.learn(c, v);
+        Ok(v)
+    }
+
     /// After `v` was coded with [`Self::model`]: in a binned level its shared model
     /// learns it, in an unbinned one its context model.
     pub(super) fn learn(&mut self, c: Ctx, v: i64) {

@@ -44,9 +44,7 @@ pub(super) fn get(
         let v = if zero >> slot & 1 == 1 {
             0
         } else {
-            let v = dec.int(m.model(c))?;
-            m.learn(c, v);
-            v
+            m.read(dec, c)?
         };
         prev = class_of(v);
         let v = match q {
@@ -82,7 +80,7 @@ fn get_plain(
         // A zero slot's values are not in the stream, and no model learns them.
         let v = if zero >> slot & 1 == 1 {
             0
-        } else if unbinned {
+        } else {
             let c = Ctx {
                 class,
                 slot,
@@ -91,13 +89,7 @@ fn get_plain(
                 bin: None,
                 unbinned,
             };
-            let v = dec.int(m.model(c))?;
-            m.learn(c, v);
-            v
-        } else {
-            // A binned level: the context model codes, the shared model learns.
-            let (model, shared) = m.get_and_shared(class, slot, prev, nbr[slot]);
-            dec.int_observed(model, shared)?
+            m.read(dec, c)?
         };
         prev = class_of(v);
         mags[slot] = prev as u8;

@@ -44,6 +44,14 @@ fn quad_slots(level: &Level) -> Vec<[u8; 2]> {
     slot
 }
 
+/// The quad on side k of edge `e` and the edge's slot in it, from [`quad_slots`]'s
+/// `slot`; `None` where that face is not a quad.
+#[inline]
+fn quad_slot(level: &Level, slot: &[[u8; 2]], e: usize, k: usize) -> Option<(usize, usize)> {
+    let i = slot[e][k];
+    (i != u8::MAX).then(|| (level.edge_faces[e][k] as usize, i as usize))
+}
+
 impl Interp4 {
     /// The stencils of `level`, from one pass over the faces that records each edge's
     /// slot in the quads beside it, so that no edge end searches its faces. The tables
@@ -52,11 +60,7 @@ impl Interp4 {
     pub(super) fn new(level: &Level, six: bool) -> Interp4 {
         let (nv, ne) = (level.nv, level.ne());
         let slot = quad_slots(level);
-        // The slot of edge e in the quad on its side k, and that quad.
-        let quad_slot = |e: usize, k: usize| {
-            let i = slot[e][k];
-            (i != u8::MAX).then(|| (level.edge_faces[e][k] as usize, i as usize))
-        };
+        let quad_slot = |e: usize, k: usize| quad_slot(level, &slot, e, k);
         let on_boundary: Vec<bool> = (0..nv)
             .map(|v| level.v_edges(v).iter().any(|&e| level.is_boundary(e as usize)))
             .collect();
@@ -250,13 +254,10 @@ impl Interp4 {
                     if f2 == NONE {
                         continue;
                     }
-                    let k = (f1 as usize == f) as usize;
-                    let j = slot[e][k];
-                    if j != u8::MAX {
-                        let g = level.edge_faces[e][k];
+                    if let Some((g, j)) = quad_slot(level, slot, e, (f1 as usize == f) as usize) {
                         let j = (j + 2) % 4;
-                        y[i] = level.f_edges(g as usize)[j as usize];
-                        h[i] = (g, j);
+                        y[i] = level.f_edges(g)[j];
+                        h[i] = (g as u32, j as u8);
                     }
                 }
             }

@@ -206,21 +206,24 @@ impl Stencils {
         })
     }
 
-    /// The stencils of wavelet `w` on `fine`, the level that [`Level::next_mapped`]
-    /// made of `coarse` with `map`, given these (of `w` on `coarse`): derived from them
-    /// where they follow by index arithmetic ([`Interp4::derive`]), else made afresh;
-    /// the same tables either way.
-    pub fn next(&self, coarse: &Level, fine: &Level, map: &NextMap, w: Wavelet) -> Stencils {
-        let derived = match (&self.0, w) {
-            (Some(st), Wavelet::Interp4 | Wavelet::Interp6) if st.six == (w == Wavelet::Interp6) => {
-                Interp4::derive(coarse, st, fine, map)
-            }
-            _ => None,
+    /// These stencils if they are interp4's or interp6's for wavelet `w`.
+    fn of(&self, w: Wavelet) -> Option<&Interp4> {
+        let six = match w {
+            Wavelet::Interp4 => false,
+            Wavelet::Interp6 => true,
+            _ => return None,
         };
-        match derived {
-            Some(st) => Stencils(Some(st)),
-            None => Stencils::new(fine, w),
-        }
+        self.0.as_ref().filter(|st| st.six == six)
+    }
+
+    /// The stencils of wavelet `w` on `fine`, the level that [`Level::next_mapped`]
+    /// made of `coarse` with `map`, derived from these (of `w` on `coarse`) where they
+    /// follow by index arithmetic ([`Interp4::derive`]): the tables
+    /// [`Stencils::new`] would make. `None` where they do not follow (the level's
+    /// transform then makes them).
+    pub fn next(&self, coarse: &Level, fine: &Level, map: &NextMap, w: Wavelet) -> Option<Stencils> {
+        let st = Interp4::derive(coarse, self.of(w)?, fine, map)?;
+        Some(Stencils(Some(st)))
     }
 
     /// Analysis (`forward`) or synthesis of an interp4 or interp6 level on the three
@@ -228,10 +231,8 @@ impl Stencils {
     /// the same values as [`analyse_with`] or [`synthesise_with`] on each axis. False
     /// (nothing done) otherwise.
     pub fn lift_axes(&self, level: &Level, w: Wavelet, x: &mut [Vec<i64>; 3], forward: bool) -> bool {
-        match (&self.0, w) {
-            (Some(st), Wavelet::Interp4 | Wavelet::Interp6)
-                if st.six == (w == Wavelet::Interp6) && x.iter().all(|xk| xk.len() >= level.fine_nv()) =>
-            {
+        match self.of(w) {
+            Some(st) if x.iter().all(|xk| xk.len() >= level.fine_nv()) => {
                 interp4_axes(level, st, x, forward);
                 true
             }
