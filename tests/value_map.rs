@@ -268,6 +268,49 @@ fn every_flipped_bit_or_cut_of_a_lattice_map_is_an_error_or_a_valid_mesh() {
     assert!(changed > 0);
 }
 
+/// How many hierarchy codings (each reports its coarsest level once) an encode of `m`
+/// at `effort` with `value_map` makes, and its container.
+fn codings(m: &subwave::Loaded, value_map: Option<bool>, effort: u8) -> (usize, Vec<u8>) {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+    let count = Arc::new(AtomicUsize::new(0));
+    let seen = count.clone();
+    let opts = EncodeOptions {
+        value_map,
+        effort,
+        keep_order: true,
+        threads: 1,
+        progress: subwave::Progress::new(move |s| {
+            if let subwave::Stage::Level { level: 1, .. } = s {
+                seen.fetch_add(1, Ordering::Relaxed);
+            }
+        }),
+        ..Default::default()
+    };
+    let out = subwave::encode_to_vec(&m.mesh, &m.quantization, &opts).unwrap();
+    (count.load(Ordering::Relaxed), out.bytes)
+}
+
+/// At the default effort a terrain whose ranks' details estimate well below its
+/// values' is coded once, as ranks (the same container as a map asked for), where
+/// effort 9 codes both and keeps the smaller; both decode exactly.
+#[test]
+fn the_default_effort_chooses_the_map_by_estimate() {
+    let m = terrain(6, 16);
+    let (forced, forced_bytes) = codings(&m, Some(true), subwave::DEFAULT_EFFORT);
+    let (auto, auto_bytes) = codings(&m, None, subwave::DEFAULT_EFFORT);
+    let (nine, nine_bytes) = codings(&m, None, 9);
+    let (forced9, _) = codings(&m, Some(true), 9);
+    assert!(forced > 0);
+    assert_eq!(auto, forced, "codings at the default effort");
+    assert_eq!(auto_bytes, forced_bytes);
+    assert!(nine > forced9, "effort 9 codes both: {nine} vs {forced9}");
+    assert!(nine_bytes.len() <= auto_bytes.len());
+    for bytes in [&auto_bytes, &nine_bytes] {
+        assert!(subwave::decode_slice(bytes).unwrap().mesh == m.mesh);
+    }
+}
+
 #[test]
 fn corpus_grids_are_mapped_and_decode_exactly() {
     let Some(dir) = common::shared_corpus() else {

@@ -69,47 +69,20 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
         Some(g) => (&g.canon, &g.pos, &g.finest),
         None => (target.canon, target.pos, target.finest),
     };
-    let last = canon.levels.last()?;
-    let base = &canon.levels[0];
-    let fine: Vec<[f64; 3]> = (0..pos[0].len())
-        .map(|i| std::array::from_fn(|k| pos[k][i] as f64))
-        .collect();
+    canon.levels.last()?;
+    let fine = floats(pos);
     let mut sets = None;
     if screen {
-        let mean = |f: &dyn Fn(&[i64]) -> Option<f64>| {
-            pos.iter().map(|x| f(x).unwrap_or(f64::MAX)).sum::<f64>() / 3.0
-        };
-        // Refinement (small defect) is fitted; else a surface: five finest vertices
-        // in a row inside one level-1 face, which roughness measures, take three
-        // levels, and a shallower hierarchy is screened by one fit on the limit.
-        // A flat mesh with a boundary (one axis constant: a UV map's charts, cut at
-        // their seams) may still be a modelling tool's subdivision, by its UV rule:
-        // linear boundaries on the limit surface. That rule set alone is tried when
-        // the screens turn the fit away, and on a shallow chart.
-        let chart = pos.iter().any(|x| x.iter().all(|&v| v == x[0]))
-            && !crate::topology::sqrt2::closed(base);
-        let far = mean(&|x| fit::defect(last, x)) > FIT_SCREEN
-            && if canon.levels.len() < 3 {
-                chart || !near_limit(&canon.levels, finest, &fine)
-            } else {
-                // Many extraordinary vertices leave few regular runs: the limit fit
-                // decides then, on the first two levels alone (the vertices of level
-                // two keep their limit positions at every level below: a prefix of
-                // the finest values).
-                let two = &canon.levels[2];
-                let runs = fit::Runs::new(&canon.levels, finest);
-                mean(&|x| runs.as_ref()?.roughness(x)) > ROUGH_SCREEN
-                    && (chart || !near_limit(&canon.levels[..2], two, &fine[..two.nv]))
-            };
-        if far {
-            if !chart {
-                return None;
+        match screened(canon, pos, finest, &fine) {
+            Screen::Open => {}
+            Screen::Away => return None,
+            Screen::Chart => {
+                sets = Some(vec![Rules {
+                    limit: true,
+                    linear: true,
+                    ..Rules::default()
+                }])
             }
-            sets = Some(vec![Rules {
-                limit: true,
-                linear: true,
-                ..Rules::default()
-            }]);
         }
     }
     let nb = canon.base.nv;
@@ -150,6 +123,77 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
         }
     }
     best
+}
+
+/// What the fit's screen makes of a hierarchy's finest values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Screen {
+    /// Near a subdivision: every rule set is tried.
+    Open,
+    /// Far from one, but a flat chart: its UV rule alone is tried.
+    Chart,
+    /// Far from one: not tried.
+    Away,
+}
+
+/// The fit's screen on hierarchy `canon` with finest values `pos` (`fine` as floats;
+/// `finest` the level after the hierarchy's last). Refinement (small defect) is fitted;
+/// else a surface: five finest vertices in a row inside one level-1 face, which
+/// roughness measures, take three levels, and a shallower hierarchy is screened by one
+/// fit on the limit. A flat mesh with a boundary (one axis constant: a UV map's charts,
+/// cut at their seams) may still be a modelling tool's subdivision, by its UV rule:
+/// linear boundaries on the limit surface. That rule set alone is tried when the
+/// screens turn the fit away, and on a shallow chart.
+fn screened(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level, fine: &[[f64; 3]]) -> Screen {
+    let (Some(last), Some(base)) = (canon.levels.last(), canon.levels.first()) else {
+        return Screen::Away;
+    };
+    let mean = |f: &dyn Fn(&[i64]) -> Option<f64>| {
+        pos.iter().map(|x| f(x).unwrap_or(f64::MAX)).sum::<f64>() / 3.0
+    };
+    let chart =
+        pos.iter().any(|x| x.iter().all(|&v| v == x[0])) && !crate::topology::sqrt2::closed(base);
+    let far = mean(&|x| fit::defect(last, x)) > FIT_SCREEN
+        && if canon.levels.len() < 3 {
+            chart || !near_limit(&canon.levels, finest, fine)
+        } else {
+            // Many extraordinary vertices leave few regular runs: the limit fit
+            // decides then, on the first two levels alone (the vertices of level
+            // two keep their limit positions at every level below: a prefix of
+            // the finest values).
+            let two = &canon.levels[2];
+            let runs = fit::Runs::new(&canon.levels, finest);
+            mean(&|x| runs.as_ref()?.roughness(x)) > ROUGH_SCREEN
+                && (chart || !near_limit(&canon.levels[..2], two, &fine[..two.nv]))
+        };
+    match (far, chart) {
+        (false, _) => Screen::Open,
+        (true, true) => Screen::Chart,
+        (true, false) => Screen::Away,
+    }
+}
+
+/// Whether `auto`'s fit would turn hierarchy `canon` with finest values `pos` away
+/// unseen ([`code_fit`] with its screen returns `None` without a fit): a polar
+/// hierarchy, or one without seams to glue that the screen turns away.
+pub(crate) fn turned_away(canon: &Canonical, pos: &[Vec<i64>; 3]) -> bool {
+    if !canon.poles.is_empty() {
+        return true;
+    }
+    let Some(last) = canon.levels.last() else {
+        return true;
+    };
+    if glue_seams(canon, pos).is_some() {
+        return false;
+    }
+    screened(canon, pos, &last.next(), &floats(pos)) == Screen::Away
+}
+
+/// Values per axis as points of floats.
+fn floats(pos: &[Vec<i64>; 3]) -> Vec<[f64; 3]> {
+    (0..pos[0].len())
+        .map(|i| std::array::from_fn(|k| pos[k][i] as f64))
+        .collect()
 }
 
 /// What a fit codes: the hierarchy and its finest values, and, where the mesh is cut at

@@ -112,6 +112,9 @@ pub(crate) struct Effort {
     /// A large level's mode is chosen by coding a sample of its details in each open
     /// mode, not all of them: below 7.
     pub sampled: bool,
+    /// A mesh with a value map's candidate is coded as ranks or as values, as their
+    /// estimates say, not both (`map_by_estimate`): below 7.
+    pub map_estimated: bool,
 }
 
 /// How a coding chooses each level's mode (the encoder's choice, not part of the
@@ -159,6 +162,7 @@ impl Effort {
             candidates: e >= 8,
             unrotated: e >= 9,
             sampled: e <= 6,
+            map_estimated: e <= 6,
         }
     }
 
@@ -813,7 +817,7 @@ fn encode_inner(
         None => ValueMap::candidate(&mesh.positions),
     };
     let Some(map) = map else {
-        return encode_with(mesh, q, opts, None, tmpl);
+        return encode_with(mesh, q, opts, None, tmpl, None);
     };
     let ranked = Mesh {
         positions: map.ranks(&mesh.positions),
@@ -822,11 +826,18 @@ fn encode_inner(
         floats: mesh.floats.clone(),
         attributes: Vec::new(),
     };
-    let mapped = encode_with(&ranked, q, opts, Some(&map), tmpl)?;
     if opts.value_map == Some(true) {
-        return Ok(mapped);
+        return encode_with(&ranked, q, opts, Some(&map), tmpl, None);
     }
-    let plain = encode_with(mesh, q, opts, None, tmpl)?;
+    // The Catmull-Clark candidates, the same for both codings, made once.
+    let (choice, recovered) = map_by_estimate(mesh, &ranked, &map, opts)?;
+    match choice {
+        Some(true) => return encode_with(&ranked, q, opts, Some(&map), tmpl, recovered),
+        Some(false) => return encode_with(mesh, q, opts, None, tmpl, recovered),
+        None => {}
+    }
+    let mapped = encode_with(&ranked, q, opts, Some(&map), tmpl, recovered.clone())?;
+    let plain = encode_with(mesh, q, opts, None, tmpl, recovered)?;
     Ok(if mapped.bytes.len() < plain.bytes.len() {
         mapped
     } else {
@@ -834,13 +845,72 @@ fn encode_inner(
     })
 }
 
-/// [`encode`] with a given value map (`mesh` holding the ranks on its mapped axes).
+/// The estimates of a value map's ranks and of the values themselves must differ by
+/// this many hundredths for the default effort to code one of them alone.
+const MAP_MARGIN: u64 = 3;
+
+/// Whether `auto` codes `mesh` as `ranked`, its ranks on value map `map` (SPEC.md
+/// 3.1), decided at the estimated efforts without coding both: `Some(true)` if the
+/// details' bits of the ranks ([`search::detail_bits`], on the preferred Catmull-Clark
+/// candidate, with the family's first transform or the one asked for) and the map's
+/// own bytes are below the values' by [`MAP_MARGIN`] %, `Some(false)` if above;
+/// `None` (code both, keep the smaller) above effort 6, for a sqrt(2) transform
+/// or the fit, without a Catmull-Clark hierarchy, where `auto`'s fit may be tried on
+/// the values, or within the margin. With the
+/// Catmull-Clark candidates where made (the faces are the same for both codings).
+fn map_by_estimate(
+    mesh: &Mesh,
+    ranked: &Mesh,
+    map: &ValueMap,
+    opts: &EncodeOptions,
+) -> Result<(Option<bool>, Option<Vec<Canonical>>)> {
+    let w = match opts.transform {
+        TransformChoice::Auto => Wavelet::Bicubic,
+        TransformChoice::Fixed(w) if !w.is_sqrt2() => w,
+        _ => return Ok((None, None)),
+    };
+    if !Effort::of(opts.effort).map_estimated || opts.max_levels == 0 {
+        return Ok((None, None));
+    }
+    opts.progress.report(Stage::Recovering);
+    let canons = cc_candidates(mesh, opts)?;
+    let Some(canon) = canons.first() else {
+        return Ok((None, Some(canons)));
+    };
+    // The fit codes values, not ranks: where it may be tried on the values (its
+    // screen lets it), they are coded both ways.
+    let fits = opts.transform == TransformChoice::Auto && Effort::of(opts.effort).fit;
+    if fits && !fitting::turned_away(canon, &canonical_positions(mesh, canon)) {
+        return Ok((None, Some(canons)));
+    }
+    let disc = opts.disc.unwrap_or(DiscTransform::None);
+    let estimates = (
+        search::detail_bits(canon, ranked, w, disc),
+        search::detail_bits(canon, mesh, w, disc),
+    );
+    let (Some(ranks), Some(values)) = estimates else {
+        return Ok((None, Some(canons)));
+    };
+    let ranks = ranks + 8 * map.encode().len() as u64;
+    let choice = if ranks * 100 <= values * (100 - MAP_MARGIN) {
+        Some(true)
+    } else if values * 100 <= ranks * (100 - MAP_MARGIN) {
+        Some(false)
+    } else {
+        None
+    };
+    Ok((choice, Some(canons)))
+}
+
+/// [`encode`] with a given value map (`mesh` holding the ranks on its mapped axes),
+/// with the Catmull-Clark family's candidates where already made ([`cc_candidates`]).
 fn encode_with(
     mesh: &Mesh,
     q: &Quantization,
     opts: &EncodeOptions,
     vmap: Option<&ValueMap>,
     tmpl: Option<&FilePayloads>,
+    recovered: Option<Vec<Canonical>>,
 ) -> Result<Encoded> {
     let mut flat_h = flat_header(mesh, q, opts);
     flat_h.has_value_map = vmap.is_some();
@@ -849,7 +919,7 @@ fn encode_with(
     flat_h.has_normals = tmpl.is_some_and(|t| t.nrml.is_some());
     let best = if opts.max_levels > 0 {
         opts.progress.report(Stage::Recovering);
-        best_hierarchy(mesh, opts, &flat_h)?
+        best_hierarchy(mesh, opts, &flat_h, recovered)?
     } else {
         None
     };
@@ -907,19 +977,14 @@ fn float_bits(mesh: &Mesh, q: &Quantization, order: &[u32]) -> Result<Option<Vec
 
 /// The hierarchy coding that codes `mesh` smallest, with the canonical order of the
 /// hierarchy it was made from; `None` when no hierarchy is found.
+/// `recovered` are the Catmull-Clark family's candidates ([`cc_candidates`]) where
+/// already made.
 fn best_hierarchy(
     mesh: &Mesh,
     opts: &EncodeOptions,
     flat_h: &Header,
+    recovered: Option<Vec<Canonical>>,
 ) -> Result<Option<(Payloads, Vec<u32>)>> {
-    // The input's faces as a topology, for recovery only: each family makes its own
-    // and drops it before coding (the memory of large meshes).
-    let input_topo = || {
-        let mut topo = Topo::new(mesh.vertex_count());
-        topo.idx = mesh.faces.clone();
-        topo.starts = mesh.face_starts.clone();
-        topo
-    };
     let mut best: Option<(Payloads, Vec<u32>)> = None;
     let (want_cc, want_sqrt2) = match opts.transform {
         TransformChoice::Auto => (true, true),
@@ -937,32 +1002,10 @@ fn best_hierarchy(
     // Catmull-Clark family's hierarchies are gone before it is (memory).
     let mut families: Vec<FamilyJob> = Vec::new();
     if want_cc {
-        let topo = input_topo();
-        let mut canons = Vec::new();
-        let led = opts.keep_order;
-        for rec in topology::cc::recover_candidates(mesh.vertex_count(), &topo, max, led) {
-            canons.push(topology::canonicalise(&rec, gates)?);
-            // Every candidate but the one in hand waits with its levels stowed.
-            canons.iter_mut().skip(1).for_each(Canonical::stow);
-        }
-        // Polar levels take the Catmull-Clark transforms (SPEC.md 8.6).
-        let keep = match opts.keep_order {
-            true => topology::polar::KEEP_FOR_ORDER,
-            false => topology::polar::KEEP,
+        let mut canons = match recovered {
+            Some(canons) => canons,
+            None => cc_candidates(mesh, opts)?,
         };
-        let cc_count = canons.len();
-        for canon in topology::polar::recover_all(mesh.vertex_count(), &topo, max, gates, keep) {
-            canons.push(canon);
-            canons.iter_mut().skip(1).for_each(Canonical::stow);
-        }
-        drop(topo);
-        if opts.keep_order {
-            // The one that codes the order best first, then as many as are coded
-            // without the order (the search's time stays what it was).
-            let polar = (canons.len() - cc_count).min(topology::polar::KEEP);
-            canons = by_order_cost(mesh, canons)?;
-            canons.truncate(cc_count + polar);
-        }
         // The subdivision fit, on each candidate whose finest level is near a
         // subdivision (every candidate when asked for by name).
         let try_fit = match opts.transform {
@@ -1007,7 +1050,7 @@ fn best_hierarchy(
         let (canons, first, others) = match taken.expect("each family is coded once") {
             FamilyJob::Ready(canons, first, others) => (canons, first, others),
             FamilyJob::Sqrt2 => {
-                let topo = input_topo();
+                let topo = input_topo(mesh);
                 let mut canons: Vec<Canonical> = Vec::new();
                 for rec in topology::sqrt2::recover_candidates(&topo, max, opts.keep_order) {
                     if let Ok(canon) = topology::sqrt2::canonicalise(rec, &topo, gates) {
@@ -1040,6 +1083,52 @@ fn best_hierarchy(
         }
     }
     Ok(best)
+}
+
+/// The input's faces as a topology, for recovery only: each family makes its own and
+/// drops it before coding (the memory of large meshes).
+fn input_topo(mesh: &Mesh) -> Topo {
+    let mut topo = Topo::new(mesh.vertex_count());
+    topo.idx = mesh.faces.clone();
+    topo.starts = mesh.face_starts.clone();
+    topo
+}
+
+/// The Catmull-Clark family's candidate hierarchies of `mesh` (SPEC.md 8: a mesh and
+/// its dual, polar labelings), the preferred first with its levels, the others stowed.
+/// They depend on the faces and their order alone, not on the positions.
+fn cc_candidates(mesh: &Mesh, opts: &EncodeOptions) -> Result<Vec<Canonical>> {
+    let max = opts.max_levels as usize;
+    // The base mesh's faces in the order of the connectivity coder's gates, unless
+    // the input's order is kept: then as recovered, which makes the order cheap.
+    let gates = !opts.keep_order;
+    let topo = input_topo(mesh);
+    let mut canons = Vec::new();
+    let led = opts.keep_order;
+    for rec in topology::cc::recover_candidates(mesh.vertex_count(), &topo, max, led) {
+        canons.push(topology::canonicalise(&rec, gates)?);
+        // Every candidate but the one in hand waits with its levels stowed.
+        canons.iter_mut().skip(1).for_each(Canonical::stow);
+    }
+    // Polar levels take the Catmull-Clark transforms (SPEC.md 8.6).
+    let keep = match opts.keep_order {
+        true => topology::polar::KEEP_FOR_ORDER,
+        false => topology::polar::KEEP,
+    };
+    let cc_count = canons.len();
+    for canon in topology::polar::recover_all(mesh.vertex_count(), &topo, max, gates, keep) {
+        canons.push(canon);
+        canons.iter_mut().skip(1).for_each(Canonical::stow);
+    }
+    drop(topo);
+    if opts.keep_order {
+        // The one that codes the order best first, then as many as are coded
+        // without the order (the search's time stays what it was).
+        let polar = (canons.len() - cc_count).min(topology::polar::KEEP);
+        canons = by_order_cost(mesh, canons)?;
+        canons.truncate(cc_count + polar);
+    }
+    Ok(canons)
 }
 
 /// `canons` (the first with its levels, the others stowed) with the one whose ORDR
