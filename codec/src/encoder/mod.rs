@@ -830,14 +830,31 @@ fn encode_inner(
         return encode_with(&ranked, q, opts, Some(&map), tmpl, None);
     }
     // The Catmull-Clark candidates, the same for both codings, made once.
-    let (choice, recovered) = map_by_estimate(mesh, &ranked, &map, opts)?;
+    let (choice, canons, bits) = match map_by_estimate(mesh, &ranked, &map, opts)? {
+        Some(e) => (e.choice, Some(e.canons), e.bits),
+        None => (None, None, None),
+    };
+    // Each coding with the candidates and its own values' estimate.
+    let recovered = |canons: Option<Vec<Canonical>>, k: usize| {
+        canons.map(|canons| Recovered {
+            canons,
+            bits: bits.map(|(w, b): (Wavelet, [u64; 2])| (w, b[k])),
+        })
+    };
     match choice {
-        Some(true) => return encode_with(&ranked, q, opts, Some(&map), tmpl, recovered),
-        Some(false) => return encode_with(mesh, q, opts, None, tmpl, recovered),
+        Some(true) => return encode_with(&ranked, q, opts, Some(&map), tmpl, recovered(canons, 0)),
+        Some(false) => return encode_with(mesh, q, opts, None, tmpl, recovered(canons, 1)),
         None => {}
     }
-    let mapped = encode_with(&ranked, q, opts, Some(&map), tmpl, recovered.clone())?;
-    let plain = encode_with(mesh, q, opts, None, tmpl, recovered)?;
+    let mapped = encode_with(
+        &ranked,
+        q,
+        opts,
+        Some(&map),
+        tmpl,
+        recovered(canons.clone(), 0),
+    )?;
+    let plain = encode_with(mesh, q, opts, None, tmpl, recovered(canons, 1))?;
     Ok(if mapped.bytes.len() < plain.bytes.len() {
         mapped
     } else {
@@ -849,39 +866,62 @@ fn encode_inner(
 /// this many hundredths for the default effort to code one of them alone.
 const MAP_MARGIN: u64 = 3;
 
+/// The Catmull-Clark family's candidates of a mesh made before its coding
+/// ([`cc_candidates`]), with the details' bits of the preferred one where estimated.
+#[derive(Clone)]
+struct Recovered {
+    canons: Vec<Canonical>,
+    /// A transform and its details' bits ([`search::detail_bits`]) on `canons[0]`.
+    bits: Option<(Wavelet, u64)>,
+}
+
+/// What [`map_by_estimate`] finds.
+struct MapEstimate {
+    /// Ranks (`true`) or values (`false`), or both to be coded (`None`).
+    choice: Option<bool>,
+    /// The Catmull-Clark family's candidates ([`cc_candidates`]).
+    canons: Vec<Canonical>,
+    /// A transform and its details' bits on `canons[0]` with the ranks and with the
+    /// values, where estimated.
+    bits: Option<(Wavelet, [u64; 2])>,
+}
+
 /// Whether `auto` codes `mesh` as `ranked`, its ranks on value map `map` (SPEC.md
-/// 3.1), decided at the estimated efforts without coding both: `Some(true)` if the
-/// details' bits of the ranks ([`search::detail_bits`], on the preferred Catmull-Clark
-/// candidate, with the family's first transform or the one asked for) and the map's
-/// own bytes are below the values' by [`MAP_MARGIN`] %, `Some(false)` if above;
-/// `None` (code both, keep the smaller) above effort 6, for a sqrt(2) transform
-/// or the fit, without a Catmull-Clark hierarchy, where `auto`'s fit may be tried on
-/// the values, or within the margin. With the
-/// Catmull-Clark candidates where made (the faces are the same for both codings).
+/// 3.1), decided up to effort 6 without coding both: ranks if the details' bits of the
+/// ranks ([`search::detail_bits`], on the preferred Catmull-Clark candidate, with the
+/// family's first transform or the one asked for) and the map's own bytes are below
+/// the values' by [`MAP_MARGIN`] %, values if above; both (`choice` `None`) within the
+/// margin, without a Catmull-Clark hierarchy, or where `auto`'s fit may be tried on
+/// the values. `None` (nothing made) above effort 6 and for a sqrt(2) transform or the
+/// fit.
 fn map_by_estimate(
     mesh: &Mesh,
     ranked: &Mesh,
     map: &ValueMap,
     opts: &EncodeOptions,
-) -> Result<(Option<bool>, Option<Vec<Canonical>>)> {
+) -> Result<Option<MapEstimate>> {
     let w = match opts.transform {
         TransformChoice::Auto => Wavelet::Bicubic,
         TransformChoice::Fixed(w) if !w.is_sqrt2() => w,
-        _ => return Ok((None, None)),
+        _ => return Ok(None),
     };
     if !Effort::of(opts.effort).map_estimated || opts.max_levels == 0 {
-        return Ok((None, None));
+        return Ok(None);
     }
     opts.progress.report(Stage::Recovering);
-    let canons = cc_candidates(mesh, opts)?;
-    let Some(canon) = canons.first() else {
-        return Ok((None, Some(canons)));
+    let mut found = MapEstimate {
+        choice: None,
+        canons: cc_candidates(mesh, opts)?,
+        bits: None,
+    };
+    let Some(canon) = found.canons.first() else {
+        return Ok(Some(found));
     };
     // The fit codes values, not ranks: where it may be tried on the values (its
     // screen lets it), they are coded both ways.
     let fits = opts.transform == TransformChoice::Auto && Effort::of(opts.effort).fit;
     if fits && !fitting::turned_away(canon, &canonical_positions(mesh, canon)) {
-        return Ok((None, Some(canons)));
+        return Ok(Some(found));
     }
     let disc = opts.disc.unwrap_or(DiscTransform::None);
     let estimates = (
@@ -889,17 +929,18 @@ fn map_by_estimate(
         search::detail_bits(canon, mesh, w, disc),
     );
     let (Some(ranks), Some(values)) = estimates else {
-        return Ok((None, Some(canons)));
+        return Ok(Some(found));
     };
+    found.bits = Some((w, [ranks, values]));
     let ranks = ranks + 8 * map.encode().len() as u64;
-    let choice = if ranks * 100 <= values * (100 - MAP_MARGIN) {
+    found.choice = if ranks * 100 <= values * (100 - MAP_MARGIN) {
         Some(true)
     } else if values * 100 <= ranks * (100 - MAP_MARGIN) {
         Some(false)
     } else {
         None
     };
-    Ok((choice, Some(canons)))
+    Ok(Some(found))
 }
 
 /// [`encode`] with a given value map (`mesh` holding the ranks on its mapped axes),
@@ -910,7 +951,7 @@ fn encode_with(
     opts: &EncodeOptions,
     vmap: Option<&ValueMap>,
     tmpl: Option<&FilePayloads>,
-    recovered: Option<Vec<Canonical>>,
+    recovered: Option<Recovered>,
 ) -> Result<Encoded> {
     let mut flat_h = flat_header(mesh, q, opts);
     flat_h.has_value_map = vmap.is_some();
@@ -977,13 +1018,12 @@ fn float_bits(mesh: &Mesh, q: &Quantization, order: &[u32]) -> Result<Option<Vec
 
 /// The hierarchy coding that codes `mesh` smallest, with the canonical order of the
 /// hierarchy it was made from; `None` when no hierarchy is found.
-/// `recovered` are the Catmull-Clark family's candidates ([`cc_candidates`]) where
-/// already made.
+/// `recovered` holds the Catmull-Clark family's candidates where already made.
 fn best_hierarchy(
     mesh: &Mesh,
     opts: &EncodeOptions,
     flat_h: &Header,
-    recovered: Option<Vec<Canonical>>,
+    recovered: Option<Recovered>,
 ) -> Result<Option<(Payloads, Vec<u32>)>> {
     let mut best: Option<(Payloads, Vec<u32>)> = None;
     let (want_cc, want_sqrt2) = match opts.transform {
@@ -1002,9 +1042,9 @@ fn best_hierarchy(
     // Catmull-Clark family's hierarchies are gone before it is (memory).
     let mut families: Vec<FamilyJob> = Vec::new();
     if want_cc {
-        let mut canons = match recovered {
-            Some(canons) => canons,
-            None => cc_candidates(mesh, opts)?,
+        let (mut canons, known) = match recovered {
+            Some(r) => (r.canons, r.bits),
+            None => (cc_candidates(mesh, opts)?, None),
         };
         // The subdivision fit, on each candidate whose finest level is near a
         // subdivision (every candidate when asked for by name).
@@ -1030,7 +1070,8 @@ fn best_hierarchy(
         }
         // A mesh and its dual can both be the base: compare them with one transform.
         if !fit_only && !canons.is_empty() {
-            families.push(FamilyJob::Ready(canons, Wavelet::Bicubic, &Wavelet::ALL));
+            let first = Wavelet::Bicubic;
+            families.push(FamilyJob::Ready(canons, first, &Wavelet::ALL, known));
         }
     }
     if want_sqrt2 {
@@ -1047,8 +1088,8 @@ fn best_hierarchy(
         .collect();
     let coded = par_map(&jobs, threads, |job| {
         let taken = job.lock().map(|mut j| j.take()).ok().flatten();
-        let (canons, first, others) = match taken.expect("each family is coded once") {
-            FamilyJob::Ready(canons, first, others) => (canons, first, others),
+        let (canons, first, others, known) = match taken.expect("each family is coded once") {
+            FamilyJob::Ready(canons, first, others, known) => (canons, first, others, known),
             FamilyJob::Sqrt2 => {
                 let topo = input_topo(mesh);
                 let mut canons: Vec<Canonical> = Vec::new();
@@ -1062,7 +1103,7 @@ fn best_hierarchy(
                 if opts.keep_order {
                     canons = by_order_cost(mesh, canons)?;
                 }
-                (canons, Wavelet::Sqrt2Lazy, &Wavelet::SQRT2[..])
+                (canons, Wavelet::Sqrt2Lazy, &Wavelet::SQRT2[..], None)
             }
         };
         if canons.is_empty() {
@@ -1070,7 +1111,7 @@ fn best_hierarchy(
         }
         // Only the order of the hierarchy is kept.
         Ok(
-            code_family(mesh, opts, flat_h, canons, first, others, share)?
+            code_family(mesh, opts, flat_h, canons, first, others, known, share)?
                 .map(|(p, canon)| (p, canon.order)),
         )
     });
@@ -1159,10 +1200,15 @@ fn by_order_cost(mesh: &Mesh, mut canons: Vec<Canonical>) -> Result<Vec<Canonica
 }
 
 /// A family's candidate hierarchies for [`best_hierarchy`]: recovered, with the
-/// transform that compares them and the family's others; or the sqrt(2) family, to be
-/// recovered.
+/// transform that compares them, the family's others and a transform's details' bits
+/// on the first where known; or the sqrt(2) family, to be recovered.
 enum FamilyJob {
-    Ready(Vec<Canonical>, Wavelet, &'static [Wavelet]),
+    Ready(
+        Vec<Canonical>,
+        Wavelet,
+        &'static [Wavelet],
+        Option<(Wavelet, u64)>,
+    ),
     Sqrt2,
 }
 

@@ -144,14 +144,15 @@ pub(crate) fn detail_bits(
 }
 
 /// `first` and `others` ranked by the bits their details take on hierarchy `canon`
-/// ([`detail_bits`]), fewest first (`first` first on ties); those out of range last, in
-/// their order. The analyses run on up to `threads` threads.
+/// ([`detail_bits`]; `known` a transform's where already estimated), fewest first
+/// (`first` first on ties); those out of range last, in their order. The analyses run
+/// on up to `threads` threads.
 fn by_bits(
     canon: &Canonical,
     mesh: &Mesh,
-    first: Wavelet,
-    others: &[Wavelet],
+    (first, others): (Wavelet, &[Wavelet]),
     disc: DiscTransform,
+    known: Option<(Wavelet, u64)>,
     threads: usize,
 ) -> Vec<Wavelet> {
     let all: Vec<Wavelet> = std::iter::once(first)
@@ -160,7 +161,10 @@ fn by_bits(
     if all.len() == 1 {
         return all;
     }
-    let bits = par_map(&all, threads, |&w| detail_bits(canon, mesh, w, disc));
+    let bits = par_map(&all, threads, |&w| match known {
+        Some((k, bits)) if k == w => Some(bits),
+        _ => detail_bits(canon, mesh, w, disc),
+    });
     let mut ranked: Vec<(u64, Wavelet)> = all
         .into_iter()
         .zip(bits)
@@ -297,8 +301,10 @@ fn best_candidate(
 /// polar, or sqrt(2)) and the hierarchy it codes: every candidate with the family's
 /// first transform, then, with `auto`, the family's `others` ranked on the best
 /// candidate, the ranking's winner coded in every mode, and a coding without the
-/// rotated modes. `threads` (at least 1) may code the ranking's transforms at once; the
-/// result is the same for every count.
+/// rotated modes. `known` is a transform's details' bits on the first candidate where
+/// already estimated. `threads` (at least 1) may code the ranking's transforms at once;
+/// the result is the same for every count.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn code_family(
     mesh: &Mesh,
     opts: &EncodeOptions,
@@ -306,6 +312,7 @@ pub(crate) fn code_family(
     canons: Vec<Canonical>,
     auto_first: Wavelet,
     others: &[Wavelet],
+    known: Option<(Wavelet, u64)>,
     threads: usize,
 ) -> Result<Option<(Payloads, Canonical)>> {
     let first = match opts.transform {
@@ -326,7 +333,7 @@ pub(crate) fn code_family(
     let (first, also) = match (auto && effort.estimated, canons.first()) {
         (true, Some(canon)) => {
             let disc = opts.disc.unwrap_or(DiscTransform::None);
-            let ranked = by_bits(canon, mesh, first, &listed, disc, threads);
+            let ranked = by_bits(canon, mesh, (first, &listed), disc, known, threads);
             let mut also = Vec::new();
             if mesh.vertex_count() <= SMALL_MESH {
                 also.extend(ranked.get(1).copied());
