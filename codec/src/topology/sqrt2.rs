@@ -249,6 +249,20 @@ impl Grouped {
 
 /// Undoes one step with the vertices of colour `side` as face points.
 fn coarsen(t: &Topo, colours: &[u8], side: u8) -> Option<Coarse> {
+    // A face point is in three quads or more (below, its polygon would have fewer
+    // sides): checked first, as a mesh with a boundary (a grid) fails here.
+    let mut quads = vec![0u8; t.nv];
+    for &v in t.idx.iter().filter(|&&v| colours[v as usize] == side) {
+        quads[v as usize] = quads[v as usize].saturating_add(1);
+    }
+    if quads
+        .iter()
+        .zip(colours)
+        .any(|(&k, &c)| c == side && k > 0 && k < 3)
+    {
+        return None;
+    }
+    drop(quads);
     // Every quad corner g of colour `side` names the coarse edge a -> b around it.
     let mut corners = Vec::with_capacity(t.idx.len() / 2);
     for f in 0..t.nf() {
