@@ -109,20 +109,32 @@ pub fn rotated(payload: &[u8]) -> bool {
 }
 
 /// Which of a level's details a sample holds (the encoder's mode trials, not part of the
-/// format): all, or every [`SAMPLE_STRIDE`]-th block of [`SAMPLE_BLOCK`] details.
+/// format): all, or every `stride`-th block of [`SAMPLE_BLOCK`] details.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Sample {
     All,
-    Blocks,
+    Blocks(usize),
 }
 
 const SAMPLE_BLOCK: usize = 64;
+/// A sample holds at least every this many-th block...
 const SAMPLE_STRIDE: usize = 8;
+/// ... and on a larger level about this many details: enough to rank the modes (at
+/// 2,400 details a mode 6 % larger on the whole level ranked first).
+const SAMPLE_DETAILS: usize = 8_192;
 
 impl Sample {
+    /// The sample of a level of `nd` details.
+    fn of(nd: usize) -> Sample {
+        Sample::Blocks((nd / SAMPLE_DETAILS).max(SAMPLE_STRIDE))
+    }
+
     /// Whether detail `i` is in the sample.
     fn has(self, i: usize) -> bool {
-        self == Sample::All || (i / SAMPLE_BLOCK) % SAMPLE_STRIDE == 0
+        match self {
+            Sample::All => true,
+            Sample::Blocks(stride) => (i / SAMPLE_BLOCK) % stride == 0,
+        }
     }
 }
 

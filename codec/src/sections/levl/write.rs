@@ -63,7 +63,7 @@ pub(super) fn put(
 }
 
 /// The fewest details of a level whose mode the encoder chooses on a sample, when asked
-/// ([`LevelModels::sampled`]): an eighth of them, [`Sample::Blocks`] (not part of the
+/// ([`LevelModels::sampled`]): an eighth of them or fewer, [`Sample::of`] (not part of the
 /// format).
 const SAMPLE_FROM: usize = 16_384;
 
@@ -102,7 +102,7 @@ pub fn encode(
     let unbinned_trial = plan_unbinned.is_none();
     let nd = family.details(level);
     let sample = match models.sampled && unbinned_trial && nd >= SAMPLE_FROM {
-        true => Sample::Blocks,
+        true => Sample::of(nd),
         false => Sample::All,
     };
     let (modes, prep) = candidates(
@@ -183,7 +183,7 @@ pub fn encode(
     // limit: their best is the mode tried unbinned, which may fit where they do not.
     let cap = if unbinned_trial { usize::MAX } else { limit };
     let mut best: Option<(usize, Tried)> = None;
-    if sample == Sample::Blocks {
+    if sample != Sample::All {
         // Mode i's sample in bytes, if within `cap`.
         let sampled = |i: usize, unbinned: bool, cap: usize| {
             let mode = modes[i];
