@@ -35,12 +35,16 @@ pub(crate) fn code_fit(
     header: &Header,
     bits: &[u8],
     screen: bool,
+    finest: Option<Level>,
 ) -> Option<Payloads> {
     if !canon.poles.is_empty() {
         return None;
     }
-    // The level whose coarse mesh is the finest one.
-    let finest = canon.levels.last()?.next();
+    // The level whose coarse mesh is the finest one (`finest` where made).
+    let finest = match finest {
+        Some(f) => f,
+        None => canon.levels.last()?.next(),
+    };
     let mut target = Target {
         canon,
         pos,
@@ -175,18 +179,16 @@ fn screened(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level, fine: &[[f64
 
 /// Whether `auto`'s fit would turn hierarchy `canon` with finest values `pos` away
 /// unseen ([`code_fit`] with its screen returns `None` without a fit): a polar
-/// hierarchy, or one without seams to glue that the screen turns away.
-pub(crate) fn turned_away(canon: &Canonical, pos: &[Vec<i64>; 3]) -> bool {
-    if !canon.poles.is_empty() {
+/// hierarchy, or one without seams to glue that the screen turns away. `finest` is the
+/// level after the hierarchy's last.
+pub(crate) fn turned_away(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level) -> bool {
+    if !canon.poles.is_empty() || canon.levels.is_empty() {
         return true;
     }
-    let Some(last) = canon.levels.last() else {
-        return true;
-    };
     if glue_seams(canon, pos).is_some() {
         return false;
     }
-    screened(canon, pos, &last.next(), &floats(pos)) == Screen::Away
+    screened(canon, pos, finest, &floats(pos)) == Screen::Away
 }
 
 /// Values per axis as points of floats.

@@ -21,7 +21,7 @@ use crate::sections::head::{Header, Source, Transform};
 use crate::sections::nrml;
 use crate::sections::vmap::ValueMap;
 use crate::sections::{base, chan, fbit, levl, ordr, tmpl};
-use crate::topology::{self, Canonical, Family, Topo};
+use crate::topology::{self, Canonical, Family, Level, Topo};
 use crate::transform::level::{LevelTransform, Scheme};
 use crate::transform::polar::DiscTransform;
 use crate::transform::{fit, Wavelet};
@@ -830,15 +830,16 @@ fn encode_inner(
         return encode_with(&ranked, q, opts, Some(&map), tmpl, None);
     }
     // The Catmull-Clark candidates, the same for both codings, made once.
-    let (choice, canons, bits) = match map_by_estimate(mesh, &ranked, &map, opts)? {
-        Some(e) => (e.choice, Some(e.canons), e.bits),
-        None => (None, None, None),
+    let (choice, canons, bits, finest) = match map_by_estimate(mesh, &ranked, &map, opts)? {
+        Some(e) => (e.choice, Some(e.canons), e.bits, e.finest),
+        None => (None, None, None, None),
     };
     // Each coding with the candidates and its own values' estimate.
     let recovered = |canons: Option<Vec<Canonical>>, k: usize| {
         canons.map(|canons| Recovered {
             canons,
             bits: bits.map(|(w, b): (Wavelet, [u64; 2])| (w, b[k])),
+            finest: finest.clone(),
         })
     };
     match choice {
@@ -873,6 +874,8 @@ struct Recovered {
     canons: Vec<Canonical>,
     /// A transform and its details' bits ([`search::detail_bits`]) on `canons[0]`.
     bits: Option<(Wavelet, u64)>,
+    /// The level after `canons[0]`'s last (the fit's), where made.
+    finest: Option<Level>,
 }
 
 /// What [`map_by_estimate`] finds.
@@ -884,6 +887,8 @@ struct MapEstimate {
     /// A transform and its details' bits on `canons[0]` with the ranks and with the
     /// values, where estimated.
     bits: Option<(Wavelet, [u64; 2])>,
+    /// The level after `canons[0]`'s last, where made.
+    finest: Option<Level>,
 }
 
 /// Whether `auto` codes `mesh` as `ranked`, its ranks on value map `map` (SPEC.md
@@ -913,16 +918,11 @@ fn map_by_estimate(
         choice: None,
         canons: cc_candidates(mesh, opts)?,
         bits: None,
+        finest: None,
     };
     let Some(canon) = found.canons.first() else {
         return Ok(Some(found));
     };
-    // The fit codes values, not ranks: where it may be tried on the values (its
-    // screen lets it), they are coded both ways.
-    let fits = opts.transform == TransformChoice::Auto && Effort::of(opts.effort).fit;
-    if fits && !fitting::turned_away(canon, &canonical_positions(mesh, canon)) {
-        return Ok(Some(found));
-    }
     let disc = opts.disc.unwrap_or(DiscTransform::None);
     let estimates = (
         search::detail_bits(canon, ranked, w, disc),
@@ -940,6 +940,17 @@ fn map_by_estimate(
     } else {
         None
     };
+    // The fit codes values, not ranks: ranks are chosen alone only where the fit's
+    // screen turns the values away (the finest level it makes is kept for the coding's
+    // own screen).
+    let fits = opts.transform == TransformChoice::Auto && Effort::of(opts.effort).fit;
+    if let (Some(true), true, Some(last)) = (found.choice, fits, canon.levels.last()) {
+        let finest = last.next();
+        if !fitting::turned_away(canon, &canonical_positions(mesh, canon), &finest) {
+            found.choice = None;
+        }
+        found.finest = Some(finest);
+    }
     Ok(Some(found))
 }
 
@@ -1042,9 +1053,9 @@ fn best_hierarchy(
     // Catmull-Clark family's hierarchies are gone before it is (memory).
     let mut families: Vec<FamilyJob> = Vec::new();
     if want_cc {
-        let (mut canons, known) = match recovered {
-            Some(r) => (r.canons, r.bits),
-            None => (cc_candidates(mesh, opts)?, None),
+        let (mut canons, known, mut finest) = match recovered {
+            Some(r) => (r.canons, r.bits, r.finest),
+            None => (cc_candidates(mesh, opts)?, None, None),
         };
         // The subdivision fit, on each candidate whose finest level is near a
         // subdivision (every candidate when asked for by name).
@@ -1056,7 +1067,8 @@ fn best_hierarchy(
         for (i, canon) in canons.iter_mut().enumerate().filter(|_| try_fit) {
             canon.unstow()?;
             let pos = canonical_positions(mesh, canon);
-            if let Some(mut p) = code_fit(canon, &pos, flat_h, &FIT_BITS, !fit_only) {
+            let made = finest.take().filter(|_| i == 0);
+            if let Some(mut p) = code_fit(canon, &pos, flat_h, &FIT_BITS, !fit_only, made) {
                 if opts.keep_order {
                     p.order = Some(hierarchy_order(mesh, canon)?);
                 }
