@@ -19,63 +19,132 @@ pub(crate) fn code_hierarchy(
     bound: usize,
     progress: &Progress,
 ) -> Option<Payloads> {
-    let scheme = scheme_of(canon, w, disc);
-    let (mut x, phases) = analyse_all(canon, mesh, &scheme, true)?;
-    let (mut header, base_bytes) = hierarchy_base(canon, &x, header);
-    let mut models = levl::LevelModels::new();
-    models.rotated = search.rotated;
-    models.sampled = search.sampled;
-    models.only = modes.map(Vec::into_iter);
-    // Bytes the levels may take: a coding over the bound is not wanted.
-    let mut room = bound.checked_sub(base_bytes.len())?;
-    let mut level_bytes = Vec::with_capacity(canon.levels.len());
-    // Level by level, coarse first, as the decoder goes: `x[k][..nv]` holds the level's
-    // coarse values as the decoder has them when it reads the level's details, and the
-    // level, once coded, is synthesised in place into the next one's (its details are
-    // then no longer wanted). No copy of any level's coarse values is kept (the memory of
-    // large meshes).
-    let last = canon.levels.len().saturating_sub(1);
-    for (i, (level, ph)) in canon.levels.iter().zip(&phases).enumerate() {
-        progress.report(Stage::Level {
-            transform: w.name(),
-            level: i + 1,
-            levels: canon.levels.len(),
-        });
-        // The level's transform, made from its coarse values as the decoder makes it:
-        // for its synthesis once it is coded (not the finest's) and for a sqrt(2)
-        // level's tangent targets (SPEC.md 10.3).
-        let sqrt2 = canon.family == Family::Sqrt2;
-        let t = (i < last || sqrt2).then(|| LevelTransform::new(&scheme, level, i, &x, false));
-        let targets = t.as_ref().and_then(|t| t.tangent_targets(level, &x));
-        let t = t.filter(|_| i < last);
-        let b = levl::encode(
-            level,
-            canon.family,
-            &x,
-            &x,
-            &mut models,
-            targets.as_deref(),
-            ph.as_ref(),
-            room,
-        )?;
-        room -= b.len();
-        level_bytes.push(b);
-        if let Some(t) = t {
-            t.synthesise(level, &mut x);
-        }
-    }
-    header.disc = if canon.poles.is_empty() {
-        DiscTransform::None
-    } else {
-        disc
-    };
-    header.transform = Transform::Wavelet(w);
-    Some(Payloads {
+    let coding = Coding {
+        canon,
+        mesh,
+        w,
+        disc,
         header,
-        base: base_bytes,
-        levels: level_bytes,
-        order: None,
-    })
+        search,
+        bound,
+        progress,
+    };
+    coding.code(modes, None)
+}
+
+/// What [`code_hierarchy`] codes, and how.
+struct Coding<'a> {
+    canon: &'a Canonical,
+    mesh: &'a Mesh,
+    w: Wavelet,
+    disc: DiscTransform,
+    header: &'a Header,
+    search: ModeSearch,
+    bound: usize,
+    progress: &'a Progress,
+}
+
+impl Coding<'_> {
+    /// [`code_hierarchy`], from the hierarchy's values analysed with the wavelet
+    /// beforehand where `given` (a Catmull-Clark or polar hierarchy's, as [`analysed`]
+    /// gives them): each level's phases are then found from its fine values, which its
+    /// synthesis gives back before it is coded (the finest level's are the mesh's).
+    fn code(&self, modes: Option<Vec<u8>>, given: Option<[Vec<i64>; 3]>) -> Option<Payloads> {
+        let Coding {
+            canon,
+            mesh,
+            w,
+            disc,
+            header,
+            search,
+            bound,
+            progress,
+        } = *self;
+        let sqrt2 = canon.family == Family::Sqrt2;
+        let scheme = scheme_of(canon, w, disc);
+        let (mut x, phases) = match given.filter(|_| !sqrt2) {
+            Some(x) => (x, None),
+            None => {
+                let (x, p) = analyse_all(canon, mesh, &scheme, true)?;
+                (x, Some(p))
+            }
+        };
+        let (mut header, base_bytes) = hierarchy_base(canon, &x, header);
+        let mut models = levl::LevelModels::new();
+        models.rotated = search.rotated;
+        models.sampled = search.sampled;
+        models.only = modes.map(Vec::into_iter);
+        // Bytes the levels may take: a coding over the bound is not wanted.
+        let mut room = bound.checked_sub(base_bytes.len())?;
+        let mut level_bytes = Vec::with_capacity(canon.levels.len());
+        // Level by level, coarse first, as the decoder goes: `x[k][..nv]` holds the level's
+        // coarse values as the decoder has them when it reads the level's details, and the
+        // level, once coded, is synthesised in place into the next one's (its details are
+        // then no longer wanted). No copy of any level's coarse values is kept (the memory of
+        // large meshes).
+        let last = canon.levels.len().saturating_sub(1);
+        for (i, level) in canon.levels.iter().enumerate() {
+            progress.report(Stage::Level {
+                transform: w.name(),
+                level: i + 1,
+                levels: canon.levels.len(),
+            });
+            // The level's transform, made from its coarse values as the decoder makes it:
+            // for its synthesis once it is coded (not the finest's), for a sqrt(2)
+            // level's tangent targets (SPEC.md 10.3) and, the values analysed beforehand,
+            // for the phases of its predictions (10.6).
+            let t = (i < last || sqrt2 || phases.is_none())
+                .then(|| LevelTransform::new(&scheme, level, i, &x, false));
+            let targets = t.as_ref().and_then(|t| t.tangent_targets(level, &x));
+            // The level's coarse values and details, where `x` is already synthesised.
+            let mut before: Option<[Vec<i64>; 3]> = None;
+            let found = match (&phases, &t) {
+                (Some(_), _) | (None, None) => None,
+                (None, Some(t)) => t.phaser(level).map(|p| {
+                    let n = level.ne() + level.nf();
+                    if i == last {
+                        return p.phases(&canonical_positions(mesh, canon), n, true);
+                    }
+                    let fine = canon.family.fine_nv(level);
+                    before = Some(std::array::from_fn(|k| x[k][..fine].to_vec()));
+                    t.synthesise(level, &mut x);
+                    p.phases(&x, n, true)
+                }),
+            };
+            let ph = match &phases {
+                Some(p) => p[i].as_ref(),
+                None => found.as_ref(),
+            };
+            let xs = before.as_ref().unwrap_or(&x);
+            let b = levl::encode(
+                level,
+                canon.family,
+                xs,
+                xs,
+                &mut models,
+                targets.as_deref(),
+                ph,
+                room,
+            )?;
+            room -= b.len();
+            level_bytes.push(b);
+            if let Some(t) = t.filter(|_| i < last && before.is_none()) {
+                t.synthesise(level, &mut x);
+            }
+        }
+        header.disc = if canon.poles.is_empty() {
+            DiscTransform::None
+        } else {
+            disc
+        };
+        header.transform = Transform::Wavelet(w);
+        Some(Payloads {
+            header,
+            base: base_bytes,
+            levels: level_bytes,
+            order: None,
+        })
+    }
 }
 
 /// The transform of hierarchy `canon` with wavelet `w` and disc transform `disc`.
@@ -139,14 +208,33 @@ pub(crate) fn detail_bits(
     w: Wavelet,
     disc: DiscTransform,
 ) -> Option<u64> {
-    let (x, _) = analyse_all(canon, mesh, &scheme_of(canon, w, disc), false)?;
-    Some(value_bits(&x, canon.base.nv))
+    analysed(canon, mesh, w, disc).map(|x| value_bits(&x, canon.base.nv))
 }
+
+/// Values per axis.
+type Values = [Vec<i64>; 3];
+
+/// A hierarchy's values analysed with `w` (its phases not found: [`analyse_all`]);
+/// `None` if a lifted value leaves the supported range.
+fn analysed(
+    canon: &Canonical,
+    mesh: &Mesh,
+    w: Wavelet,
+    disc: DiscTransform,
+) -> Option<[Vec<i64>; 3]> {
+    analyse_all(canon, mesh, &scheme_of(canon, w, disc), false).map(|(x, _)| x)
+}
+
+/// Meshes up to this many vertices keep the analysis of the transform their estimate
+/// ranks first for its coding ([`by_bits`]); larger ones make it again (the memory of
+/// large meshes: every transform's analysis is held until they are ranked).
+const KEEP_ANALYSIS: usize = 500_000;
 
 /// `first` and `others` ranked by the bits their details take on hierarchy `canon`
 /// ([`detail_bits`]; `known` a transform's where already estimated), fewest first
-/// (`first` first on ties); those out of range last, in their order. The analyses run
-/// on up to `threads` threads.
+/// (`first` first on ties); those out of range last, in their order; with the first's
+/// analysed values where made and kept ([`KEEP_ANALYSIS`]). The analyses run on up to
+/// `threads` threads.
 fn by_bits(
     canon: &Canonical,
     mesh: &Mesh,
@@ -154,25 +242,33 @@ fn by_bits(
     disc: DiscTransform,
     known: Option<(Wavelet, u64)>,
     threads: usize,
-) -> Vec<Wavelet> {
+) -> (Vec<Wavelet>, Option<[Vec<i64>; 3]>) {
     let all: Vec<Wavelet> = std::iter::once(first)
         .chain(others.iter().copied())
         .collect();
     if all.len() == 1 {
-        return all;
+        return (all, None);
     }
-    let bits = par_map(&all, threads, |&w| match known {
-        Some((k, bits)) if k == w => Some(bits),
-        _ => detail_bits(canon, mesh, w, disc),
+    let keep = mesh.vertex_count() <= KEEP_ANALYSIS;
+    let found = par_map(&all, threads, |&w| match known {
+        Some((k, bits)) if k == w => (Some(bits), None),
+        _ => {
+            let x = analysed(canon, mesh, w, disc);
+            (
+                x.as_ref().map(|x| value_bits(x, canon.base.nv)),
+                x.filter(|_| keep),
+            )
+        }
     });
-    let mut ranked: Vec<(u64, Wavelet)> = all
+    let mut ranked: Vec<(u64, Wavelet, Option<Values>)> = all
         .into_iter()
-        .zip(bits)
-        .map(|(w, b)| (b.unwrap_or(u64::MAX), w))
+        .zip(found)
+        .map(|(w, (b, x))| (b.unwrap_or(u64::MAX), w, x))
         .collect();
     // (A stable sort: equal bits keep their order.)
-    ranked.sort_by_key(|&(b, _)| b);
-    ranked.into_iter().map(|(_, w)| w).collect()
+    ranked.sort_by_key(|&(b, ..)| b);
+    let x = ranked.first_mut().and_then(|r| r.2.take());
+    (ranked.into_iter().map(|(_, w, _)| w).collect(), x)
 }
 
 /// Meshes up to this many vertices are small: at the estimated efforts `auto` codes
@@ -232,6 +328,7 @@ fn best_candidate(
     flat_h: &Header,
     mut canons: Vec<Canonical>,
     first: Wavelet,
+    mut given: Option<[Vec<i64>; 3]>,
 ) -> Result<Option<Candidate>> {
     let effort = Effort::of(opts.effort);
     // Below effort 8, the preferred candidate alone (recovery ranks it first); with
@@ -274,17 +371,19 @@ fn best_candidate(
             let order_len = order.as_ref().map_or(0, Vec::len);
             b.0.size().saturating_sub(order_len + 1)
         });
-        if let Some(mut p) = code_hierarchy(
-            &canon,
+        let coding = Coding {
+            canon: &canon,
             mesh,
-            first,
+            w: first,
             disc,
-            flat_h,
-            effort.modes(),
-            None,
+            header: flat_h,
+            search: effort.modes(),
             bound,
-            &opts.progress,
-        ) {
+            progress: &opts.progress,
+        };
+        // The first candidate's values may be analysed already.
+        let given = given.take().filter(|_| i == 0);
+        if let Some(mut p) = coding.code(None, given) {
             p.order = order;
             if fam_best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
                 fam_best = Some((p, canon));
@@ -330,10 +429,13 @@ pub(crate) fn code_family(
     // At the estimated efforts the transform with the fewest details' bits on the
     // preferred candidate is the one coded (the first on ties), on a small mesh also
     // the runner-up and the first; at the others, the others are ranked by coding them.
+    // (And the analysis of the one coded, where made.)
+    let mut given = None;
     let (first, also) = match (auto && effort.estimated, canons.first()) {
         (true, Some(canon)) => {
             let disc = opts.disc.unwrap_or(DiscTransform::None);
-            let ranked = by_bits(canon, mesh, (first, &listed), disc, known, threads);
+            let (ranked, x) = by_bits(canon, mesh, (first, &listed), disc, known, threads);
+            given = x;
             let mut also = Vec::new();
             if mesh.vertex_count() <= SMALL_MESH {
                 also.extend(ranked.get(1).copied());
@@ -345,7 +447,7 @@ pub(crate) fn code_family(
         }
         _ => (first, Vec::new()),
     };
-    let fam_best = best_candidate(mesh, opts, flat_h, canons, first)?;
+    let fam_best = best_candidate(mesh, opts, flat_h, canons, first, given)?;
     let Some((mut p, canon)) = fam_best else {
         return Ok(None);
     };
@@ -532,4 +634,71 @@ pub(crate) fn par_map<T: Sync, R: Send>(
     out.into_iter()
         .map(|r| r.expect("every item was taken"))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::topology::fixtures::{prism_with_triangles, pseudo};
+
+    /// A coding from values analysed beforehand (their phases then found level by
+    /// level from the synthesised values) is the coding that analyses them itself,
+    /// byte for byte: every Catmull-Clark transform, every mode open and each level
+    /// held to the phased modes 6 and 9 (which read the phases).
+    #[test]
+    fn codings_from_analysed_values_are_the_same() {
+        let mut t = prism_with_triangles();
+        for _ in 0..3 {
+            t = topology::Level::new(&t).unwrap().fine();
+        }
+        let rec = topology::cc::recover_all(t.nv, &t, 16).remove(0);
+        let canon = topology::canonicalise(&rec, true).unwrap();
+        // Values whose predictions' phases vary.
+        let vals: Vec<Vec<i64>> = (0..3).map(|k| pseudo(k + 1, t.nv, 12)).collect();
+        let mesh = Mesh {
+            positions: (0..t.nv)
+                .map(|v| std::array::from_fn(|k| vals[k][v]))
+                .collect(),
+            face_starts: t.starts.clone(),
+            faces: t.idx.clone(),
+            floats: Vec::new(),
+            attributes: Vec::new(),
+        };
+        let q = Quantization::Decimal { decimals: 0 };
+        let header = flat_header(&mesh, &q, &EncodeOptions::default());
+        let d = DiscTransform::None;
+        let levels = canon.levels.len();
+        let mut phased = 0;
+        for w in [
+            Wavelet::Interp6,
+            Wavelet::Interp4,
+            Wavelet::Lazy,
+            Wavelet::Bicubic,
+        ] {
+            for modes in [None, Some(vec![6; levels]), Some(vec![9; levels])] {
+                let coding = Coding {
+                    canon: &canon,
+                    mesh: &mesh,
+                    w,
+                    disc: d,
+                    header: &header,
+                    search: ModeSearch::ALL,
+                    bound: UNBOUNDED,
+                    progress: &Progress::default(),
+                };
+                let itself = coding.code(modes.clone(), None);
+                let given = coding.code(modes.clone(), analysed(&canon, &mesh, w, d));
+                let key =
+                    |p: &Option<Payloads>| p.as_ref().map(|p| (p.base.clone(), p.levels.clone()));
+                assert_eq!(key(&itself), key(&given), "{w:?} {modes:?}");
+                if modes.is_none() {
+                    assert!(itself.is_some(), "{w:?}");
+                }
+                let reads_phases =
+                    |p: &Payloads| p.modes().iter().any(|&m| matches!(m & 15, 6 | 9));
+                phased += itself.as_ref().is_some_and(reads_phases) as usize;
+            }
+        }
+        assert!(phased >= 3, "{phased} codings read phases");
+    }
 }
