@@ -30,9 +30,35 @@ pub struct ValueMap {
 }
 
 fn distinct(positions: &[[i64; 3]], k: usize) -> Vec<i64> {
-    let mut v: Vec<i64> = positions.iter().map(|p| p[k]).collect();
-    v.sort_unstable();
-    v.dedup();
+    let (Some(lo), Some(hi)) = (
+        positions.iter().map(|p| p[k]).min(),
+        positions.iter().map(|p| p[k]).max(),
+    ) else {
+        return Vec::new();
+    };
+    // A range of at most 64 values per position (and any up to 2^22) is marked in a
+    // bit set, one bit per value (at most 8 bytes per position); a wider one sorted.
+    let span = hi.abs_diff(lo);
+    if span >= (positions.len() as u64 * 64).max(1 << 22) {
+        let mut v: Vec<i64> = positions.iter().map(|p| p[k]).collect();
+        v.sort_unstable();
+        v.dedup();
+        return v;
+    }
+    let mut seen = vec![0u64; (span / 64 + 1) as usize];
+    for p in positions {
+        let o = p[k].abs_diff(lo);
+        seen[(o / 64) as usize] |= 1 << (o % 64);
+    }
+    let mut v = Vec::new();
+    for (w, &bits) in seen.iter().enumerate() {
+        let mut b = bits;
+        while b != 0 {
+            let o = w as u64 * 64 + u64::from(b.trailing_zeros());
+            v.push(lo.wrapping_add_unsigned(o));
+            b &= b - 1;
+        }
+    }
     v
 }
 
@@ -300,6 +326,40 @@ impl ValueMap {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The distinct values of an axis, by bit set or by sorting (narrow and wide
+    /// ranges, negative values, extremes), are its values sorted without repeats.
+    #[test]
+    fn distinct_values_are_sorted_without_repeats() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        for (n, width) in [(1, 1), (50, 8), (1000, 12), (1000, 20), (200, 40), (100, 63)] {
+            let pos: Vec<[i64; 3]> = (0..n)
+                .map(|_| {
+                    std::array::from_fn(|_| {
+                        let r = (next() >> (64 - width)) as i64;
+                        r - (1 << (width - 1))
+                    })
+                })
+                .collect();
+            for k in 0..3 {
+                let mut want: Vec<i64> = pos.iter().map(|p| p[k]).collect();
+                want.sort_unstable();
+                want.dedup();
+                assert_eq!(distinct(&pos, k), want, "{n} values of {width} bits");
+            }
+        }
+        let ends = [[i64::MIN, -1, 0], [i64::MAX, 1, 0], [0, -1, 0]];
+        assert_eq!(distinct(&ends, 0), vec![i64::MIN, 0, i64::MAX]);
+        assert_eq!(distinct(&ends, 1), vec![-1, 1]);
+        assert_eq!(distinct(&ends, 2), vec![0]);
+        assert!(distinct(&[], 0).is_empty());
+    }
 
     #[test]
     fn a_sparse_axis_is_mapped_and_comes_back_exactly() {
