@@ -829,33 +829,28 @@ fn encode_inner(
     if opts.value_map == Some(true) {
         return encode_with(&ranked, q, opts, Some(&map), tmpl, None);
     }
-    // The Catmull-Clark candidates, the same for both codings, made once.
-    let (choice, canons, bits, finest) = match map_by_estimate(mesh, &ranked, &map, opts)? {
-        Some(e) => (e.choice, Some(e.canons), e.bits, e.finest),
-        None => (None, None, None, None),
-    };
-    // Each coding with the candidates and its own values' estimate.
-    let recovered = |canons: Option<Vec<Canonical>>, k: usize| {
-        canons.map(|canons| Recovered {
-            canons,
-            bits: bits.map(|(w, b): (Wavelet, [u64; 2])| (w, b[k])),
-            finest: finest.clone(),
+    // Ranks or values by estimate, and the Catmull-Clark candidates the estimate made
+    // (of the faces: the same for either coding).
+    let estimate = map_by_estimate(mesh, &ranked, &map, opts)?;
+    let choice = estimate.as_ref().and_then(|e| e.choice);
+    // The ranks' (k = 0) or the values' (1) coding, with the candidates and its
+    // estimate.
+    let recovered = move |k: usize| {
+        estimate.map(|e| Recovered {
+            canons: e.canons,
+            bits: e.bits.map(|(w, b)| (w, b[k])),
+            finest: e.finest,
         })
     };
     match choice {
-        Some(true) => return encode_with(&ranked, q, opts, Some(&map), tmpl, recovered(canons, 0)),
-        Some(false) => return encode_with(mesh, q, opts, None, tmpl, recovered(canons, 1)),
+        Some(true) => return encode_with(&ranked, q, opts, Some(&map), tmpl, recovered(0)),
+        Some(false) => return encode_with(mesh, q, opts, None, tmpl, recovered(1)),
         None => {}
     }
-    let mapped = encode_with(
-        &ranked,
-        q,
-        opts,
-        Some(&map),
-        tmpl,
-        recovered(canons.clone(), 0),
-    )?;
-    let plain = encode_with(mesh, q, opts, None, tmpl, recovered(canons, 1))?;
+    // Both: the values' coding recovers its own candidates (one hierarchy held at a
+    // time, the memory of large meshes).
+    let mapped = encode_with(&ranked, q, opts, Some(&map), tmpl, recovered(0))?;
+    let plain = encode_with(mesh, q, opts, None, tmpl, None)?;
     Ok(if mapped.bytes.len() < plain.bytes.len() {
         mapped
     } else {
@@ -869,7 +864,6 @@ const MAP_MARGIN: u64 = 3;
 
 /// The Catmull-Clark family's candidates of a mesh made before its coding
 /// ([`cc_candidates`]), with the details' bits of the preferred one where estimated.
-#[derive(Clone)]
 struct Recovered {
     canons: Vec<Canonical>,
     /// A transform and its details' bits ([`search::detail_bits`]) on `canons[0]`.
