@@ -1317,11 +1317,9 @@ mod tests {
     use super::*;
     use crate::topology::fixtures::{prism_with_triangles, pseudo};
 
-    /// `code_hierarchy`'s bound: a coding whose BASE and LEVL payloads fit is the
-    /// unbounded one, byte for byte; one byte less and it is refused. With and without
-    /// a mode plan, for several transforms.
-    #[test]
-    fn bounded_codings_are_the_unbounded_ones_or_none() {
+    /// A prism with triangles refined three times, its hierarchy, pseudo-random 12-bit
+    /// values (whose predictions' phases vary) and a header for them.
+    pub(super) fn refined_prism() -> (Canonical, Mesh, Header) {
         let mut t = prism_with_triangles();
         for _ in 0..3 {
             t = topology::Level::new(&t).unwrap().fine();
@@ -1340,6 +1338,15 @@ mod tests {
         };
         let q = Quantization::Decimal { decimals: 0 };
         let header = flat_header(&mesh, &q, &EncodeOptions::default());
+        (canon, mesh, header)
+    }
+
+    /// `code_hierarchy`'s bound: a coding whose BASE and LEVL payloads fit is the
+    /// unbounded one, byte for byte; one byte less and it is refused. With and without
+    /// a mode plan, for several transforms.
+    #[test]
+    fn bounded_codings_are_the_unbounded_ones_or_none() {
+        let (canon, mesh, header) = refined_prism();
         let d = DiscTransform::None;
         for w in [Wavelet::Bicubic, Wavelet::Interp4, Wavelet::Lazy] {
             let free = code_hierarchy(

@@ -50,16 +50,9 @@ impl Coding<'_> {
     /// gives them): each level's phases are then found from its fine values, which its
     /// synthesis gives back before it is coded (the finest level's are the mesh's).
     fn code(&self, modes: Option<Vec<u8>>, given: Option<[Vec<i64>; 3]>) -> Option<Payloads> {
-        let Coding {
-            canon,
-            mesh,
-            w,
-            disc,
-            header,
-            search,
-            bound,
-            progress,
-        } = *self;
+        let (canon, mesh, w, disc) = (self.canon, self.mesh, self.w, self.disc);
+        let (header, search, bound, progress) =
+            (self.header, self.search, self.bound, self.progress);
         let sqrt2 = canon.family == Family::Sqrt2;
         let scheme = scheme_of(canon, w, disc);
         let (mut x, phases) = match given.filter(|_| !sqrt2) {
@@ -639,7 +632,6 @@ pub(crate) fn par_map<T: Sync, R: Send>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::topology::fixtures::{prism_with_triangles, pseudo};
 
     /// A coding from values analysed beforehand (their phases then found level by
     /// level from the synthesised values) is the coding that analyses them itself,
@@ -647,25 +639,7 @@ mod tests {
     /// held to the phased modes 6 and 9 (which read the phases).
     #[test]
     fn codings_from_analysed_values_are_the_same() {
-        let mut t = prism_with_triangles();
-        for _ in 0..3 {
-            t = topology::Level::new(&t).unwrap().fine();
-        }
-        let rec = topology::cc::recover_all(t.nv, &t, 16).remove(0);
-        let canon = topology::canonicalise(&rec, true).unwrap();
-        // Values whose predictions' phases vary.
-        let vals: Vec<Vec<i64>> = (0..3).map(|k| pseudo(k + 1, t.nv, 12)).collect();
-        let mesh = Mesh {
-            positions: (0..t.nv)
-                .map(|v| std::array::from_fn(|k| vals[k][v]))
-                .collect(),
-            face_starts: t.starts.clone(),
-            faces: t.idx.clone(),
-            floats: Vec::new(),
-            attributes: Vec::new(),
-        };
-        let q = Quantization::Decimal { decimals: 0 };
-        let header = flat_header(&mesh, &q, &EncodeOptions::default());
+        let (canon, mesh, header) = super::super::tests::refined_prism();
         let d = DiscTransform::None;
         let levels = canon.levels.len();
         let mut phased = 0;
