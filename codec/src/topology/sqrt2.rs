@@ -439,7 +439,7 @@ pub fn recover(topo: &Topo, max_levels: usize) -> Option<Recovered> {
 /// same sqrt(2) step: which one a file was made from shows in its order only).
 pub fn recover_candidates(topo: &Topo, max_levels: usize, alternatives: bool) -> Vec<Recovered> {
     let n = topo.nv;
-    if topo.nf() == 0 || !topo.all_quads() {
+    if topo.nf() == 0 || !topo.all_quads() || few_quads_on_an_edge(topo) {
         return Vec::new();
     }
     let mut comps = crate::topology::cc::components(n, topo);
@@ -468,6 +468,22 @@ pub fn recover_candidates(topo: &Topo, max_levels: usize, alternatives: bool) ->
         out.push(merge(n, &comps, &pick(true), depth));
     }
     out
+}
+
+/// Whether some face edge joins two vertices that are each in one or two quads (a mesh
+/// with a boundary refined twice or more): then no coarsening is found. A face edge's
+/// ends take the two colours ([`colour`]; else there is none), and a coarsening fails
+/// at a face point in fewer than three quads ([`coarsen`]), on either side.
+fn few_quads_on_an_edge(topo: &Topo) -> bool {
+    let mut quads = vec![0u8; topo.nv];
+    for &v in &topo.idx {
+        quads[v as usize] = quads[v as usize].saturating_add(1);
+    }
+    let few = |v: u32| matches!(quads[v as usize], 1 | 2);
+    (0..topo.nf()).any(|f| {
+        let face = topo.face(f);
+        (0..face.len()).any(|i| few(face[i]) && few(face[(i + 1) % face.len()]))
+    })
 }
 
 /// The hierarchy of the components' `chains`, cut to `depth` steps, in input numbers.
@@ -595,6 +611,53 @@ mod tests {
             }
         }
         Some((faces, points))
+    }
+
+    /// Where a face edge joins two vertices each in one or two quads, the search finds
+    /// no coarsening in some component (so [`recover_candidates`] may stop before it):
+    /// on sqrt(2) meshes with holes cut and on grids; closed ones are not stopped.
+    #[test]
+    fn few_quads_on_an_edge_leave_nothing_to_find() {
+        let finds_nothing = |t: &Topo| {
+            crate::topology::cc::components(t.nv, t)
+                .into_iter()
+                .any(|(verts, mut c)| {
+                    c.nv = verts.len();
+                    search(&c, 16, 2).is_empty()
+                })
+        };
+        let (mut stopped, mut closed) = (0, 0);
+        let mut t = prism_with_triangles();
+        for _ in 1..=4 {
+            t = crate::topology::sqrt2::fine(&Level::new(&t).unwrap());
+            assert!(!few_quads_on_an_edge(&t));
+            assert!(!finds_nothing(&t));
+            closed += 1;
+            // Holes: every face whose index is a multiple of `gap` left out.
+            for gap in [3, 7, 50] {
+                let mut open = Topo::new(t.nv);
+                for f in (0..t.nf()).filter(|f| f % gap != 0) {
+                    open.push(t.face(f));
+                }
+                if few_quads_on_an_edge(&open) {
+                    assert!(finds_nothing(&open), "gap {gap}");
+                    stopped += 1;
+                }
+            }
+        }
+        for n in [3usize, 5, 9, 17] {
+            let mut grid = Topo::new(n * n);
+            for r in 0..n - 1 {
+                for c in 0..n - 1 {
+                    let v = |r: usize, c: usize| (r * n + c) as u32;
+                    grid.push(&[v(r, c), v(r, c + 1), v(r + 1, c + 1), v(r + 1, c)]);
+                }
+            }
+            assert!(few_quads_on_an_edge(&grid));
+            assert!(finds_nothing(&grid), "{n} x {n} grid");
+            stopped += 1;
+        }
+        assert!(stopped > 4 && closed > 0, "{stopped} stopped");
     }
 
     /// The array-based coarsening agrees with the reference on sqrt(2) meshes, on their
