@@ -73,7 +73,9 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
         Some(g) => (&g.canon, &g.pos, &g.finest),
         None => (target.canon, target.pos, target.finest),
     };
-    canon.levels.last()?;
+    if canon.levels.is_empty() {
+        return None;
+    }
     let fine = floats(pos);
     let mut sets = None;
     if screen {

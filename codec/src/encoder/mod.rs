@@ -904,7 +904,8 @@ fn map_by_estimate(
         TransformChoice::Fixed(w) if !w.is_sqrt2() => w,
         _ => return Ok(None),
     };
-    if !Effort::of(opts.effort).map_estimated || opts.max_levels == 0 {
+    let effort = Effort::of(opts.effort);
+    if !effort.map_estimated || opts.max_levels == 0 {
         return Ok(None);
     }
     opts.progress.report(Stage::Recovering);
@@ -937,7 +938,7 @@ fn map_by_estimate(
     // The fit codes values, not ranks: ranks are chosen alone only where the fit's
     // screen turns the values away (the finest level it makes is kept for the coding's
     // own screen).
-    let fits = opts.transform == TransformChoice::Auto && Effort::of(opts.effort).fit;
+    let fits = opts.transform == TransformChoice::Auto && effort.fit;
     if let (Some(true), true, Some(last)) = (found.choice, fits, canon.levels.last()) {
         let finest = last.next();
         if !fitting::turned_away(canon, &canonical_positions(mesh, canon), &finest) {

@@ -49,7 +49,7 @@ impl Coding<'_> {
     /// beforehand where `given` (a Catmull-Clark or polar hierarchy's, as [`analysed`]
     /// gives them): each level's phases are then found from its fine values, which its
     /// synthesis gives back before it is coded (the finest level's are the mesh's).
-    fn code(&self, modes: Option<Vec<u8>>, given: Option<[Vec<i64>; 3]>) -> Option<Payloads> {
+    fn code(&self, modes: Option<Vec<u8>>, given: Option<Values>) -> Option<Payloads> {
         let (canon, mesh, w, disc) = (self.canon, self.mesh, self.w, self.disc);
         let (header, search, bound, progress) =
             (self.header, self.search, self.bound, self.progress);
@@ -70,11 +70,13 @@ impl Coding<'_> {
         // Bytes the levels may take: a coding over the bound is not wanted.
         let mut room = bound.checked_sub(base_bytes.len())?;
         let mut level_bytes = Vec::with_capacity(canon.levels.len());
-        // Level by level, coarse first, as the decoder goes: `x[k][..nv]` holds the level's
-        // coarse values as the decoder has them when it reads the level's details, and the
-        // level, once coded, is synthesised in place into the next one's (its details are
-        // then no longer wanted). No copy of any level's coarse values is kept (the memory of
-        // large meshes).
+        // Level by level, coarse first, as the decoder goes: `x[k][..nv]` holds the
+        // level's coarse values as the decoder has them when it reads the level's
+        // details, and the level, once coded, is synthesised in place into the next
+        // one's (its details are then no longer wanted). No copy of any level's coarse
+        // values is kept (the memory of large meshes), but for one level at a time
+        // where the values were analysed beforehand: its phases need its fine values
+        // before it is coded.
         let last = canon.levels.len().saturating_sub(1);
         for (i, level) in canon.levels.iter().enumerate() {
             progress.report(Stage::Level {
@@ -90,7 +92,7 @@ impl Coding<'_> {
                 .then(|| LevelTransform::new(&scheme, level, i, &x, false));
             let targets = t.as_ref().and_then(|t| t.tangent_targets(level, &x));
             // The level's coarse values and details, where `x` is already synthesised.
-            let mut before: Option<[Vec<i64>; 3]> = None;
+            let mut before: Option<Values> = None;
             let found = match (&phases, &t) {
                 (Some(_), _) | (None, None) => None,
                 (None, Some(t)) => t.phaser(level).map(|p| {
@@ -209,12 +211,7 @@ type Values = [Vec<i64>; 3];
 
 /// A hierarchy's values analysed with `w` (its phases not found: [`analyse_all`]);
 /// `None` if a lifted value leaves the supported range.
-fn analysed(
-    canon: &Canonical,
-    mesh: &Mesh,
-    w: Wavelet,
-    disc: DiscTransform,
-) -> Option<[Vec<i64>; 3]> {
+fn analysed(canon: &Canonical, mesh: &Mesh, w: Wavelet, disc: DiscTransform) -> Option<Values> {
     analyse_all(canon, mesh, &scheme_of(canon, w, disc), false).map(|(x, _)| x)
 }
 
@@ -235,7 +232,7 @@ fn by_bits(
     disc: DiscTransform,
     known: Option<(Wavelet, u64)>,
     threads: usize,
-) -> (Vec<Wavelet>, Option<[Vec<i64>; 3]>) {
+) -> (Vec<Wavelet>, Option<Values>) {
     let all: Vec<Wavelet> = std::iter::once(first)
         .chain(others.iter().copied())
         .collect();
@@ -321,7 +318,7 @@ fn best_candidate(
     flat_h: &Header,
     mut canons: Vec<Canonical>,
     first: Wavelet,
-    mut given: Option<[Vec<i64>; 3]>,
+    mut given: Option<Values>,
 ) -> Result<Option<Candidate>> {
     let effort = Effort::of(opts.effort);
     // Below effort 8, the preferred candidate alone (recovery ranks it first); with
@@ -668,8 +665,11 @@ mod tests {
                 if modes.is_none() {
                     assert!(itself.is_some(), "{w:?}");
                 }
-                let reads_phases =
-                    |p: &Payloads| p.modes().iter().any(|&m| matches!(m & 15, 6 | 9));
+                let reads_phases = |p: &Payloads| {
+                    p.levels
+                        .iter()
+                        .any(|l| matches!(levl::mode_of(l), Some(6 | 9)))
+                };
                 phased += itself.as_ref().is_some_and(reads_phases) as usize;
             }
         }

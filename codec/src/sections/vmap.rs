@@ -326,27 +326,15 @@ impl ValueMap {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::topology::fixtures::pseudo;
 
     /// The distinct values of an axis, by bit set or by sorting (narrow and wide
     /// ranges, negative values, extremes), are its values sorted without repeats.
     #[test]
     fn distinct_values_are_sorted_without_repeats() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
-        for (n, width) in [(1, 1), (50, 8), (1000, 12), (1000, 20), (200, 40), (100, 63)] {
-            let pos: Vec<[i64; 3]> = (0..n)
-                .map(|_| {
-                    std::array::from_fn(|_| {
-                        let r = (next() >> (64 - width)) as i64;
-                        r - (1 << (width - 1))
-                    })
-                })
-                .collect();
+        for (n, width) in [(1, 1), (50, 8), (1000, 12), (1000, 20), (200, 40), (100, 44)] {
+            let axes: Vec<Vec<i64>> = (0..3).map(|k| pseudo(k + 1, n, width)).collect();
+            let pos: Vec<[i64; 3]> = (0..n).map(|i| std::array::from_fn(|k| axes[k][i])).collect();
             for k in 0..3 {
                 let mut want: Vec<i64> = pos.iter().map(|p| p[k]).collect();
                 want.sort_unstable();

@@ -251,14 +251,11 @@ impl Grouped {
 fn coarsen(t: &Topo, colours: &[u8], side: u8) -> Option<Coarse> {
     // A face point is in three quads or more (below, its polygon would have fewer
     // sides): checked first, as a mesh with a boundary (a grid) fails here.
-    let mut quads = vec![0u8; t.nv];
-    for &v in t.idx.iter().filter(|&&v| colours[v as usize] == side) {
-        quads[v as usize] = quads[v as usize].saturating_add(1);
-    }
+    let quads = quads_per_vertex(t);
     if quads
         .iter()
         .zip(colours)
-        .any(|(&k, &c)| c == side && k > 0 && k < 3)
+        .any(|(&k, &c)| c == side && matches!(k, 1 | 2))
     {
         return None;
     }
@@ -475,15 +472,22 @@ pub fn recover_candidates(topo: &Topo, max_levels: usize, alternatives: bool) ->
 /// ends take the two colours ([`colour`]; else there is none), and a coarsening fails
 /// at a face point in fewer than three quads ([`coarsen`]), on either side.
 fn few_quads_on_an_edge(topo: &Topo) -> bool {
-    let mut quads = vec![0u8; topo.nv];
-    for &v in &topo.idx {
-        quads[v as usize] = quads[v as usize].saturating_add(1);
-    }
+    let quads = quads_per_vertex(topo);
     let few = |v: u32| matches!(quads[v as usize], 1 | 2);
     (0..topo.nf()).any(|f| {
         let face = topo.face(f);
         (0..face.len()).any(|i| few(face[i]) && few(face[(i + 1) % face.len()]))
     })
+}
+
+/// Per vertex, the faces (of an all-quad mesh: quads) it is a corner of, counted up to
+/// 255.
+fn quads_per_vertex(topo: &Topo) -> Vec<u8> {
+    let mut quads = vec![0u8; topo.nv];
+    for &v in &topo.idx {
+        quads[v as usize] = quads[v as usize].saturating_add(1);
+    }
+    quads
 }
 
 /// The hierarchy of the components' `chains`, cut to `depth` steps, in input numbers.
@@ -553,7 +557,7 @@ pub fn canonicalise(mut rec: Recovered, input: &Topo, gates: bool) -> Result<Can
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::topology::fixtures::{prism_with_triangles, shuffle};
+    use crate::topology::fixtures::{prism_with_triangles, quad_grid, shuffle};
     use std::collections::HashMap;
 
     /// The coarse faces and their points of a coarsening.
@@ -645,14 +649,8 @@ mod tests {
                 }
             }
         }
-        for n in [3usize, 5, 9, 17] {
-            let mut grid = Topo::new(n * n);
-            for r in 0..n - 1 {
-                for c in 0..n - 1 {
-                    let v = |r: usize, c: usize| (r * n + c) as u32;
-                    grid.push(&[v(r, c), v(r, c + 1), v(r + 1, c + 1), v(r + 1, c)]);
-                }
-            }
+        for n in [3, 5, 9, 17] {
+            let grid = quad_grid(n);
             assert!(few_quads_on_an_edge(&grid));
             assert!(finds_nothing(&grid), "{n} x {n} grid");
             stopped += 1;
