@@ -625,9 +625,7 @@ pub(crate) mod fixtures {
             .collect()
     }
 
-    /// A closed pentagonal prism with one side split into two triangles: a pentagon,
-    /// triangles and quads, vertices of valence 3, 4 and 5.
-    /// An n x n grid of quads over n^2 vertices, row-major.
+    /// An (n - 1) x (n - 1) grid of quads over n^2 vertices, row-major.
     pub(crate) fn quad_grid(n: u32) -> Topo {
         let mut t = Topo::new((n * n) as usize);
         for y in 0..n - 1 {
@@ -639,6 +637,8 @@ pub(crate) mod fixtures {
         t
     }
 
+    /// A closed pentagonal prism with one side split into two triangles: a pentagon,
+    /// triangles and quads, vertices of valence 3, 4 and 5.
     pub(crate) fn prism_with_triangles() -> Topo {
         let mut t = Topo::new(10);
         t.push(&[4, 3, 2, 1, 0]);
