@@ -330,6 +330,52 @@ fn each_rule_set_is_found_and_its_surfaces_code_to_near_zero_residuals() {
 }
 
 #[test]
+fn a_vertex_between_two_faces_is_smooth() {
+    // A cube whose top face is split through a middle vertex of two edges into two
+    // quads (as on Blender's Suzanne): OpenSubdiv refines that vertex by the smooth
+    // rule and places it on the limit by the smooth mask. The corpus crate's own
+    // float evaluation of those rules, rounded, codes to near-zero residuals and
+    // decodes exactly.
+    let mut control = subwave_corpus::PolyMesh {
+        positions: vec![
+            [-1.0, -1.0, -1.0],
+            [1.0, -1.0, -1.0],
+            [1.0, 1.0, -1.0],
+            [-1.0, 1.0, -1.0],
+            [-1.0, -1.0, 1.0],
+            [1.0, -1.0, 1.0],
+            [1.0, 1.0, 1.0],
+            [-1.0, 1.0, 1.0],
+            [0.1, -0.2, 1.3],
+        ],
+        faces: vec![
+            vec![0, 3, 2, 1],
+            vec![0, 1, 5, 4],
+            vec![1, 2, 6, 5],
+            vec![2, 3, 7, 6],
+            vec![3, 0, 4, 7],
+            vec![4, 5, 6, 8],
+            vec![6, 7, 4, 8],
+        ],
+    };
+    control.displace(0.2, 0.0, &mut Rng::new(2));
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    for limit in [false, true] {
+        let mesh = common::to_mesh(&control.subdivision_surface(4, &[], limit), 1e5);
+        let enc = encode(&mesh, &q, TransformChoice::Fit);
+        let what = format!("limit {limit}");
+        match enc.header.transform {
+            Transform::Fit { limit: l, .. } => assert_eq!(l, limit, "{what}"),
+            t => panic!("{what}: expected a fit, got {}", t.name()),
+        }
+        assert_exact(&enc.bytes, &mesh, &what);
+        let n = mesh.vertex_count();
+        let r = residual_bytes(&enc.bytes);
+        assert!(8 * r < n, "{what}: {r} B of residuals for {n} vertices");
+    }
+}
+
+#[test]
 fn semi_sharp_creases_are_found_with_their_sharpness() {
     // Limit surfaces made by the corpus crate's own float evaluation of OpenSubdiv's
     // semi-sharp rules: the prism's rims at Blender's crease 0.3, 0.5 and 0.8

@@ -338,7 +338,7 @@ impl PolyMesh {
                     [0, 1, 2].map(|k| (a[k] + 4.0 * p[k] + b[k]) / 6.0)
                 } else if hard.len() <= 1
                     && !boundary
-                    && n >= 3
+                    && n >= 2
                     && opposite[v].len() == n
                     && opposite[v].iter().all(Option::is_some)
                 {

@@ -134,8 +134,9 @@ impl Hard<'_> {
 enum VertexRule {
     /// Exactly two sharp edges (boundary or creased), to these vertices.
     Crease([u32; 2]),
-    /// No boundary edge, at most one sharp edge (a dart), at least three edges and as
-    /// many face corners.
+    /// No boundary edge, at most one sharp edge (a dart), at least two edges (a vertex
+    /// between two faces only is smooth, as OpenSubdiv refines it) and as many face
+    /// corners.
     Inside,
     /// Anything else (a corner): the value is kept.
     Kept,
@@ -164,7 +165,7 @@ fn vertex_rule(level: &Level, v: usize, hard: Hard<'_>, child: bool) -> VertexRu
     }
     match count {
         2 => VertexRule::Crease(ends),
-        0 | 1 if !boundary && n >= 3 && level.v_faces(v).len() == n => VertexRule::Inside,
+        0 | 1 if !boundary && n >= 2 && level.v_faces(v).len() == n => VertexRule::Inside,
         _ => VertexRule::Kept,
     }
 }
