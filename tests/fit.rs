@@ -549,6 +549,34 @@ fn kept_boundary_corners_are_found() {
     }
 }
 
+#[test]
+fn a_sheet_is_fitted_on_its_own_control_mesh() {
+    // A 4 x 4 sheet of quads, bent, refined four times on the limit with either
+    // boundary rule (Blender's "Keep Corners" and "All"): a 65 x 65 grid, which the
+    // recovery takes for one quad refined six times. The fit is tried with levels
+    // left out and finds the 4 x 4 control mesh: near-zero residuals, exact.
+    let mut control = subwave_corpus::open_grid(4, 4);
+    for p in &mut control.positions {
+        p[2] = 0.3 * (2.0 * p[0]).sin() * (1.5 * p[1]).cos();
+    }
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    for kept in [Kept::Corners, Kept::Nothing] {
+        let surface = control.subdivision_surface_with(4, &[], true, kept);
+        let mesh = common::to_mesh(&surface, 1e6);
+        let enc = encode(&mesh, &q, TransformChoice::Auto);
+        let what = format!("{kept:?}");
+        assert!(
+            matches!(enc.header.transform, Transform::Fit { limit: true, .. }),
+            "{what}: auto chose {}",
+            enc.header.transform.name()
+        );
+        assert_eq!(enc.header.levels, 4, "{what}");
+        assert_exact(&enc.bytes, &mesh, &what);
+        let (n, r) = (mesh.vertex_count(), residual_bytes(&enc.bytes));
+        assert!(8 * r < n, "{what}: {r} B of residuals for {n} vertices");
+    }
+}
+
 /// A fit container whose header was changed to other rules (`what`) decodes to another
 /// surface than `mesh`, or its residuals, coded for other predictions, run out.
 fn assert_other_surface(bytes: &[u8], mesh: &Mesh, what: &str) {

@@ -193,6 +193,26 @@ pub(crate) fn turned_away(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level
     screened(canon, pos, finest, &floats(pos)) == Screen::Away
 }
 
+/// Whether hierarchy `canon`'s finest values `pos` are near a subdivision of its base:
+/// the finest level a plain refinement (small defect), or near the limit surface of a
+/// control mesh (one short least-squares fit). The screen of a hierarchy the fit has
+/// already seen deeper, where [`screened`]'s roughness is the same (the runs lie in
+/// the same finest faces) but the control mesh is finer.
+pub(crate) fn near_subdivision(canon: &Canonical, pos: &[Vec<i64>; 3]) -> bool {
+    let Some(last) = canon.levels.last() else {
+        return false;
+    };
+    let defect = pos
+        .iter()
+        .map(|x| fit::defect(last, x).unwrap_or(f64::MAX))
+        .sum::<f64>()
+        / 3.0;
+    if defect <= FIT_SCREEN {
+        return true;
+    }
+    near_limit(&canon.levels, &last.next(), &floats(pos))
+}
+
 /// Values per axis as points of floats.
 fn floats(pos: &[Vec<i64>; 3]) -> Vec<[f64; 3]> {
     (0..pos[0].len())

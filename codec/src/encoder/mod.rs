@@ -1059,11 +1059,26 @@ fn best_hierarchy(
             TransformChoice::Fit => true,
             TransformChoice::Fixed(_) => false,
         };
+        // The preferred candidate's levels and fit where its base mesh has no
+        // extraordinary vertex and the fit was tried but missed (residuals of a bit
+        // per vertex or more).
+        let mut regular_fit = None;
         for (i, canon) in canons.iter_mut().enumerate().filter(|_| try_fit) {
             canon.unstow()?;
             let pos = canonical_positions(mesh, canon);
             let made = finest.take().filter(|_| i == 0);
-            if let Some(mut p) = code_fit(canon, &pos, flat_h, &FIT_BITS, !fit_only, made) {
+            let fitted = code_fit(canon, &pos, flat_h, &FIT_BITS, !fit_only, made);
+            let missed = fitted.as_ref().filter(|p| {
+                p.levels
+                    .last()
+                    .is_some_and(|r| 8 * r.len() >= mesh.vertex_count())
+            });
+            if let (0, Some(p), Some(base)) = (i, missed, canon.levels.first()) {
+                if canon.poles.is_empty() && no_extraordinary(base) {
+                    regular_fit = Some((canon.levels.len(), p.size()));
+                }
+            }
+            if let Some(mut p) = fitted {
                 if opts.keep_order {
                     p.order = Some(hierarchy_order(mesh, canon)?);
                 }
@@ -1073,6 +1088,44 @@ fn best_hierarchy(
             }
             if i > 0 {
                 canon.stow();
+            }
+        }
+        // A base mesh without extraordinary vertices refines from a coarser one as
+        // far as its grid allows, so the recovery finds a base coarser than a
+        // modelling tool's control mesh (a subdivided plane or torus: a 4 x 4 sheet
+        // refined four times is one quad refined six): the fit is tried again with
+        // the first levels left out, the control mesh a level finer each time, on
+        // the hierarchies near a subdivision, until one codes no smaller than the
+        // one above (past the control mesh's depth the fits only grow).
+        if let Some((levels, mut above)) = regular_fit {
+            for keep in (levels.saturating_sub(SHALLOWER)..levels)
+                .rev()
+                .filter(|&k| k > 0)
+            {
+                let mut size: Option<usize> = None;
+                for mut canon in shallow_candidates(mesh, opts, keep)? {
+                    canon.unstow()?;
+                    let pos = canonical_positions(mesh, &canon);
+                    if !fit_only && !fitting::near_subdivision(&canon, &pos) {
+                        continue;
+                    }
+                    let Some(mut p) = code_fit(&canon, &pos, flat_h, &FIT_BITS, !fit_only, None)
+                    else {
+                        continue;
+                    };
+                    size = Some(size.map_or(p.size(), |s| s.min(p.size())));
+                    if best.as_ref().is_none_or(|b| p.size() < b.0.size()) {
+                        if opts.keep_order {
+                            p.order = Some(hierarchy_order(mesh, &canon)?);
+                        }
+                        best = Some((p, canon.order.clone()));
+                    }
+                }
+                match size {
+                    Some(s) if s >= above => break,
+                    Some(s) => above = s,
+                    None => {}
+                }
             }
         }
         // A mesh and its dual can both be the base: compare them with one transform.
@@ -1175,6 +1228,35 @@ fn cc_candidates(mesh: &Mesh, opts: &EncodeOptions) -> Result<Vec<Canonical>> {
         let polar = (canons.len() - cc_count).min(topology::polar::KEEP);
         canons = by_order_cost(mesh, canons)?;
         canons.truncate(cc_count + polar);
+    }
+    Ok(canons)
+}
+
+/// Levels left out, at most, where the fit is tried on a shallower hierarchy of a base
+/// mesh without extraordinary vertices ([`best_hierarchy`]).
+const SHALLOWER: usize = 3;
+
+/// Whether every vertex of `base` is regular: four edges inside, at most three on a
+/// boundary (a grid's vertices, of any depth).
+fn no_extraordinary(base: &Level) -> bool {
+    (0..base.nv).all(|v| {
+        let edges = base.v_edges(v);
+        match edges.iter().any(|&e| base.is_boundary(e as usize)) {
+            false => edges.len() == 4,
+            true => edges.len() <= 3,
+        }
+    })
+}
+
+/// The Catmull-Clark candidates of `mesh` of exactly `levels` levels (as
+/// [`cc_candidates`], without polar ones): the deepest hierarchies' last `levels`.
+fn shallow_candidates(mesh: &Mesh, opts: &EncodeOptions, levels: usize) -> Result<Vec<Canonical>> {
+    let topo = input_topo(mesh);
+    let mut canons = Vec::new();
+    for rec in topology::cc::recover_candidates(mesh.vertex_count(), &topo, levels, opts.keep_order)
+    {
+        canons.push(topology::canonicalise(&rec, !opts.keep_order)?);
+        canons.iter_mut().skip(1).for_each(Canonical::stow);
     }
     Ok(canons)
 }
