@@ -446,6 +446,92 @@ fn semi_sharp_creases_are_found_with_their_sharpness() {
 }
 
 #[test]
+fn auto_tries_the_fit_on_small_smooth_surfaces_with_semi_sharp_creases() {
+    // The prism's rims at crease 0.5 (sharpness 2.5): too small and too creased for
+    // the roughness screen and the two-level fit, but its finest faces meet at a
+    // few degrees at their median, so `auto` tries every rule set on a mesh this
+    // small and codes the fit with its creases.
+    let (control, rims) = prism_and_rims();
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    let edges: Vec<([u32; 2], f64)> = rims.iter().map(|&e| (e, 2.5)).collect();
+    let surface = control.subdivision_surface_sharp(4, &edges, &[], true, Kept::Nothing);
+    let mesh = common::to_mesh(&surface, 1e5);
+    let enc = encode(&mesh, &q, TransformChoice::Auto);
+    assert!(
+        matches!(enc.header.transform, Transform::Fit { limit: true, .. }),
+        "auto chose {}",
+        enc.header.transform.name()
+    );
+    assert_eq!(enc.header.creases.len(), 10);
+    assert_exact(&enc.bytes, &mesh, "semi-sharp prism");
+}
+
+#[test]
+fn end_cap_points_do_not_pull_the_fit() {
+    // Blender's default quality evaluates patches beside extraordinary vertices from
+    // the fourth level on, not the limit surface: a few points off by thousands of
+    // grid units. Here the prism's limit surface, four levels, with the points of
+    // the last level inside the level-3 faces beside extraordinary vertices (their
+    // face points and the edge points at the extraordinary vertex) moved so. The fit leaves them out of its least squares: the control mesh is the
+    // prism's, so every other vertex's residual is the rounding's, and the moved
+    // points cost what their offsets do.
+    let (control, _) = prism_and_rims();
+    let three = control.subdivision_surface(3, &[], false);
+    let mut valence = vec![0usize; three.positions.len()];
+    for f in &three.faces {
+        for &v in f {
+            valence[v as usize] += 1;
+        }
+    }
+    let mut surface = control.subdivision_surface(4, &[], true);
+    // Blender's order: the level-3 vertices, one per level-3 edge (numbered as the
+    // faces first meet them), one per face.
+    let mut edge_ids: std::collections::HashMap<(u32, u32), usize> = Default::default();
+    for f in &three.faces {
+        for i in 0..f.len() {
+            let (a, b) = (f[i], f[(i + 1) % f.len()]);
+            let n = edge_ids.len();
+            edge_ids.entry((a.min(b), a.max(b))).or_insert(n);
+        }
+    }
+    let nv3 = three.positions.len();
+    let first_face_point = nv3 + edge_ids.len();
+    let mut rng = Rng::new(9);
+    let mut shift = |p: &mut [f64; 3]| {
+        for x in p.iter_mut() {
+            *x += 0.05 * (rng.unit() - 0.5);
+        }
+    };
+    let mut moved = 0;
+    for (f, face) in three.faces.iter().enumerate() {
+        let Some(&ev) = face.iter().find(|&&v| valence[v as usize] != 4) else {
+            continue;
+        };
+        shift(&mut surface.positions[first_face_point + f]);
+        moved += 1;
+        // And the edge points of the face's two edges at the extraordinary vertex.
+        for i in 0..face.len() {
+            let (a, b) = (face[i], face[(i + 1) % face.len()]);
+            if a == ev || b == ev {
+                shift(&mut surface.positions[nv3 + edge_ids[&(a.min(b), a.max(b))]]);
+                moved += 1;
+            }
+        }
+    }
+    assert!(moved > 10, "{moved} points moved");
+    let mesh = common::to_mesh(&surface, 1e5);
+    let enc = limit_fit(&mesh);
+    assert_exact(&enc.bytes, &mesh, "end caps");
+    let (n, r) = (mesh.vertex_count(), residual_bytes(&enc.bytes));
+    // About 3 x 12 bits per moved point, and the rounding's bit or less elsewhere
+    // (pulled by them, the fit left 1,439 B here).
+    assert!(
+        r < 5 * moved + n / 8,
+        "{r} B of residuals for {n} vertices, {moved} moved"
+    );
+}
+
+#[test]
 fn auto_finds_a_creased_limit_surface() {
     // A folded sheet (a tent along a column; 5 columns, so that its hierarchy's base
     // is this grid), its fold creased (infinitely sharp, and at Blender's crease 0.5,

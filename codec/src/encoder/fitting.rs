@@ -99,33 +99,43 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
         }
     };
     let sets = sets.unwrap_or_else(|| rule_sets(canon, finest, pos));
-    // The smooth rule sets' sizes and the limit surface's distances, for the search
-    // for semi-sharp creases.
-    let mut smooth: Vec<(usize, bool)> = Vec::new();
-    let mut distances = None;
-    for rules in &sets {
-        let op = fit::Operator::new(&canon.levels, finest, rules);
-        let control = robust_fit(&op, &fine, nb);
-        let plain = rules.sharpness.is_empty() && !rules.corners && !rules.linear;
-        if plain && rules.limit {
-            distances = Some((distances_from(&op, &control, &fine), control.clone()));
-        }
-        drop(op);
-        if let Some(p) = code_rules(target, header, bits, rules, &control) {
-            if plain {
-                smooth.push((p.size(), rules.limit));
-            }
-            keep(p);
-        }
+    // Every vertex counts; then, where the hierarchy has them, without the points of
+    // Blender's end-cap patches (the smaller coding is kept: on a surface that is the
+    // limit everywhere they carry its creases' sharpness).
+    let caps = end_caps(canon, finest);
+    let mut counts = vec![vec![false; finest.nv]];
+    if caps.contains(&true) {
+        counts.push(caps);
     }
-    let limit = smooth.iter().min().is_none_or(|&(_, l)| l);
-    let found = distances.and_then(|(d, c)| semi_sharp(canon, finest, pos, &fine, &d, &c, limit));
-    if let Some(rules) = found.filter(|r| !sets.contains(r)) {
-        let op = fit::Operator::new(&canon.levels, finest, &rules);
-        let control = robust_fit(&op, &fine, nb);
-        drop(op);
-        if let Some(p) = code_rules(target, header, bits, &rules, &control) {
-            keep(p);
+    for caps in &counts {
+        // The smooth rule sets' sizes and the limit surface's distances, for the
+        // search for semi-sharp creases.
+        let mut smooth: Vec<(usize, bool)> = Vec::new();
+        let mut distances = None;
+        for rules in &sets {
+            let op = fit::Operator::new(&canon.levels, finest, rules);
+            let control = robust_fit(&op, &fine, nb, caps);
+            let plain = rules.sharpness.is_empty() && !rules.corners && !rules.linear;
+            if plain && rules.limit {
+                distances = Some((distances_from(&op, &control, &fine), control.clone()));
+            }
+            drop(op);
+            if let Some(p) = code_rules(target, header, bits, rules, &control) {
+                if plain {
+                    smooth.push((p.size(), rules.limit));
+                }
+                keep(p);
+            }
+        }
+        let limit = smooth.iter().min().is_none_or(|&(_, l)| l);
+        let found = distances.and_then(|d| semi_sharp(canon, finest, pos, &fine, &d, limit, caps));
+        if let Some(rules) = found.filter(|r| !sets.contains(r)) {
+            let op = fit::Operator::new(&canon.levels, finest, &rules);
+            let control = robust_fit(&op, &fine, nb, caps);
+            drop(op);
+            if let Some(p) = code_rules(target, header, bits, &rules, &control) {
+                keep(p);
+            }
         }
     }
     best
@@ -172,11 +182,72 @@ fn screened(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level, fine: &[[f64
             mean(&|x| runs.as_ref()?.roughness(x)) > ROUGH_SCREEN
                 && (chart || !near_limit(&canon.levels[..2], two, &fine[..two.nv]))
         };
+    // A smooth surface of few vertices: creases (semi-sharp, or at vertices) break
+    // the runs and the two-level fit but fold few finest edges, so every rule set is
+    // tried where the finest faces meet at a small angle at their median (detail
+    // folds most by far more; a flat chart keeps its UV rule).
+    let far =
+        far && (chart || finest.nv > SMOOTH_VERTICES || median_fold(finest, pos) > SMOOTH_FOLD);
     match (far, chart) {
         (false, _) => Screen::Open,
         (true, true) => Screen::Chart,
         (true, false) => Screen::Away,
     }
+}
+
+/// Finest vertices up to which a smooth surface is screened by its folds alone
+/// ([`screened`]): the fit's whole search there takes about a second at most.
+const SMOOTH_VERTICES: usize = 16_384;
+
+/// The median fold (radians) at the finest edges ([`median_fold`]) at or below which a
+/// small mesh is smooth enough for the fit: Blender's creased subdivision surfaces of
+/// a few thousand vertices fold by 0.05 to 0.09, detail (displaced, scanned) by 0.15
+/// and more.
+const SMOOTH_FOLD: f64 = 0.1;
+
+/// The median angle (radians) between the finest faces at the finest edges inside the
+/// mesh (at most every `step`-th edge, about 20,000).
+fn median_fold(finest: &Level, pos: &[Vec<i64>; 3]) -> f64 {
+    let step = (finest.ne() / 20_000).max(1);
+    let mut a: Vec<f64> = (0..finest.ne())
+        .step_by(step)
+        .filter(|&h| !finest.is_boundary(h))
+        .filter_map(|h| {
+            let [f0, f1] = finest.edge_faces[h];
+            fold(face_normal(finest, pos, f0), face_normal(finest, pos, f1))
+        })
+        .collect();
+    if a.is_empty() {
+        return f64::MAX;
+    }
+    let mid = a.len() / 2;
+    *a.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+/// The normal of face `f` of `finest`'s coarse mesh (its diagonals' cross product; a
+/// triangle's two edges'), unnormalised.
+fn face_normal(finest: &Level, pos: &[Vec<i64>; 3], f: u32) -> [f64; 3] {
+    let p = |v: u32| -> [f64; 3] { std::array::from_fn(|k| pos[k][v as usize] as f64) };
+    let c = finest.coarse.face(f as usize);
+    let (a, b) = if c.len() == 4 {
+        ((c[0], c[2]), (c[1], c[3]))
+    } else {
+        ((c[0], c[1]), (c[0], c[2]))
+    };
+    let (u, w) = (sub(p(a.1), p(a.0)), sub(p(b.1), p(b.0)));
+    [
+        u[1] * w[2] - u[2] * w[1],
+        u[2] * w[0] - u[0] * w[2],
+        u[0] * w[1] - u[1] * w[0],
+    ]
+}
+
+/// The angle (radians) between two normals; `None` where one is zero.
+fn fold(n0: [f64; 3], n1: [f64; 3]) -> Option<f64> {
+    let dot: f64 = (0..3).map(|k| n0[k] * n1[k]).sum();
+    let len = (0..3).map(|k| n0[k] * n0[k]).sum::<f64>().sqrt()
+        * (0..3).map(|k| n1[k] * n1[k]).sum::<f64>().sqrt();
+    (len > 0.0).then(|| (dot / len).clamp(-1.0, 1.0).acos())
 }
 
 /// Whether `auto`'s fit would turn hierarchy `canon` with finest values `pos` away
@@ -211,6 +282,53 @@ pub(crate) fn near_subdivision(canon: &Canonical, pos: &[Vec<i64>; 3]) -> bool {
         return true;
     }
     near_limit(&canon.levels, &last.next(), &floats(pos))
+}
+
+/// OpenSubdiv's isolation level in Blender's default ("Quality" 3): below it, beside
+/// an extraordinary vertex, Blender evaluates end-cap patches (Gregory basis), not the
+/// limit surface.
+const END_CAP_LEVEL: usize = 3;
+
+/// Per finest vertex of `canon` (`finest` the level after its last), whether it lies
+/// where Blender's default quality evaluates an end-cap patch rather than the limit
+/// surface: made after level [`END_CAP_LEVEL`] inside a face of that level beside an
+/// extraordinary vertex (inside the mesh, not four edges; a boundary, sharp in
+/// OpenSubdiv, takes patches of its own that are on the limit). The fits
+/// leave them out (they are coded as residuals like every vertex); all false for
+/// hierarchies of that many levels or fewer.
+fn end_caps(canon: &Canonical, finest: &Level) -> Vec<bool> {
+    let mut caps = vec![false; finest.nv];
+    let Some(at) = canon.levels.get(END_CAP_LEVEL) else {
+        return caps;
+    };
+    let irregular: Vec<bool> = (0..at.nv)
+        .map(|v| {
+            let edges = at.v_edges(v);
+            edges.len() != 4 && edges.iter().all(|&e| !at.is_boundary(e as usize))
+        })
+        .collect();
+    if !irregular.contains(&true) {
+        return caps;
+    }
+    // Per face of each level from END_CAP_LEVEL down, whether it lies in a marked face
+    // of that level (a face's children are its coarse corners, SPEC.md 8.1).
+    let mut marked: Vec<bool> = (0..at.coarse.nf())
+        .map(|f| at.coarse.face(f).iter().any(|&v| irregular[v as usize]))
+        .collect();
+    for l in &canon.levels[END_CAP_LEVEL..] {
+        let mut next = vec![false; l.coarse.idx.len()];
+        for (f, &m) in marked.iter().enumerate().filter(|&(_, &m)| m) {
+            let (a, b) = (l.coarse.starts[f] as usize, l.coarse.starts[f + 1] as usize);
+            next[a..b].fill(m);
+        }
+        marked = next;
+    }
+    for (f, _) in marked.iter().enumerate().filter(|&(_, &m)| m) {
+        for &v in finest.coarse.face(f) {
+            caps[v as usize] |= v as usize >= at.nv;
+        }
+    }
+    caps
 }
 
 /// Values per axis as points of floats.
@@ -443,21 +561,37 @@ const OUTLIER_FACTOR: f64 = 16.0;
 /// Grid units below which no vertex is an outlier.
 const OUTLIER_FLOOR: f64 = 4.0;
 
+/// Rounds of [`robust_fit`]'s refits: each fits again without the outliers of the
+/// fit before, until they stay the same.
+const ROBUST_ROUNDS: usize = 2;
+
 /// The control values of `op` nearest `fine` in least squares, fitted again without
-/// the outliers of the first fit.
-fn robust_fit(op: &fit::Operator, fine: &[[f64; 3]], nb: usize) -> Vec<[f64; 3]> {
-    let first = op.fit(fine, &fine[..nb], &[], 400, FIT_TOLERANCE);
-    let dist = distances_from(op, &first, fine);
-    let mut sorted = dist.clone();
-    sorted.sort_by(f64::total_cmp);
-    let cut = (OUTLIER_FACTOR * sorted[sorted.len() / 2]).max(OUTLIER_FLOOR);
-    let ignored: Vec<bool> = dist.iter().map(|&d| d > cut).collect();
-    // Refit only where a few points are outliers (many are no rule's misses).
-    let n = ignored.iter().filter(|&&i| i).count();
-    if n == 0 || n * 8 > dist.len() {
-        return first;
+/// the outliers of the fit before (a few rounds: a first fit pulled by many far
+/// points, as beside the end-cap patches of a mesh with many extraordinary vertices,
+/// is off everywhere, so its median hides them).
+fn robust_fit(op: &fit::Operator, fine: &[[f64; 3]], nb: usize, caps: &[bool]) -> Vec<[f64; 3]> {
+    let mut control = op.fit(fine, &fine[..nb], caps, 400, FIT_TOLERANCE);
+    let mut ignored: Vec<bool> = caps.to_vec();
+    for _ in 0..ROBUST_ROUNDS {
+        let dist = distances_from(op, &control, fine);
+        let mut sorted = dist.clone();
+        let mid = sorted.len() / 2;
+        let median = *sorted.select_nth_unstable_by(mid, f64::total_cmp).1;
+        let cut = (OUTLIER_FACTOR * median).max(OUTLIER_FLOOR);
+        let now: Vec<bool> = dist
+            .iter()
+            .enumerate()
+            .map(|(i, &d)| d > cut || caps.get(i).is_some_and(|&c| c))
+            .collect();
+        // Refit only where a few points are outliers (many are no rule's misses).
+        let n = now.iter().filter(|&&i| i).count();
+        if n == 0 || n * 8 > dist.len() || now == ignored {
+            break;
+        }
+        control = op.fit(fine, &control, &now, 400, FIT_TOLERANCE);
+        ignored = now;
     }
-    op.fit(fine, &first, &ignored, 400, FIT_TOLERANCE)
+    control
 }
 
 /// The rule sets the fit tries: plain refinement, the limit surface, and the limit
@@ -539,34 +673,15 @@ fn owners(canon: &Canonical, finest: &Level) -> Vec<u32> {
 /// fold (0 for an edge whose descendants are all on a boundary).
 fn fold_angles(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<f64> {
     let owner = owners(canon, finest);
-    let p = |v: u32| -> [f64; 3] { std::array::from_fn(|k| pos[k][v as usize] as f64) };
-    let normal = |f: u32| {
-        let c = finest.coarse.face(f as usize);
-        let (a, b) = if c.len() == 4 {
-            ((c[0], c[2]), (c[1], c[3]))
-        } else {
-            ((c[0], c[1]), (c[0], c[2]))
-        };
-        let (u, w) = (sub(p(a.1), p(a.0)), sub(p(b.1), p(b.0)));
-        [
-            u[1] * w[2] - u[2] * w[1],
-            u[2] * w[0] - u[0] * w[2],
-            u[0] * w[1] - u[1] * w[0],
-        ]
-    };
     let mut sum = vec![(0.0f64, 0usize); canon.levels[0].ne()];
     for (h, &o) in owner.iter().enumerate().filter(|&(_, &o)| o != u32::MAX) {
         if finest.is_boundary(h) {
             continue;
         }
         let [f0, f1] = finest.edge_faces[h];
-        let (n0, n1) = (normal(f0), normal(f1));
-        let dot: f64 = (0..3).map(|k| n0[k] * n1[k]).sum();
-        let len = (0..3).map(|k| n0[k] * n0[k]).sum::<f64>().sqrt()
-            * (0..3).map(|k| n1[k] * n1[k]).sum::<f64>().sqrt();
-        if len > 0.0 {
+        if let Some(a) = fold(face_normal(finest, pos, f0), face_normal(finest, pos, f1)) {
             let s = &mut sum[o as usize];
-            s.0 += (dot / len).clamp(-1.0, 1.0).acos();
+            s.0 += a;
             s.1 += 1;
         }
     }
@@ -637,8 +752,8 @@ fn crease_sharpness(c: f64) -> u32 {
 
 /// Semi-sharp creases (SPEC.md 9.10), as a modelling tool's user sets them: a set of
 /// base edges, or of base vertices, with one sharpness. Candidate edge sets are those
-/// whose finest vertices lie far from the smooth surface (`distances`, per finest
-/// vertex, of the control values `start`) and those that fold far more than the rest;
+/// whose finest vertices lie far from the smooth surface (`smooth`: per finest vertex
+/// its distance, and the control values) and those that fold far more than the rest;
 /// each is screened at a few sharpnesses, and the best, if it fits far better than the
 /// smooth surface, gets the sharpness that fits best by least squares. Then base
 /// vertices still far off are tried as vertex creases the same way (on the creases
@@ -648,10 +763,11 @@ fn semi_sharp(
     finest: &Level,
     pos: &[Vec<i64>; 3],
     fine: &[[f64; 3]],
-    distances: &[f64],
-    start: &[[f64; 3]],
+    smooth: &(Vec<f64>, Vec<[f64; 3]>),
     limit: bool,
+    caps: &[bool],
 ) -> Option<Rules> {
+    let (distances, start) = (&smooth.0[..], &smooth.1[..]);
     let mut sorted = distances.to_vec();
     let mid = sorted.len() / 2;
     let median = *sorted.select_nth_unstable_by(mid, f64::total_cmp).1;
@@ -709,7 +825,11 @@ fn semi_sharp(
         ..Rules::default()
     };
     // Vertices far off the smooth surface (placed by other rules) do not count.
-    let counted: Vec<bool> = distances.iter().map(|&d| d <= cut).collect();
+    let counted: Vec<bool> = distances
+        .iter()
+        .zip(caps)
+        .map(|(&d, &c)| !c && d <= cut)
+        .collect();
     let ignored: Vec<bool> = counted.iter().map(|&c| !c).collect();
     let square = |p: &[[f64; 3]]| -> f64 {
         p.iter()
