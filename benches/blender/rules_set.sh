@@ -19,7 +19,7 @@ ROOT=$(cd "$HERE/../.." && pwd)
 mkdir -p "$OUT/files" "$OUT/coded"
 "${BPY_PYTHON:?set BPY_PYTHON to a Python with bpy 5.0.1}" "$HERE/make_rules_set.py" "$@" "$OUT/files" > "$OUT/blender.log" 2>&1
 (cd "$ROOT" && cargo build --release -q -p subwave-cli)
-SW="$ROOT/target/release/subwave"
+SW="$(cd "$ROOT" && realpath "${CARGO_TARGET_DIR:-target}")/release/subwave"
 if [ -n "${DRACO_PYTHON:-}" ]; then
   "$DRACO_PYTHON" "$ROOT/../shared/tools/peers/peers.py" "$OUT/files" --bits 16 \
     --peers draco_cl10 --fast --out "$OUT/draco" > /dev/null 2>&1 || true

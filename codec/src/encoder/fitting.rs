@@ -1018,6 +1018,15 @@ fn semi_sharp(
         found.extend(vertex_creases(&best.0, &d, m));
     }
     found.extend(vertex_creases(&smooth_rules, distances, smooth));
+    // (Where the plain smooth surface coded smaller, the vertex creases on the limit
+    // too: an infinitely sharp corner pulls the smooth limit fit further off.)
+    if !limit {
+        let on_limit = Rules {
+            limit: true,
+            ..smooth_rules.clone()
+        };
+        found.extend(vertex_creases(&on_limit, distances, smooth));
+    }
     for f in found {
         if f.1 < best.1 {
             best = f;

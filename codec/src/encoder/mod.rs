@@ -1059,9 +1059,9 @@ fn best_hierarchy(
             TransformChoice::Fit => true,
             TransformChoice::Fixed(_) => false,
         };
-        // The preferred candidate's levels and fit where its base mesh has no
-        // extraordinary vertex and the fit was tried but missed (residuals of a bit
-        // per vertex or more).
+        // The levels and fit of the first candidate whose base mesh has no
+        // extraordinary vertex and whose fit was tried but missed (residuals of
+        // MISSED_BITS per vertex or more).
         let mut regular_fit = None;
         for (i, canon) in canons.iter_mut().enumerate().filter(|_| try_fit) {
             canon.unstow()?;
@@ -1071,9 +1071,9 @@ fn best_hierarchy(
             let missed = fitted.as_ref().filter(|p| {
                 p.levels
                     .last()
-                    .is_some_and(|r| 8 * r.len() >= mesh.vertex_count())
+                    .is_some_and(|r| 8 * r.len() >= MISSED_BITS * mesh.vertex_count())
             });
-            if let (0, Some(p), Some(base)) = (i, missed, canon.levels.first()) {
+            if let (None, Some(p), Some(base)) = (regular_fit, missed, canon.levels.first()) {
                 if canon.poles.is_empty() && no_extraordinary(base) {
                     regular_fit = Some((canon.levels.len(), p.size()));
                 }
@@ -1096,8 +1096,10 @@ fn best_hierarchy(
         // refined four times is one quad refined six): the fit is tried again with
         // the first levels left out, the control mesh a level finer each time, on
         // the hierarchies near a subdivision, until one codes no smaller than the
-        // one above (past the control mesh's depth the fits only grow).
+        // one above after one has coded smaller (past the control mesh's depth the
+        // fits only grow; above it they may too).
         if let Some((levels, mut above)) = regular_fit {
+            let mut improved = false;
             for keep in (levels.saturating_sub(SHALLOWER)..levels)
                 .rev()
                 .filter(|&k| k > 0)
@@ -1122,9 +1124,9 @@ fn best_hierarchy(
                     }
                 }
                 match size {
-                    Some(s) if s >= above => break,
-                    Some(s) => above = s,
-                    None => {}
+                    Some(s) if s >= above && improved => break,
+                    Some(s) if s < above => (above, improved) = (s, true),
+                    _ => {}
                 }
             }
         }
@@ -1231,6 +1233,12 @@ fn cc_candidates(mesh: &Mesh, opts: &EncodeOptions) -> Result<Vec<Canonical>> {
     }
     Ok(canons)
 }
+
+/// Bits per vertex of a fit's residuals from which a fit on a base mesh without
+/// extraordinary vertices is tried with levels left out: a fit on its control mesh
+/// leaves the rounding's one to three (a file's 6 decimals), one a level too coarse
+/// ten and more.
+const MISSED_BITS: usize = 4;
 
 /// Levels left out, at most, where the fit is tried on a shallower hierarchy of a base
 /// mesh without extraordinary vertices ([`best_hierarchy`]).
