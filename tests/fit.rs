@@ -336,28 +336,15 @@ fn a_vertex_between_two_faces_is_smooth() {
     // rule and places it on the limit by the smooth mask. The corpus crate's own
     // float evaluation of those rules, rounded, codes to near-zero residuals and
     // decodes exactly.
-    let mut control = subwave_corpus::PolyMesh {
-        positions: vec![
-            [-1.0, -1.0, -1.0],
-            [1.0, -1.0, -1.0],
-            [1.0, 1.0, -1.0],
-            [-1.0, 1.0, -1.0],
-            [-1.0, -1.0, 1.0],
-            [1.0, -1.0, 1.0],
-            [1.0, 1.0, 1.0],
-            [-1.0, 1.0, 1.0],
-            [0.1, -0.2, 1.3],
-        ],
-        faces: vec![
-            vec![0, 3, 2, 1],
-            vec![0, 1, 5, 4],
-            vec![1, 2, 6, 5],
-            vec![2, 3, 7, 6],
-            vec![3, 0, 4, 7],
-            vec![4, 5, 6, 8],
-            vec![6, 7, 4, 8],
-        ],
-    };
+    let mut control = subwave_corpus::cube();
+    let top = control
+        .faces
+        .iter()
+        .position(|f| f == &[4, 5, 7, 6])
+        .unwrap();
+    control.positions.push([0.05, -0.1, 0.65]);
+    control.faces[top] = vec![4, 5, 7, 8];
+    control.faces.push(vec![7, 6, 4, 8]);
     control.displace(0.2, 0.0, &mut Rng::new(2));
     let q = subwave::Quantization::Decimal { decimals: 0 };
     for limit in [false, true] {
