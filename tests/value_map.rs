@@ -293,10 +293,11 @@ fn codings(m: &subwave::Loaded, value_map: Option<bool>, effort: u8) -> (usize, 
 
 /// At the default effort a terrain whose ranks' details estimate well below its
 /// values' is coded once, as ranks (the same container as a map asked for), where
-/// effort 9 codes both and keeps the smaller; both decode exactly.
+/// effort 9 codes both and keeps the smaller; both decode exactly. (129 x 129: above
+/// the size up to which the fit's screen lets a smooth mesh's values through.)
 #[test]
 fn the_default_effort_chooses_the_map_by_estimate() {
-    let m = terrain(6, 16);
+    let m = terrain(7, 16);
     let (forced, forced_bytes) = codings(&m, Some(true), subwave::DEFAULT_EFFORT);
     let (auto, auto_bytes) = codings(&m, None, subwave::DEFAULT_EFFORT);
     let (nine, nine_bytes) = codings(&m, None, 9);
