@@ -1206,13 +1206,7 @@ fn cc_candidates(mesh: &Mesh, opts: &EncodeOptions) -> Result<Vec<Canonical>> {
     // the input's order is kept: then as recovered, which makes the order cheap.
     let gates = !opts.keep_order;
     let topo = input_topo(mesh);
-    let mut canons = Vec::new();
-    let led = opts.keep_order;
-    for rec in topology::cc::recover_candidates(mesh.vertex_count(), &topo, max, led) {
-        canons.push(topology::canonicalise(&rec, gates)?);
-        // Every candidate but the one in hand waits with its levels stowed.
-        canons.iter_mut().skip(1).for_each(Canonical::stow);
-    }
+    let mut canons = cc_canonicals(mesh, &topo, max, opts.keep_order)?;
     // Polar levels take the Catmull-Clark transforms (SPEC.md 8.6).
     let keep = match opts.keep_order {
         true => topology::polar::KEEP_FOR_ORDER,
@@ -1259,11 +1253,17 @@ fn no_extraordinary(base: &Level) -> bool {
 /// The Catmull-Clark candidates of `mesh` of exactly `levels` levels (as
 /// [`cc_candidates`], without polar ones): the deepest hierarchies' last `levels`.
 fn shallow_candidates(mesh: &Mesh, opts: &EncodeOptions, levels: usize) -> Result<Vec<Canonical>> {
-    let topo = input_topo(mesh);
+    cc_canonicals(mesh, &input_topo(mesh), levels, opts.keep_order)
+}
+
+/// The Catmull-Clark hierarchies of `mesh` (its faces `topo`) of at most `max` levels,
+/// canonical; with `keep_order` led by the input's order and the base faces as
+/// recovered, else in the gates' order.
+fn cc_canonicals(mesh: &Mesh, topo: &Topo, max: usize, keep_order: bool) -> Result<Vec<Canonical>> {
     let mut canons = Vec::new();
-    for rec in topology::cc::recover_candidates(mesh.vertex_count(), &topo, levels, opts.keep_order)
-    {
-        canons.push(topology::canonicalise(&rec, !opts.keep_order)?);
+    for rec in topology::cc::recover_candidates(mesh.vertex_count(), topo, max, keep_order) {
+        canons.push(topology::canonicalise(&rec, !keep_order)?);
+        // Every candidate but the one in hand waits with its levels stowed.
         canons.iter_mut().skip(1).for_each(Canonical::stow);
     }
     Ok(canons)
