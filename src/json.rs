@@ -61,6 +61,14 @@ pub fn info(info: &Info) -> Value {
             Transform::Fit { linear, .. } => Some(linear),
             _ => None,
         },
+        "fit_linear_everywhere": match h.transform {
+            Transform::Fit { bilinear, .. } => Some(bilinear),
+            _ => None,
+        },
+        "fit_limit_corners": match h.transform {
+            Transform::Fit { limit_corners, .. } => Some(limit_corners),
+            _ => None,
+        },
         "creases": h.creases,
         "crease_sharpness": h.crease_sharpness,
         "vertex_creases": h.vertex_creases,

@@ -172,6 +172,8 @@ fn hostile_fit_containers_are_refused() {
         limit,
         corners,
         linear,
+        bilinear,
+        limit_corners,
     } = enc.header.transform
     else {
         panic!("not a fit")
@@ -183,6 +185,8 @@ fn hostile_fit_containers_are_refused() {
         limit,
         corners,
         linear,
+        bilinear,
+        limit_corners,
     };
     let at = head
         .iter()
@@ -249,8 +253,33 @@ fn hostile_fit_containers_are_refused() {
             other => panic!("{what}: expected a malformed or corrupt container, got {other:?}"),
         }
     }
+    // The rules (a varint: one byte below 128) set to `rules`, in two bytes.
+    let rules_as = |rules: u64| {
+        move |h: &mut Vec<u8>| {
+            h[at + 1] = (rules & 0x7f) as u8 | 0x80;
+            h.insert(at + 2, (rules >> 7) as u8);
+        }
+    };
+    assert_eq!(head[at + 1] & 0x80, 0, "one byte of fit rules");
+    for (what, rules) in [
+        ("linear everywhere with kept corners", 128 | 4),
+        ("linear everywhere with linear boundaries", 128 | 8),
+        ("corners kept at the limit without the limit", 256),
+        ("vertex sharpnesses without creased vertices", 512),
+    ] {
+        match subwave::decode_slice(&rewritten(rules_as(rules), |_, _| {})) {
+            Err(Error::Container(e)) => {
+                let e = e.to_string();
+                assert!(
+                    e.contains("fit rules") || e.contains("without"),
+                    "{what}: {e}"
+                )
+            }
+            other => panic!("{what}: expected a malformed header, got {other:?}"),
+        }
+    }
     // Fit rules the format does not define are unsupported, not guessed at.
-    match subwave::decode_slice(&rewritten(|h| h[at + 1] |= 128, |_, _| {})) {
+    match subwave::decode_slice(&rewritten(rules_as(1024), |_, _| {})) {
         Err(Error::Unsupported(what)) => assert!(what.contains("fit rules"), "{what}"),
         other => panic!("unknown fit rules: {other:?}"),
     }
@@ -940,13 +969,9 @@ proptest! {
     }
 }
 
-#[test]
-fn uv_charts_with_linear_boundaries_are_found_by_auto() {
-    // A UV map as Blender's Subdivision Surface writes it (UV Smooth "Keep
-    // Boundaries"): charts cut at their seams, every boundary vertex kept, the limit
-    // surface inside. Two charts (a jittered grid and a strip beside it), flat (the
-    // third axis 0, as ATTR codes a UV map): `auto` tries that rule set, finds it, and
-    // the residuals cost next to nothing; the other rules predict it worse.
+/// Two UV charts cut at their seams (a jittered 5 x 4 grid and a strip beside it),
+/// flat (the third axis 0, as ATTR codes a UV map).
+fn uv_charts() -> subwave_corpus::PolyMesh {
     let mut rng = Rng::new(9);
     let mut chart = subwave_corpus::open_grid(5, 4);
     for p in &mut chart.positions {
@@ -954,7 +979,70 @@ fn uv_charts_with_linear_boundaries_are_found_by_auto() {
         p[1] += 0.04 * (rng.unit() - 0.5);
     }
     let strip = subwave_corpus::translate(subwave_corpus::open_grid(6, 1), [1.3, 0.0, 0.0]);
-    let control = subwave_corpus::union(&[chart, strip]);
+    subwave_corpus::union(&[chart, strip])
+}
+
+#[test]
+fn each_uv_smoothing_option_is_found_and_codes_to_near_zero_residuals() {
+    // Blender's UV smoothing options other than "Keep Boundaries" (below), each made
+    // by the project's own evaluation of its rules on the same charts: "None" (linear
+    // everywhere), "All" (smooth corners, kept on the limit), "Keep Corners", and
+    // "Keep Corners, Junctions" (two boundary vertices where other charts would meet
+    // this one, kept: vertex creases the encoder finds). `auto` finds each rule,
+    // decodes exactly, and leaves under a bit per vertex of residuals.
+    let control = uv_charts();
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    let junctions: &[(u32, f64)] = &[(2, 10.0), (12, 10.0)];
+    let cases = [
+        ("none", Kept::Everything, &[][..], false),
+        ("all", Kept::LimitCorners, &[], true),
+        ("keep corners", Kept::Corners, &[], true),
+        ("keep corners, junctions", Kept::Corners, junctions, true),
+    ];
+    let mut made = Vec::new();
+    for (what, kept, vertices, limit) in cases {
+        let surface = control.subdivision_surface_sharp(3, &[], vertices, limit, kept);
+        let mesh = common::to_mesh(&surface, 1e6);
+        assert!(
+            !made.contains(&mesh.positions),
+            "{what}: another option's surface"
+        );
+        made.push(mesh.positions.clone());
+        let enc = encode(&mesh, &q, TransformChoice::Auto);
+        let Transform::Fit {
+            limit: l,
+            corners,
+            bilinear,
+            limit_corners,
+            ..
+        } = enc.header.transform
+        else {
+            panic!("{what}: not a fit but {:?}", enc.header.transform)
+        };
+        assert_eq!(
+            (l, bilinear, limit_corners, corners),
+            (
+                limit,
+                kept == Kept::Everything,
+                kept == Kept::LimitCorners,
+                kept == Kept::Corners
+            ),
+            "{what}"
+        );
+        assert_eq!(enc.header.vertex_creases.len(), vertices.len(), "{what}");
+        assert_exact(&enc.bytes, &mesh, what);
+        let (n, r) = (mesh.vertex_count(), residual_bytes(&enc.bytes));
+        assert!(8 * r < n, "{what}: {r} B of residuals for {n} vertices");
+    }
+}
+
+#[test]
+fn uv_charts_with_linear_boundaries_are_found_by_auto() {
+    // A UV map as Blender's Subdivision Surface writes it (UV Smooth "Keep
+    // Boundaries"): charts cut at their seams, every boundary vertex kept, the limit
+    // surface inside (`uv_charts`): `auto` tries that rule set, finds it, and the
+    // residuals cost next to nothing; the other rules predict it worse.
+    let control = uv_charts();
     let q = subwave::Quantization::Decimal { decimals: 0 };
     let surface = control.subdivision_surface_with(3, &[], true, Kept::Boundary);
     let mesh = common::to_mesh(&surface, 1e6);

@@ -160,9 +160,22 @@ def main(out):
     bpy.ops.object.shade_smooth()
     subdivide(ob, 4)
     export(out, "cone12_ngon_cc4")
-    # Suzanne: quads and triangles, open at the eyes' sockets, with UVs; its UV
-    # smoothing options, and a binary PLY (cut at the UV seams).
-    for uv in ("PRESERVE_BOUNDARIES", "SMOOTH_ALL", "NONE"):
+    # Blender's "Simple" subdivision (bilinear: positions and UVs linear in each face).
+    fresh()
+    bpy.ops.mesh.primitive_monkey_add(size=2)
+    ob = bpy.context.active_object
+    subdivide(ob, 3, subdivision_type="SIMPLE")
+    export(out, "suzanne_simple_cc3")
+    # Suzanne: quads and triangles, open at the eyes' sockets, with UVs; every UV
+    # smoothing option Blender has, and a binary PLY (cut at the UV seams).
+    for uv in (
+        "PRESERVE_BOUNDARIES",
+        "SMOOTH_ALL",
+        "NONE",
+        "PRESERVE_CORNERS",
+        "PRESERVE_CORNERS_AND_JUNCTIONS",
+        "PRESERVE_CORNERS_JUNCTIONS_AND_CONCAVE",
+    ):
         fresh()
         bpy.ops.mesh.primitive_monkey_add(size=2)
         ob = bpy.context.active_object

@@ -239,11 +239,15 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
             limit,
             corners,
             linear,
+            bilinear,
+            limit_corners,
         } => {
             let rules = fit::Rules {
                 limit,
                 corners,
                 linear,
+                bilinear,
+                limit_corners,
                 ..fit::Rules::default()
             };
             synthesise_fit(&c, &h, base, bits, &rules, level)?
@@ -901,10 +905,14 @@ fn synthesise_fit(
     }
     if !h.vertex_creases.is_empty() {
         sharp.vertices = vec![0; rl.nv];
-        for (&v, &s) in h.vertex_creases.iter().zip(&h.vertex_sharpness) {
+        for (i, &v) in h.vertex_creases.iter().enumerate() {
             *sharp.vertices.get_mut(v as usize).ok_or_else(|| {
                 Error::corrupt("HEAD", format!("vertex crease {v} is not a base vertex"))
-            })? = s;
+            })? = h
+                .vertex_sharpness
+                .get(i)
+                .copied()
+                .unwrap_or(fit::SHARP_INFINITE);
         }
     }
     // With seams, the cut mesh's finest faces (made without a level).

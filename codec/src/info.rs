@@ -161,15 +161,24 @@ pub fn fit_rules(h: &Header) -> String {
         limit,
         corners,
         linear,
+        bilinear,
+        limit_corners,
         ..
     } = h.transform
     else {
         return String::new();
     };
     let mut rules = Vec::new();
-    let n = h.creases.len();
-    let sharpness = |list: &[u32]| -> String {
-        let mut v: Vec<String> = list
+    // "N creased base edges (sharpness ...)": the sharpnesses (in levels, the first
+    // three distinct) where listed, else every one is infinitely sharp.
+    let listed = |n: usize, what: &str, sharpness: &[u32]| -> Option<String> {
+        if n == 0 {
+            return None;
+        }
+        if sharpness.is_empty() {
+            return Some(format!("{n} creased base {what}"));
+        }
+        let mut v: Vec<String> = sharpness
             .iter()
             .map(|&s| format!("{:.4}", s as f64 / crate::transform::fit::SHARP_ONE as f64))
             .collect();
@@ -178,27 +187,17 @@ pub fn fit_rules(h: &Header) -> String {
             v.truncate(3);
             v.push("...".into());
         }
-        v.join(", ")
+        Some(format!(
+            "{n} creased base {what} (sharpness {})",
+            v.join(", ")
+        ))
     };
-    if n > 0 {
-        let s = if n == 1 { "" } else { "s" };
-        rules.push(if h.crease_sharpness.is_empty() {
-            format!("{n} creased base edge{s}")
-        } else {
-            format!(
-                "{n} creased base edge{s} (sharpness {})",
-                sharpness(&h.crease_sharpness)
-            )
-        });
-    }
+    let n = h.creases.len();
+    let edges = if n == 1 { "edge" } else { "edges" };
+    rules.extend(listed(n, edges, &h.crease_sharpness));
     let n = h.vertex_creases.len();
-    if n > 0 {
-        rules.push(format!(
-            "{n} creased base {} (sharpness {})",
-            if n == 1 { "vertex" } else { "vertices" },
-            sharpness(&h.vertex_sharpness)
-        ));
-    }
+    let vertices = if n == 1 { "vertex" } else { "vertices" };
+    rules.extend(listed(n, vertices, &h.vertex_sharpness));
     let n = h.seams.len();
     if n > 0 {
         rules.push(format!(
@@ -212,8 +211,14 @@ pub fn fit_rules(h: &Header) -> String {
     if linear {
         rules.push("linear boundaries".to_string());
     }
+    if bilinear {
+        rules.push("linear everywhere".to_string());
+    }
     if limit {
         rules.push("limit surface".to_string());
+    }
+    if limit_corners {
+        rules.push("corners kept at the limit".to_string());
     }
     rules.join(", ")
 }

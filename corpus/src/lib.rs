@@ -94,7 +94,7 @@ impl PolyMesh {
         let mut pos = vec![[0.0; 3]; nv + ne + self.faces.len()];
         let boundary_edge = |e: usize| edge_faces[e].len() < 2;
         let sharpness = |e: usize| {
-            if boundary_edge(e) {
+            if boundary_edge(e) || kept == Kept::Everything {
                 INFINITELY_SHARP
             } else {
                 creases.edges.get(&edges[e]).copied().unwrap_or(0.0)
@@ -326,7 +326,7 @@ impl PolyMesh {
                     .filter(|&o| edge_faces[&key(o)] < 2 || creases.edges.contains_key(&key(o)))
                     .collect();
                 let n = neighbours[v].len();
-                if kept.keeps(boundary, opposite[v].len())
+                if kept.keeps_at_limit(boundary, opposite[v].len())
                     || creases.vertices.contains_key(&(v as u32))
                 {
                     p
@@ -984,7 +984,7 @@ pub struct Creases {
     pub vertices: HashMap<u32, f64>,
 }
 
-/// Which boundary vertices a subdivision keeps where they are.
+/// Which vertices a subdivision keeps where they are.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kept {
     /// None: boundaries follow the cubic B-spline curve rules.
@@ -994,17 +994,29 @@ pub enum Kept {
     /// Every boundary vertex: boundaries stay piecewise linear (Blender's UV rule
     /// "Keep Boundaries", on a UV map's charts).
     Boundary,
+    /// Every vertex, and every edge sharp: linear everywhere (Blender's UV rule
+    /// "None" and its "Simple" subdivision).
+    Everything,
+    /// None while refining, but boundary vertices of one face keep their place on the
+    /// limit (what Blender writes for UV charts with its UV rule "All").
+    LimitCorners,
 }
 
 impl Kept {
     /// Whether a vertex (on a boundary or not, with `faces` faces) keeps its place.
     fn keeps(self, on_boundary: bool, faces: usize) -> bool {
-        on_boundary
-            && match self {
-                Kept::Nothing => false,
-                Kept::Corners => faces == 1,
-                Kept::Boundary => true,
-            }
+        self == Kept::Everything
+            || on_boundary
+                && match self {
+                    Kept::Nothing | Kept::LimitCorners | Kept::Everything => false,
+                    Kept::Corners => faces == 1,
+                    Kept::Boundary => true,
+                }
+    }
+
+    /// Whether such a vertex keeps its place on the limit.
+    fn keeps_at_limit(self, on_boundary: bool, faces: usize) -> bool {
+        self.keeps(on_boundary, faces) || self == Kept::LimitCorners && on_boundary && faces == 1
     }
 }
 

@@ -83,19 +83,22 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
             Screen::Open => {}
             Screen::Away => return None,
             Screen::Chart => {
-                sets = Some(vec![Rules {
-                    limit: true,
-                    linear: true,
-                    ..Rules::default()
-                }])
+                sets = Some(vec![
+                    Rules {
+                        limit: true,
+                        linear: true,
+                        ..Rules::default()
+                    },
+                    BILINEAR,
+                ])
             }
         }
     }
     let nb = canon.base.nv;
     let mut best: Option<Payloads> = None;
-    let mut keep = |p: Payloads| {
+    let keep = |best: &mut Option<Payloads>, p: Payloads| {
         if best.as_ref().is_none_or(|q| p.size() < q.size()) {
-            best = Some(p);
+            *best = Some(p);
         }
     };
     let sets = sets.unwrap_or_else(|| rule_sets(canon, finest, pos));
@@ -112,10 +115,17 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
         // search for semi-sharp creases.
         let mut smooth: Vec<(usize, bool)> = Vec::new();
         let mut distances = None;
+        // The smallest coding with kept corners: its size, rules and control values.
+        let mut kept_corners = None;
         for rules in &sets {
             let op = fit::Operator::new(&canon.levels, finest, rules);
             let control = robust_fit(&op, &fine, nb, caps);
-            let plain = rules.sharpness.is_empty() && !rules.corners && !rules.linear;
+            // (Smooth: no rule but the limit's.)
+            let plain = *rules
+                == Rules {
+                    limit: rules.limit,
+                    ..Rules::default()
+                };
             if plain && rules.limit {
                 distances = Some((distances_from(&op, &control, &fine), control.clone()));
             }
@@ -124,7 +134,30 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
                 if plain {
                     smooth.push((p.size(), rules.limit));
                 }
-                keep(p);
+                if rules.corners
+                    && kept_corners
+                        .as_ref()
+                        .is_none_or(|k: &(usize, Rules, Vec<[f64; 3]>)| p.size() < k.0)
+                {
+                    kept_corners = Some((p.size(), rules.clone(), control.clone()));
+                }
+                keep(&mut best, p);
+            }
+        }
+        // Kept boundary vertices (Blender's UV junctions and concave corners) on the
+        // best coding with kept corners, where it codes near the smallest (junctions
+        // are kept corners too, and a few of them miss little).
+        let smallest = best.as_ref().map_or(0, |b| b.size()) as f64;
+        let kept = kept_corners
+            .take()
+            .filter(|k| k.0 as f64 <= JUNCTION_GATE * smallest);
+        if let Some(rules) = kept.and_then(|(_, r, c)| junctions(canon, finest, &fine, &r, c, caps))
+        {
+            let op = fit::Operator::new(&canon.levels, finest, &rules);
+            let control = robust_fit(&op, &fine, nb, caps);
+            drop(op);
+            if let Some(p) = code_rules(target, header, bits, &rules, &control) {
+                keep(&mut best, p);
             }
         }
         let limit = smooth.iter().min().is_none_or(|&(_, l)| l);
@@ -134,7 +167,7 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
             let control = robust_fit(&op, &fine, nb, caps);
             drop(op);
             if let Some(p) = code_rules(target, header, bits, &rules, &control) {
-                keep(p);
+                keep(&mut best, p);
             }
         }
     }
@@ -479,6 +512,8 @@ fn code_rules(
             limit: rules.limit,
             corners: rules.corners,
             linear: rules.linear,
+            bilinear: rules.bilinear,
+            limit_corners: rules.limit_corners,
         };
         let listed = |sharpness: &[u32]| -> (Vec<u32>, Vec<u32>) {
             sharpness
@@ -490,12 +525,18 @@ fn code_rules(
         };
         let (creases, sharpness) = listed(&rules.sharpness);
         h.creases = creases;
-        h.crease_sharpness = if sharpness.iter().all(|&s| s == fit::SHARP_INFINITE) {
-            Vec::new()
-        } else {
-            sharpness
+        // (Lists of infinitely sharp creases only leave their sharpnesses out.)
+        let finite = |s: Vec<u32>| {
+            if s.iter().all(|&s| s == fit::SHARP_INFINITE) {
+                Vec::new()
+            } else {
+                s
+            }
         };
-        (h.vertex_creases, h.vertex_sharpness) = listed(&rules.vertex_sharpness);
+        h.crease_sharpness = finite(sharpness);
+        let (vertices, sharpness) = listed(&rules.vertex_sharpness);
+        h.vertex_creases = vertices;
+        h.vertex_sharpness = finite(sharpness);
         let p = Payloads {
             header: h,
             base: base_bytes,
@@ -507,6 +548,84 @@ fn code_rules(
         }
     }
     best
+}
+
+/// Rounds of [`junctions`]' search: each keeps the boundary vertices still far off.
+const JUNCTION_ROUNDS: usize = 10;
+
+/// [`junctions`] runs where the smallest coding with kept corners is at most this
+/// many times the smallest of all.
+const JUNCTION_GATE: f64 = 1.5;
+
+/// Each round of [`junctions`] keeps the vertices within this factor of the farthest
+/// (a wrong rule's error at a vertex is far above what it leaves at its neighbours
+/// once the fit is right elsewhere).
+const JUNCTION_SPAN: f64 = 4.0;
+
+/// Boundary base vertices that keep their values besides the corners of `rules` (with
+/// `control` its fitted control values), as infinitely sharp vertex creases: Blender's
+/// UV smoothing "Keep Corners, Junctions" keeps every UV value of a vertex where three
+/// or more charts meet, and "... and Concave" both values where one is a chart's
+/// corner, and a chart alone does not say which. Each round keeps those far off the
+/// fit (above [`OUTLIER_FACTOR`] times the median distance and [`JUNCTION_SPAN`]
+/// times less than the farthest), each the farthest of its neighbours, and fits
+/// again. `None` when none is far off.
+fn junctions(
+    canon: &Canonical,
+    finest: &Level,
+    fine: &[[f64; 3]],
+    rules: &Rules,
+    control: Vec<[f64; 3]>,
+    caps: &[bool],
+) -> Option<Rules> {
+    let base = &canon.levels[0];
+    let nb = base.nv;
+    let on_boundary = |v: usize| {
+        base.v_faces(v).len() > 1
+            && base
+                .v_edges(v)
+                .iter()
+                .any(|&e| base.is_boundary(e as usize))
+    };
+    let mut rules = rules.clone();
+    let mut control = control;
+    let mut kept = vec![0u32; nb];
+    for _ in 0..JUNCTION_ROUNDS {
+        let op = fit::Operator::new(&canon.levels, finest, &rules);
+        if rules.vertex_sharpness.iter().any(|&s| s > 0) {
+            control = op.fit(fine, &control, caps, 400, FIT_TOLERANCE);
+        }
+        let d = distances_from(&op, &control, fine);
+        let mut sorted = d.clone();
+        let mid = sorted.len() / 2;
+        let median = *sorted.select_nth_unstable_by(mid, f64::total_cmp).1;
+        let cut = (OUTLIER_FACTOR * median).max(OUTLIER_FLOOR);
+        // A wrong rule at one vertex moves its neighbours too, less: only the
+        // farthest of its neighbourhood counts.
+        let peak = |v: usize| {
+            base.v_edges(v).iter().all(|&e| {
+                let u = base.other_end(e, v) as usize;
+                kept[u] > 0 || d[u] < d[v] || d[u] == d[v] && u > v
+            })
+        };
+        let free = |v: usize| kept[v] == 0 && on_boundary(v);
+        let top = (0..nb)
+            .filter(|&v| free(v))
+            .map(|v| d[v])
+            .fold(0.0, f64::max);
+        let cut = cut.max(top / JUNCTION_SPAN);
+        let far: Vec<usize> = (0..nb)
+            .filter(|&v| free(v) && d[v] > cut && peak(v))
+            .collect();
+        if far.is_empty() {
+            break;
+        }
+        for v in far {
+            kept[v] = fit::SHARP_INFINITE;
+        }
+        rules.vertex_sharpness = kept.clone();
+    }
+    kept.iter().any(|&s| s > 0).then_some(rules)
 }
 
 /// Per finest vertex, its largest distance over the axes from the refinement of
@@ -597,7 +716,8 @@ fn robust_fit(op: &fit::Operator, fine: &[[f64; 3]], nb: usize, caps: &[bool]) -
 /// The rule sets the fit tries: plain refinement, the limit surface, and the limit
 /// surface with the creases the finest level shows; each also with boundary corners
 /// kept where the base mesh has a boundary vertex with one face, and with every
-/// boundary vertex kept (linear boundaries) where it has a boundary.
+/// boundary vertex kept (linear boundaries) where it has a boundary; and linear
+/// everywhere.
 fn rule_sets(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<Rules> {
     let mut sets = vec![
         Rules::default(),
@@ -639,18 +759,39 @@ fn rule_sets(canon: &Canonical, finest: &Level, pos: &[Vec<i64>; 3]) -> Vec<Rule
                 .any(|&e| base.is_boundary(e as usize))
     };
     if (0..base.nv).any(corner) {
+        // Kept corners; and corners refined smoothly but kept at the limit.
         let kept: Vec<Rules> = sets
             .iter()
             .map(|r| Rules {
                 corners: true,
                 ..r.clone()
             })
+            .chain(
+                sets.iter()
+                    .filter(|r| r.limit && r.sharpness.is_empty())
+                    .map(|r| Rules {
+                        limit_corners: true,
+                        ..r.clone()
+                    }),
+            )
             .collect();
         sets.extend(kept);
     }
     sets.extend(linear);
+    sets.push(BILINEAR);
     sets
 }
+
+/// Linear everywhere: Blender's UV smoothing "None" and its "Simple" subdivision.
+const BILINEAR: Rules = Rules {
+    limit: false,
+    sharpness: Vec::new(),
+    vertex_sharpness: Vec::new(),
+    corners: false,
+    linear: false,
+    bilinear: true,
+    limit_corners: false,
+};
 
 /// The mean angle (radians) between the finest faces beside a base edge's descendants
 /// above which the encoder tries the edge as a crease: a smooth surface's finest faces

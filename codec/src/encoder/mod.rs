@@ -270,8 +270,10 @@ impl Payloads {
         self.base.len() + self.levels.iter().map(Vec::len).sum::<usize>()
     }
 
+    /// Bytes of the payloads that differ between codings: the header too (a fit's
+    /// crease lists stand in it).
     fn size(&self) -> usize {
-        self.coded() + self.order.as_ref().map_or(0, Vec::len)
+        self.coded() + self.order.as_ref().map_or(0, Vec::len) + self.header.write().len()
     }
 
     /// Each LEVL payload's mode byte, its flags included (SPEC.md 10.1):

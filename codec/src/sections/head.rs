@@ -40,6 +40,11 @@ pub enum Transform {
         corners: bool,
         /// Every boundary vertex keeps its value: linear boundaries (SPEC.md 9.10).
         linear: bool,
+        /// Linear everywhere: every edge sharp, every vertex kept (SPEC.md 9.10).
+        bilinear: bool,
+        /// At the limit, boundary vertices with one face keep their values (SPEC.md
+        /// 9.10).
+        limit_corners: bool,
     },
 }
 
@@ -162,7 +167,8 @@ pub struct Header {
     pub crease_sharpness: Vec<u32>,
     /// Subdivision fits: the base mesh's creased vertices, increasing; empty: none.
     pub vertex_creases: Vec<u32>,
-    /// Subdivision fits: each creased vertex's sharpness, as `crease_sharpness`.
+    /// Subdivision fits: each creased vertex's sharpness, as `crease_sharpness`
+    /// (empty: every creased vertex is infinitely sharp).
     pub vertex_sharpness: Vec<u32>,
     /// Subdivision fits: the base mesh's seams, `(copy, partner)` with `partner <
     /// copy` and the copies increasing; the rules refine the base mesh with each copy
@@ -180,19 +186,25 @@ const FLAG_NORMALS: u64 = 32;
 /// The transform code of the subdivision fit.
 const FIT_CODE: u8 = 9;
 /// Fit rules: the finest values are the limit surface's.
-const FIT_LIMIT: u8 = 1;
+const FIT_LIMIT: u64 = 1;
 /// Fit rules: a list of creased base edges ends the header.
-const FIT_CREASES: u8 = 2;
+const FIT_CREASES: u64 = 2;
 /// Fit rules: boundary vertices with one face keep their values.
-const FIT_CORNERS: u8 = 4;
+const FIT_CORNERS: u64 = 4;
 /// Fit rules: every boundary vertex keeps its value (linear boundaries).
-const FIT_LINEAR: u8 = 8;
+const FIT_LINEAR: u64 = 8;
 /// Fit rules: the creases' sharpnesses follow their list.
-const FIT_SEMI_SHARP: u8 = 16;
+const FIT_SEMI_SHARP: u64 = 16;
 /// Fit rules: a list of creased base vertices and their sharpnesses ends the header.
-const FIT_VERTEX_CREASES: u8 = 32;
+const FIT_VERTEX_CREASES: u64 = 32;
 /// Fit rules: a list of seams ends the header.
-const FIT_SEAMS: u8 = 64;
+const FIT_SEAMS: u64 = 64;
+/// Fit rules: linear everywhere (every edge sharp, every vertex kept).
+const FIT_BILINEAR: u64 = 128;
+/// Fit rules: the creased vertices' sharpnesses follow their list.
+const FIT_VERTEX_SEMI_SHARP: u64 = 512;
+/// Fit rules: at the limit, boundary vertices with one face keep their values.
+const FIT_LIMIT_CORNERS: u64 = 256;
 /// The largest crease sharpness a header holds: infinitely sharp (SPEC.md 9.10).
 const MAX_SHARPNESS: u64 = crate::transform::fit::SHARP_INFINITE as u64;
 
@@ -218,18 +230,23 @@ impl Header {
             limit,
             corners,
             linear,
+            bilinear,
+            limit_corners,
         } = self.transform
         {
             w.u8(bits);
-            let flag = |on: bool, bit: u8| if on { bit } else { 0 };
-            w.u8(
+            let flag = |on: bool, bit: u64| if on { bit } else { 0 };
+            w.varint(
                 flag(limit, FIT_LIMIT)
                     | flag(!self.creases.is_empty(), FIT_CREASES)
                     | flag(corners, FIT_CORNERS)
                     | flag(linear, FIT_LINEAR)
                     | flag(!self.crease_sharpness.is_empty(), FIT_SEMI_SHARP)
                     | flag(!self.vertex_creases.is_empty(), FIT_VERTEX_CREASES)
-                    | flag(!self.seams.is_empty(), FIT_SEAMS),
+                    | flag(!self.seams.is_empty(), FIT_SEAMS)
+                    | flag(bilinear, FIT_BILINEAR)
+                    | flag(limit_corners, FIT_LIMIT_CORNERS)
+                    | flag(!self.vertex_sharpness.is_empty(), FIT_VERTEX_SEMI_SHARP),
             );
         }
         match self.quantization {
@@ -369,7 +386,11 @@ impl Header {
         };
         let (vertex_creases, vertex_sharpness) = if rules & FIT_VERTEX_CREASES != 0 {
             let list = read_increasing(&mut r, "vertex crease", base_vertices)?;
-            let sharpness = read_sharpness(&mut r, list.len())?;
+            let sharpness = if rules & FIT_VERTEX_SEMI_SHARP != 0 {
+                read_sharpness(&mut r, list.len())?
+            } else {
+                Vec::new()
+            };
             (list, sharpness)
         } else {
             (Vec::new(), Vec::new())
@@ -598,8 +619,8 @@ fn read_sharpness(r: &mut ByteReader<'_>, n: usize) -> Result<Vec<u32>> {
         .collect()
 }
 
-/// The header's transform (SPEC.md 5), and for a fit its rules byte (0 otherwise).
-fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, u8)> {
+/// The header's transform (SPEC.md 5), and for a fit its rules (0 otherwise).
+fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, u64)> {
     let at = r.offset();
     Ok(match r.u8("transform")? {
         0 => (Transform::None, 0),
@@ -613,14 +634,17 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, u8)> {
                 ));
             }
             let at = r.offset();
-            let rules = r.u8("fit rules")?;
+            let rules = r.varint("fit rules")?;
             let known = FIT_LIMIT
                 | FIT_CREASES
                 | FIT_CORNERS
                 | FIT_LINEAR
                 | FIT_SEMI_SHARP
                 | FIT_VERTEX_CREASES
-                | FIT_SEAMS;
+                | FIT_SEAMS
+                | FIT_BILINEAR
+                | FIT_LIMIT_CORNERS
+                | FIT_VERTEX_SEMI_SHARP;
             if rules & !known != 0 {
                 return Err(Error::Unsupported(format!(
                     "fit rules {rules:#x} (byte {at})"
@@ -629,11 +653,27 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, u8)> {
             if rules & FIT_SEMI_SHARP != 0 && rules & FIT_CREASES == 0 {
                 return Err(malformed(at, "crease sharpnesses without creases"));
             }
+            if rules & FIT_VERTEX_SEMI_SHARP != 0 && rules & FIT_VERTEX_CREASES == 0 {
+                return Err(malformed(at, "vertex sharpnesses without creased vertices"));
+            }
+            // Linear everywhere leaves nothing for the other rules to change.
+            let moot = FIT_LIMIT | FIT_CREASES | FIT_CORNERS | FIT_LINEAR | FIT_VERTEX_CREASES;
+            if rules & FIT_BILINEAR != 0 && rules & moot != 0 {
+                return Err(malformed(
+                    at,
+                    format!("fit rules {rules:#x}: linear everywhere with other rules"),
+                ));
+            }
+            if rules & FIT_LIMIT_CORNERS != 0 && rules & FIT_LIMIT == 0 {
+                return Err(malformed(at, "limit corners without the limit"));
+            }
             let fit = Transform::Fit {
                 bits,
                 limit: rules & FIT_LIMIT != 0,
                 corners: rules & FIT_CORNERS != 0,
                 linear: rules & FIT_LINEAR != 0,
+                bilinear: rules & FIT_BILINEAR != 0,
+                limit_corners: rules & FIT_LIMIT_CORNERS != 0,
             };
             (fit, rules)
         }

@@ -52,6 +52,15 @@ pub struct Rules {
     /// (the UV rule Blender calls "Keep Boundaries", OpenSubdiv's linear face-varying
     /// boundaries: a UV chart's seams).
     pub linear: bool,
+    /// Linear everywhere: every edge infinitely sharp and every vertex kept, so each
+    /// face's values are a bilinear refinement of its corners' (the UV rule Blender
+    /// calls "None", OpenSubdiv's `FVAR_LINEAR_ALL`; Blender's "Simple" subdivision).
+    pub bilinear: bool,
+    /// With the limit, a boundary vertex with one face (refined by the crease rule)
+    /// keeps its refined value rather than the crease's limit: what Blender writes for
+    /// a UV chart's corners with its UV smoothing "All" (OpenSubdiv's
+    /// `FVAR_LINEAR_NONE`), whose face-varying patches take such a corner as sharp.
+    pub limit_corners: bool,
 }
 
 impl Rules {
@@ -62,6 +71,8 @@ impl Rules {
             vertices: &sharp.vertices,
             corners: self.corners,
             linear: self.linear,
+            bilinear: self.bilinear,
+            limit_corners: self.limit_corners,
         }
     }
 
@@ -112,12 +123,16 @@ pub struct Hard<'a> {
     pub corners: bool,
     /// Every boundary vertex keeps its value.
     pub linear: bool,
+    /// Every edge is infinitely sharp and every vertex keeps its value.
+    pub bilinear: bool,
+    /// At the limit, a boundary vertex with one face keeps its value.
+    pub limit_corners: bool,
 }
 
 impl Hard<'_> {
     /// The sharpness of edge `e` of `level`: a boundary edge is infinitely sharp.
     fn edge(&self, level: &Level, e: u32) -> u32 {
-        if level.is_boundary(e as usize) {
+        if self.bilinear || level.is_boundary(e as usize) {
             SHARP_INFINITE
         } else {
             self.edges.get(e as usize).copied().unwrap_or(0)
@@ -158,7 +173,8 @@ fn vertex_rule(level: &Level, v: usize, hard: Hard<'_>, child: bool) -> VertexRu
         }
     }
     let n = level.v_edges(v).len();
-    if boundary && (hard.linear || hard.corners && level.v_faces(v).len() == 1)
+    if hard.bilinear
+        || boundary && (hard.linear || hard.corners && level.v_faces(v).len() == 1)
         || now(hard.vertex(v)) > 0
     {
         return VertexRule::Kept;
@@ -356,6 +372,9 @@ fn opposite(level: &Level, f: u32, v: usize) -> Option<u32> {
 /// An edge or vertex with any sharpness left is sharp here.
 fn limit_mask(level: &Level, v: usize, hard: Hard<'_>) -> Option<(Vec<(u32, i128)>, i128)> {
     match vertex_rule(level, v, hard, false) {
+        // A corner of one face refined by the crease rule keeps its value at the
+        // limit with `limit_corners` (Blender's UV smoothing "All").
+        VertexRule::Crease(_) if hard.limit_corners && level.v_faces(v).len() == 1 => None,
         VertexRule::Crease([a, b]) => Some((vec![(a, 1), (v as u32, 4), (b, 1)], 6)),
         VertexRule::Kept => None,
         VertexRule::Inside => {
@@ -892,7 +911,8 @@ mod tests {
 
     /// Every rule set of a hierarchy: plain, limit, creases (the base mesh's first
     /// face's edges) infinitely sharp, semi-sharp (1.7 and 0.4 levels, and a vertex
-    /// crease of 0.6 at the first face's first corner), each with and without the limit.
+    /// crease of 0.6 at the first face's first corner), each with and without the limit;
+    /// and linear everywhere, and the limit with corners kept at it.
     fn rule_sets(levels: &[Level]) -> Vec<Rules> {
         let first = levels[0].f_edges(0).to_vec();
         let crease = |s: u32| -> Vec<u32> {
@@ -915,10 +935,20 @@ mod tests {
                     limit,
                     sharpness,
                     vertex_sharpness,
-                    corners: false,
-                    linear: false,
+                    ..Rules::default()
                 })
             })
+            .chain([
+                Rules {
+                    bilinear: true,
+                    ..Rules::default()
+                },
+                Rules {
+                    limit: true,
+                    limit_corners: true,
+                    ..Rules::default()
+                },
+            ])
             .collect()
     }
 
@@ -950,12 +980,13 @@ mod tests {
             let finest = levels.last().unwrap().next();
             let b = values(3 * levels[0].nv, 3);
             let mut outputs = Vec::new();
-            for rules in rule_sets(&levels) {
-                let op = Operator::new(&levels, &finest, &rules);
+            let sets = rule_sets(&levels);
+            for rules in &sets {
+                let op = Operator::new(&levels, &finest, rules);
                 let exact = op.apply(&triples(&b));
                 let mut x: [Vec<i64>; 3] =
                     std::array::from_fn(|k| b.iter().skip(k).step_by(3).copied().collect());
-                refine(&levels, &finest, &rules, &mut x);
+                refine(&levels, &finest, rules, &mut x);
                 for k in 0..3 {
                     assert_eq!(x[k].len(), exact.len());
                     for (i, (&a, e)) in x[k].iter().zip(&exact).enumerate() {
@@ -968,8 +999,14 @@ mod tests {
                 }
                 outputs.push(x);
             }
+            // (Corners kept at the limit change only boundary vertices of one face,
+            // which a closed hierarchy does not have.)
+            let closed = (0..levels[0].nv).all(|v| levels[0].v_faces(v).len() > 1);
             for i in 0..outputs.len() {
                 for j in 0..i {
+                    if closed && (sets[i].limit_corners || sets[j].limit_corners) {
+                        continue;
+                    }
                     assert_ne!(outputs[i], outputs[j], "rule sets {j} and {i}");
                 }
             }
@@ -1097,6 +1134,8 @@ mod tests {
                         vertices: &[],
                         corners: false,
                         linear: false,
+                        bilinear: false,
+                        limit_corners: false,
                     },
                     &mut x,
                 );
