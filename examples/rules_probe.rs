@@ -1,6 +1,8 @@
 //! How far a Blender export is from the project's integer subdivision rules (SPEC.md
 //! 9.10) applied to Blender's own control mesh: no fit, so a miss is a rule's.
-//! `cargo run --release --example rules_probe -- FINE.obj CONTROL.txt [plain]`
+//! `cargo run --release --example rules_probe -- FINE.obj CONTROL.txt [plain] [extra=N]`
+//! (`extra=N`: N more levels refined before the limit, the finest level's vertices
+//! read from them: the limit of a crease with sharpness left past the last level.)
 //! CONTROL.txt (written by `benches/blender/make_rules_set.py --control`): lines
 //! `v x y z` (the control mesh in the exported file's frame, its vertices first in the
 //! export), `e a b crease` and `c a crease` (edge and vertex creases, Blender's 0..1).
@@ -90,7 +92,25 @@ fn main() {
                 .collect()
         });
         let finest = canon.levels.last().expect("a level").next();
-        refine(&canon.levels, &finest, &rules, &mut x);
+        let extra: usize = args
+            .iter()
+            .find_map(|a| a.strip_prefix("extra="))
+            .map_or(0, |n| n.parse().expect("extra=N"));
+        if extra == 0 {
+            refine(&canon.levels, &finest, &rules, &mut x);
+        } else {
+            let mut levels = canon.levels.clone();
+            let mut last = finest.clone();
+            for _ in 0..extra {
+                let next = last.next();
+                levels.push(last);
+                last = next;
+            }
+            refine(&levels, &last, &rules, &mut x);
+            for xs in x.iter_mut() {
+                xs.truncate(finest.nv);
+            }
+        }
         // Kinds: the level a vertex first appears at, and whether it is a vertex, edge
         // or face point there.
         let mut starts = vec![(0usize, "base")];
