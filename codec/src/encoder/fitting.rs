@@ -242,7 +242,7 @@ const SMOOTH_FOLD: f64 = 0.1;
 /// mesh (at most every `step`-th edge, about 20,000).
 fn median_fold(finest: &Level, pos: &[Vec<i64>; 3]) -> f64 {
     let step = (finest.ne() / 20_000).max(1);
-    let mut a: Vec<f64> = (0..finest.ne())
+    let a: Vec<f64> = (0..finest.ne())
         .step_by(step)
         .filter(|&h| !finest.is_boundary(h))
         .filter_map(|h| {
@@ -253,8 +253,7 @@ fn median_fold(finest: &Level, pos: &[Vec<i64>; 3]) -> f64 {
     if a.is_empty() {
         return f64::MAX;
     }
-    let mid = a.len() / 2;
-    *a.select_nth_unstable_by(mid, f64::total_cmp).1
+    median_of(&a)
 }
 
 /// The normal of face `f` of `finest`'s coarse mesh (its diagonals' cross product; a
@@ -596,10 +595,7 @@ fn junctions(
             control = op.fit(fine, &control, caps, 400, FIT_TOLERANCE);
         }
         let d = distances_from(&op, &control, fine);
-        let mut sorted = d.clone();
-        let mid = sorted.len() / 2;
-        let median = *sorted.select_nth_unstable_by(mid, f64::total_cmp).1;
-        let cut = (OUTLIER_FACTOR * median).max(OUTLIER_FLOOR);
+        let cut = outlier_cut(&d);
         // A wrong rule at one vertex moves its neighbours too, less: only the
         // farthest of its neighbourhood counts.
         let peak = |v: usize| {
@@ -658,7 +654,7 @@ fn near_limit(levels: &[Level], finest: &Level, fine: &[[f64; 3]]) -> bool {
     let op = fit::Operator::new(levels, finest, &rules);
     let nb = levels[0].nv;
     let control = op.fit(fine, &fine[..nb], &[], NEAR_ITERATIONS, FIT_TOLERANCE);
-    let mut dist: Vec<f64> = op
+    let dist: Vec<f64> = op
         .apply(&control)
         .iter()
         .zip(fine)
@@ -667,8 +663,7 @@ fn near_limit(levels: &[Level], finest: &Level, fine: &[[f64; 3]]) -> bool {
     if dist.is_empty() {
         return false;
     }
-    let mid = dist.len() / 2;
-    *dist.select_nth_unstable_by(mid, f64::total_cmp).1 <= NEAR_LIMIT
+    median_of(&dist) <= NEAR_LIMIT
 }
 
 /// Finest vertices whose distance from the first fit exceeds this many times the
@@ -679,6 +674,20 @@ const OUTLIER_FACTOR: f64 = 16.0;
 
 /// Grid units below which no vertex is an outlier.
 const OUTLIER_FLOOR: f64 = 4.0;
+
+/// The median of `d` (not empty).
+fn median_of(d: &[f64]) -> f64 {
+    let mut sorted = d.to_vec();
+    let mid = sorted.len() / 2;
+    *sorted.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+/// The distance from a fit above which a finest vertex is an outlier:
+/// [`OUTLIER_FACTOR`] times the median of the distances `d`, at least
+/// [`OUTLIER_FLOOR`].
+fn outlier_cut(d: &[f64]) -> f64 {
+    (OUTLIER_FACTOR * median_of(d)).max(OUTLIER_FLOOR)
+}
 
 /// Rounds of [`robust_fit`]'s refits: each fits again without the outliers of the
 /// fit before, until they stay the same.
@@ -693,10 +702,7 @@ fn robust_fit(op: &fit::Operator, fine: &[[f64; 3]], nb: usize, caps: &[bool]) -
     let mut ignored: Vec<bool> = caps.to_vec();
     for _ in 0..ROBUST_ROUNDS {
         let dist = distances_from(op, &control, fine);
-        let mut sorted = dist.clone();
-        let mid = sorted.len() / 2;
-        let median = *sorted.select_nth_unstable_by(mid, f64::total_cmp).1;
-        let cut = (OUTLIER_FACTOR * median).max(OUTLIER_FLOOR);
+        let cut = outlier_cut(&dist);
         let now: Vec<bool> = dist
             .iter()
             .enumerate()
@@ -909,10 +915,8 @@ fn semi_sharp(
     caps: &[bool],
 ) -> Option<Rules> {
     let (distances, start) = (&smooth.0[..], &smooth.1[..]);
-    let mut sorted = distances.to_vec();
-    let mid = sorted.len() / 2;
-    let median = *sorted.select_nth_unstable_by(mid, f64::total_cmp).1;
-    let cut = (OUTLIER_FACTOR * median).max(OUTLIER_FLOOR);
+    let median = median_of(distances);
+    let cut = outlier_cut(distances);
     let base = &canon.levels[0];
     // Per base edge, the median distance of the finest vertices on its descendants
     // (a median: one vertex beside an extraordinary vertex does not make a crease).
@@ -1135,8 +1139,7 @@ fn semi_sharp(
     // Vertex creases: base vertices still far off, on the creases found and on the
     // smooth surface (a vertex crease's edges may pass for creases).
     let vertex_creases = |rules: &Rules, d: &[f64], now: f64| -> Option<(Rules, f64)> {
-        let mut sorted = d.to_vec();
-        let median = *sorted.select_nth_unstable_by(mid, f64::total_cmp).1;
+        let median = median_of(d);
         let vertices: Vec<usize> = (0..nb)
             .filter(|&v| d[v] > (VERTEX_FACTOR * median).max(OUTLIER_FLOOR))
             .collect();

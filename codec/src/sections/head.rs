@@ -201,10 +201,10 @@ const FIT_VERTEX_CREASES: u64 = 32;
 const FIT_SEAMS: u64 = 64;
 /// Fit rules: linear everywhere (every edge sharp, every vertex kept).
 const FIT_BILINEAR: u64 = 128;
-/// Fit rules: the creased vertices' sharpnesses follow their list.
-const FIT_VERTEX_SEMI_SHARP: u64 = 512;
 /// Fit rules: at the limit, boundary vertices with one face keep their values.
 const FIT_LIMIT_CORNERS: u64 = 256;
+/// Fit rules: the creased vertices' sharpnesses follow their list.
+const FIT_VERTEX_SEMI_SHARP: u64 = 512;
 /// The largest crease sharpness a header holds: infinitely sharp (SPEC.md 9.10).
 const MAX_SHARPNESS: u64 = crate::transform::fit::SHARP_INFINITE as u64;
 
