@@ -595,7 +595,7 @@ fn junctions(
             control = op.fit(fine, &control, caps, 400, FIT_TOLERANCE);
         }
         let d = distances_from(&op, &control, fine);
-        let cut = outlier_cut(&d);
+        let cut = outlier_cut(median_of(&d));
         // A wrong rule at one vertex moves its neighbours too, less: only the
         // farthest of its neighbourhood counts.
         let peak = |v: usize| {
@@ -683,10 +683,10 @@ fn median_of(d: &[f64]) -> f64 {
 }
 
 /// The distance from a fit above which a finest vertex is an outlier:
-/// [`OUTLIER_FACTOR`] times the median of the distances `d`, at least
+/// [`OUTLIER_FACTOR`] times the median of the distances (`median`), at least
 /// [`OUTLIER_FLOOR`].
-fn outlier_cut(d: &[f64]) -> f64 {
-    (OUTLIER_FACTOR * median_of(d)).max(OUTLIER_FLOOR)
+fn outlier_cut(median: f64) -> f64 {
+    (OUTLIER_FACTOR * median).max(OUTLIER_FLOOR)
 }
 
 /// Rounds of [`robust_fit`]'s refits: each fits again without the outliers of the
@@ -702,7 +702,7 @@ fn robust_fit(op: &fit::Operator, fine: &[[f64; 3]], nb: usize, caps: &[bool]) -
     let mut ignored: Vec<bool> = caps.to_vec();
     for _ in 0..ROBUST_ROUNDS {
         let dist = distances_from(op, &control, fine);
-        let cut = outlier_cut(&dist);
+        let cut = outlier_cut(median_of(&dist));
         let now: Vec<bool> = dist
             .iter()
             .enumerate()
@@ -916,7 +916,7 @@ fn semi_sharp(
 ) -> Option<Rules> {
     let (distances, start) = (&smooth.0[..], &smooth.1[..]);
     let median = median_of(distances);
-    let cut = outlier_cut(distances);
+    let cut = outlier_cut(median);
     let base = &canon.levels[0];
     // Per base edge, the median distance of the finest vertices on its descendants
     // (a median: one vertex beside an extraordinary vertex does not make a crease).
