@@ -296,6 +296,38 @@ impl PolyMesh {
         m
     }
 
+    /// [`PolyMesh::subdivision_surface_sharp`] on the limit as OpenSubdiv evaluates it
+    /// past its isolation level (Blender's Quality) over fewer levels: `extra` more
+    /// steps with the creases, then the limit with a finite sharpness left smooth (an
+    /// infinite one sharp); the mesh of `levels` steps, its vertices placed there.
+    pub fn subdivision_surface_isolated(
+        &self,
+        levels: u32,
+        extra: u32,
+        edges: &[([u32; 2], f64)],
+        vertices: &[(u32, f64)],
+        kept: Kept,
+    ) -> PolyMesh {
+        let mut out = self.subdivision_surface_sharp(levels, edges, vertices, false, kept);
+        let mut m = self.clone();
+        let mut sharp = Creases {
+            edges: edges
+                .iter()
+                .map(|&([a, b], s)| ((a.min(b), a.max(b)), s))
+                .collect(),
+            vertices: vertices.iter().copied().collect(),
+        };
+        for _ in 0..levels + extra {
+            (m, sharp) = m.catmull_clark_creased(&sharp, kept);
+        }
+        sharp.edges.retain(|_, s| *s >= INFINITELY_SHARP);
+        sharp.vertices.retain(|_, s| *s >= INFINITELY_SHARP);
+        let placed = m.limit_positions(&sharp, kept);
+        let n = out.positions.len();
+        out.positions.copy_from_slice(&placed[..n]);
+        out
+    }
+
     /// The limit positions of [`PolyMesh::subdivision_surface`].
     fn limit_positions(&self, creases: &Creases, kept: Kept) -> Vec<[f64; 3]> {
         let nv = self.positions.len();
