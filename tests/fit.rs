@@ -323,6 +323,20 @@ fn prism_and_rims() -> (subwave_corpus::PolyMesh, Vec<[u32; 2]>) {
     (control, rims)
 }
 
+/// The container decodes to `mesh` exactly and its residuals cost under a bit per
+/// vertex.
+fn exact_with_near_zero_residuals(enc: &subwave::Encoded, mesh: &Mesh, what: &str) {
+    assert_exact(&enc.bytes, mesh, what);
+    let (n, r) = (mesh.vertex_count(), residual_bytes(&enc.bytes));
+    assert!(
+        8 * r < n,
+        "{what}: {r} B of residuals for {n} vertices ({:?}, {:?} {:?})",
+        enc.header.crease_sharpness,
+        enc.header.vertex_creases,
+        enc.header.vertex_sharpness
+    );
+}
+
 /// Bytes of a container's finest LEVL section (a fit's residuals).
 fn residual_bytes(bytes: &[u8]) -> usize {
     let c = subwave_container::Container::parse(bytes, &Limits::default()).unwrap();
@@ -465,15 +479,7 @@ fn semi_sharp_creases_are_found_with_their_sharpness() {
                 assert!((s - v).abs() < 0.01, "{what}: sharpness {s}");
             }
         }
-        assert_exact(&enc.bytes, &mesh, &what);
-        let (n, r) = (mesh.vertex_count(), residual_bytes(&enc.bytes));
-        assert!(
-            8 * r < n,
-            "{what}: {r} B of residuals for {n} vertices ({:?}, {:?} {:?})",
-            enc.header.crease_sharpness,
-            enc.header.vertex_creases,
-            enc.header.vertex_sharpness
-        );
+        exact_with_near_zero_residuals(&enc, &mesh, &what);
         // Infinitely sharp rules miss these surfaces (but where the sharpness
         // outlasts the four levels).
         let sharp = common::to_mesh(&control.subdivision_surface(4, &rims, true), 1e5);
@@ -556,15 +562,7 @@ fn semi_sharp_creases_over_fewer_levels_than_the_isolation_level_are_found() {
             },
             "{what}"
         );
-        assert_exact(&enc.bytes, &mesh, &what);
-        let (n, r) = (mesh.vertex_count(), residual_bytes(&enc.bytes));
-        assert!(
-            8 * r < n,
-            "{what}: {r} B of residuals for {n} vertices ({:?}, {:?} {:?})",
-            enc.header.crease_sharpness,
-            enc.header.vertex_creases,
-            enc.header.vertex_sharpness
-        );
+        exact_with_near_zero_residuals(&enc, &mesh, &what);
     }
 }
 

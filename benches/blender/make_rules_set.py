@@ -107,6 +107,18 @@ def cylinder(crease, levels=4):
     return ob
 
 
+def mixed_cube(out, levels):
+    """A cube with its top edges creased at 0.6 and two bottom corners at 0.9."""
+    fresh()
+    bpy.ops.mesh.primitive_cube_add(size=1.4)
+    ob = bpy.context.active_object
+    crease_edges(ob.data, lambda a, b: a.z > 0 and b.z > 0, 0.6)
+    crease_vertices(ob.data, lambda co: co.z < 0 and co.x < 0, 0.9)
+    bpy.ops.object.shade_smooth()
+    subdivide(ob, levels)
+    export(out, f"cube_mixed_creases_cc{levels}")
+
+
 def main(out):
     # Semi-sharp edge creases (OpenSubdiv's sharpness is Blender's 10 c^2 here).
     for crease in (0.3, 0.5, 0.7):
@@ -122,14 +134,7 @@ def main(out):
         ob = cylinder(crease)
         subdivide(ob, 2)
         export(out, f"cylinder8_crease{int(crease * 10):02d}_cc2")
-    fresh()
-    bpy.ops.mesh.primitive_cube_add(size=1.4)
-    ob = bpy.context.active_object
-    crease_edges(ob.data, lambda a, b: a.z > 0 and b.z > 0, 0.6)
-    crease_vertices(ob.data, lambda co: co.z < 0 and co.x < 0, 0.9)
-    bpy.ops.object.shade_smooth()
-    subdivide(ob, 2)
-    export(out, "cube_mixed_creases_cc2")
+    mixed_cube(out, 2)
     # Vertex creases: a cube's eight corners, and one corner of a box sharp.
     for crease in (0.5, 1.0):
         fresh()
@@ -140,14 +145,7 @@ def main(out):
         subdivide(ob, 4)
         export(out, f"cube_vcrease{int(crease * 10):02d}_cc4")
     # Edge and vertex creases together, mixed sharpness on one mesh.
-    fresh()
-    bpy.ops.mesh.primitive_cube_add(size=1.4)
-    ob = bpy.context.active_object
-    crease_edges(ob.data, lambda a, b: a.z > 0 and b.z > 0, 0.6)
-    crease_vertices(ob.data, lambda co: co.z < 0 and co.x < 0, 0.9)
-    bpy.ops.object.shade_smooth()
-    subdivide(ob, 4)
-    export(out, "cube_mixed_creases_cc4")
+    mixed_cube(out, 4)
     # Open boundaries: the boundary option, a grid of 4 x 4 quads, bent.
     for smooth in ("PRESERVE_CORNERS", "ALL"):
         fresh()

@@ -279,6 +279,22 @@ impl PolyMesh {
         limit: bool,
         kept: Kept,
     ) -> PolyMesh {
+        let (mut m, sharp) = self.creased(levels, edges, vertices, kept);
+        if limit {
+            m.positions = m.limit_positions(&sharp, kept);
+        }
+        m
+    }
+
+    /// `levels` Catmull-Clark steps with the creases `edges` and `vertices` (as
+    /// [`PolyMesh::subdivision_surface_sharp`] takes them), and the creases left.
+    fn creased(
+        &self,
+        levels: u32,
+        edges: &[([u32; 2], f64)],
+        vertices: &[(u32, f64)],
+        kept: Kept,
+    ) -> (PolyMesh, Creases) {
         let mut sharp = Creases {
             edges: edges
                 .iter()
@@ -290,10 +306,7 @@ impl PolyMesh {
         for _ in 0..levels {
             (m, sharp) = m.catmull_clark_creased(&sharp, kept);
         }
-        if limit {
-            m.positions = m.limit_positions(&sharp, kept);
-        }
-        m
+        (m, sharp)
     }
 
     /// [`PolyMesh::subdivision_surface_sharp`] on the limit as OpenSubdiv evaluates it
@@ -308,18 +321,8 @@ impl PolyMesh {
         vertices: &[(u32, f64)],
         kept: Kept,
     ) -> PolyMesh {
-        let mut out = self.subdivision_surface_sharp(levels, edges, vertices, false, kept);
-        let mut m = self.clone();
-        let mut sharp = Creases {
-            edges: edges
-                .iter()
-                .map(|&([a, b], s)| ((a.min(b), a.max(b)), s))
-                .collect(),
-            vertices: vertices.iter().copied().collect(),
-        };
-        for _ in 0..levels + extra {
-            (m, sharp) = m.catmull_clark_creased(&sharp, kept);
-        }
+        let (mut out, _) = self.creased(levels, edges, vertices, kept);
+        let (m, mut sharp) = self.creased(levels + extra, edges, vertices, kept);
         sharp.edges.retain(|_, s| *s >= INFINITELY_SHARP);
         sharp.vertices.retain(|_, s| *s >= INFINITELY_SHARP);
         let placed = m.limit_positions(&sharp, kept);
