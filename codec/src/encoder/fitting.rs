@@ -222,9 +222,13 @@ fn screened(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level, fine: &[[f64
     // the runs and the two-level fit but fold few finest edges, so every rule set is
     // tried where the finest faces meet at a small angle at their median (detail
     // folds most by far more; a flat chart keeps its UV rule).
-    // (A smooth surface's folds halve with each level: the bound is for four.)
-    let bound = SMOOTH_FOLD * f64::from(1u32 << 4usize.saturating_sub(canon.levels.len()));
-    let far = far && (chart || finest.nv > SMOOTH_VERTICES || median_fold(finest, pos) > bound);
+    // A tiny mesh is tried whatever it folds (over fewer levels a smooth surface
+    // folds more: Blender's creased cylinders over two levels by 0.2, as much as
+    // scans do), since the search there is cheap.
+    let far = far
+        && (chart
+            || finest.nv > SMOOTH_VERTICES
+            || (finest.nv > TINY_VERTICES && median_fold(finest, pos) > SMOOTH_FOLD));
     match (far, chart) {
         (false, _) => Screen::Open,
         (true, true) => Screen::Chart,
@@ -236,11 +240,15 @@ fn screened(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level, fine: &[[f64
 /// ([`screened`]): the fit's whole search there takes about a second at most.
 const SMOOTH_VERTICES: usize = 16_384;
 
+/// Finest vertices up to which every rule set is tried whatever the screens say
+/// ([`screened`]): the fit's whole search there takes a few tenths of a second at
+/// most.
+const TINY_VERTICES: usize = 1024;
+
 /// The median fold (radians) at the finest edges ([`median_fold`]) at or below which a
-/// small mesh of four levels or more is smooth enough for the fit (twice as much for
-/// each level fewer): Blender's creased subdivision surfaces of a few thousand
-/// vertices fold by 0.05 to 0.09, detail (displaced, scanned) by 0.15 and more; over
-/// two levels Blender's creased cylinder folds by 0.2.
+/// small mesh is smooth enough for the fit: Blender's creased subdivision surfaces of
+/// a few thousand vertices fold by 0.05 to 0.09, detail (displaced, scanned) by 0.15
+/// and more.
 const SMOOTH_FOLD: f64 = 0.1;
 
 /// The median angle (radians) between the finest faces at the finest edges inside the
@@ -907,7 +915,7 @@ const ISOLATION: usize = 3;
 /// default limit of semi-sharp creases over 1 to 3 levels (SPEC.md 9.10).
 fn isolation(canon: &Canonical, finest: &Level) -> Option<u8> {
     let e = ISOLATION.checked_sub(canon.levels.len())? as u8;
-    (fit::extra_vertices(finest, e) <= fit::MAX_EXTRA_VERTICES).then_some(e)
+    (e > 0 && fit::extra_vertices(finest, e) <= fit::MAX_EXTRA_VERTICES).then_some(e)
 }
 
 /// The sharpness (units of 2^-16) of Blender's crease value `c`.
@@ -1176,7 +1184,14 @@ fn semi_sharp(
     };
     let (plain_kinds, extra_kinds) = limits.split_at(limits.len() - isolated.is_some() as usize);
     let mut edge_found: Vec<(Rules, f64)> = Vec::new();
+    // (The extra levels are screened only where a set screened well without them: at
+    // the larger screening value a crease is infinitely sharp in either kind, so a
+    // set that does not fit far better then is no crease set; and a screen past the
+    // isolation level refines four to sixteen times the finest vertices.)
     for kinds in [plain_kinds, extra_kinds] {
+        if kinds == extra_kinds && edge_found.is_empty() {
+            break;
+        }
         if let Some((_, edges, limit, extra_levels)) = screened(kinds) {
             let set = |s| Rules {
                 limit,
@@ -1228,7 +1243,9 @@ fn semi_sharp(
         let (m, d) = misfit(rules, SEARCH_ITERATIONS);
         found.extend(vertex_creases(rules, &d, m));
     }
-    found.extend(vertex_creases(&smooth_rules, distances, smooth));
+    let alone = vertex_creases(&smooth_rules, distances, smooth);
+    let vertices_found = alone.is_some();
+    found.extend(alone);
     // (Where the plain smooth surface coded smaller, the vertex creases on the limit
     // too: an infinitely sharp corner pulls the smooth limit fit further off.)
     if !limit {
@@ -1239,8 +1256,8 @@ fn semi_sharp(
         found.extend(vertex_creases(&on_limit, distances, smooth));
     }
     // (And past the isolation level, where a finite vertex sharpness is smooth at the
-    // limit.)
-    if isolated.is_some() {
+    // limit: where vertex creases screened well on the smooth surface.)
+    if isolated.is_some() && vertices_found {
         let past = Rules {
             limit: true,
             extra_levels: isolated,
