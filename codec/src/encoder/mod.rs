@@ -842,6 +842,7 @@ fn encode_inner(
             canons: e.canons,
             bits: e.bits.map(|(w, b)| (w, b[k])),
             finest: e.finest,
+            fit: k == 1,
         })
     };
     match choice {
@@ -872,6 +873,12 @@ struct Recovered {
     bits: Option<(Wavelet, u64)>,
     /// The level after `canons[0]`'s last (the fit's), where made.
     finest: Option<Level>,
+    /// Whether the subdivision fit is tried: not on a value map's ranks, chosen by
+    /// estimate. The map bends its axes (a subdivision of the values is none of their
+    /// ranks) and the fit codes values: the values' coding tries it, or their screen
+    /// in the estimate turned it away ([`map_by_estimate`]; on the 69 corpus codings
+    /// and the Blender files the fit on ranks never won).
+    fit: bool,
 }
 
 /// What [`map_by_estimate`] finds.
@@ -1050,14 +1057,14 @@ fn best_hierarchy(
     // Catmull-Clark family's hierarchies are gone before it is (memory).
     let mut families: Vec<FamilyJob> = Vec::new();
     if want_cc {
-        let (mut canons, known, mut finest) = match recovered {
-            Some(r) => (r.canons, r.bits, r.finest),
-            None => (cc_candidates(mesh, opts)?, None, None),
+        let (mut canons, known, mut finest, fit) = match recovered {
+            Some(r) => (r.canons, r.bits, r.finest, r.fit),
+            None => (cc_candidates(mesh, opts)?, None, None, true),
         };
         // The subdivision fit, on each candidate whose finest level is near a
         // subdivision (every candidate when asked for by name).
         let try_fit = match opts.transform {
-            TransformChoice::Auto => Effort::of(opts.effort).fit,
+            TransformChoice::Auto => Effort::of(opts.effort).fit && fit,
             TransformChoice::Fit => true,
             TransformChoice::Fixed(_) => false,
         };
