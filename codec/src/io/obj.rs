@@ -99,8 +99,17 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                     })?;
                 }
                 coords.push(p).map_err(|e| syntax("OBJ", lineno, e))?;
-                let rest: Vec<&str> = tok.collect();
-                match rest.len() {
+                // The tokens after the position (the first three kept; no
+                // allocation a vertex).
+                let mut rest = [""; 3];
+                let mut count = 0;
+                for t in tok {
+                    if let Some(slot) = rest.get_mut(count) {
+                        *slot = t;
+                    }
+                    count += 1;
+                }
+                match count {
                     0 => {}
                     1 => {
                         dropped.insert("homogeneous w coordinates".to_string());
