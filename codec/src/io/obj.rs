@@ -99,16 +99,8 @@ pub(crate) fn read(bytes: &[u8]) -> Result<RawMesh> {
                     })?;
                 }
                 coords.push(p).map_err(|e| syntax("OBJ", lineno, e))?;
-                // The tokens after the position (the first three kept; no
-                // allocation a vertex).
-                let mut rest = [""; 3];
-                let mut count = 0;
-                for t in tok {
-                    if let Some(slot) = rest.get_mut(count) {
-                        *slot = t;
-                    }
-                    count += 1;
-                }
+                // The tokens after the position.
+                let (rest, count) = first_three(tok, "");
                 match count {
                     0 => {}
                     1 => {
@@ -319,14 +311,7 @@ impl Table {
 
     /// A `vt` or `vn` line's values.
     fn push<'a>(&mut self, tok: impl Iterator<Item = &'a str>, lineno: usize) {
-        let mut t = ["0"; 3];
-        let mut n = 0;
-        for v in tok {
-            if n < 3 {
-                t[n] = v;
-            }
-            n += 1;
-        }
+        let (t, n) = first_three(tok, "0");
         self.lines += 1;
         let first = self.lines == 1;
         match self.width {
@@ -450,6 +435,20 @@ fn join_continued<'a>(
             break;
         }
     }
+}
+
+/// The first three of a statement's remaining tokens (`fill` where there are fewer)
+/// and how many there are, without an allocation a line.
+fn first_three<'a>(tok: impl Iterator<Item = &'a str>, fill: &'a str) -> ([&'a str; 3], usize) {
+    let mut t = [fill; 3];
+    let mut n = 0;
+    for v in tok {
+        if let Some(slot) = t.get_mut(n) {
+            *slot = v;
+        }
+        n += 1;
+    }
+    (t, n)
 }
 
 /// An `f` statement's corners (`v`, `v/vt`, `v/vt/vn`, `v//vn`; negative numbers count
