@@ -352,8 +352,8 @@ pub(super) fn adjacency(n: usize, pairs: &[(u32, u32)]) -> (Vec<u32>, Vec<u32>) 
 pub(super) fn candidates(t: &Topo) -> Vec<Coarsening> {
     let n = t.nv;
     let nf = t.nf();
-    for f in 0..nf {
-        let q = t.face(f);
+    // (All quads: face f's corners are idx[4 f..4 f + 4].)
+    for q in t.idx.chunks_exact(4) {
         if q[0] == q[1]
             || q[1] == q[2]
             || q[2] == q[3]
@@ -364,36 +364,30 @@ pub(super) fn candidates(t: &Topo) -> Vec<Coarsening> {
             return Vec::new();
         }
     }
-    // Quads per vertex: the graphs coloured below are walked through them.
-    let mut vq_starts = vec![0u32; n + 1];
+    // The corners of each vertex (corner c is corner c % 4 of quad c / 4): the graphs
+    // coloured below are walked through them.
+    let mut vc_starts = vec![0u32; n + 1];
     for &v in &t.idx {
-        vq_starts[v as usize + 1] += 1;
+        vc_starts[v as usize + 1] += 1;
     }
     for i in 0..n {
-        vq_starts[i + 1] += vq_starts[i];
+        vc_starts[i + 1] += vc_starts[i];
     }
-    let mut fill = vq_starts.clone();
-    let mut vq = vec![0u32; t.idx.len()];
-    for f in 0..nf {
-        for &v in t.face(f) {
-            vq[fill[v as usize] as usize] = f as u32;
-            fill[v as usize] += 1;
-        }
+    let mut fill = vc_starts.clone();
+    let mut vc = vec![0u32; t.idx.len()];
+    for (c, &v) in t.idx.iter().enumerate() {
+        vc[fill[v as usize] as usize] = c as u32;
+        fill[v as usize] += 1;
     }
     drop(fill);
-    // Each quad of v with v at corner i: its corner at offset `at` from i, for every
-    // offset in `offsets`.
-    let around = |v: u32, offsets: &[usize], out: &mut Vec<u32>| {
-        for &q in &vq[vq_starts[v as usize] as usize..vq_starts[v as usize + 1] as usize] {
-            let quad = t.face(q as usize);
-            if let Some(i) = quad.iter().position(|&x| x == v) {
-                out.extend(offsets.iter().map(|&at| quad[(i + at) % 4]));
-            }
-        }
+    let corners = Corners {
+        idx: &t.idx,
+        starts: &vc_starts,
+        of: &vc,
     };
     // The edges' graph: a vertex's neighbours are the corners beside it in its quads.
     let all = vec![true; n];
-    let Some(colour) = two_colour_with(n, &all, |v, out| around(v, &[1, 3], out)) else {
+    let Some(colour) = corners.two_colour(&all, &[1, 3]) else {
         return Vec::new();
     };
     drop(all);
@@ -402,14 +396,20 @@ pub(super) fn candidates(t: &Topo) -> Vec<Coarsening> {
         // The other class: one diagonal of every quad, between its corners of that
         // class (a vertex's neighbours are the corners opposite it in its quads).
         let members: Vec<bool> = colour.iter().map(|&c| c != e_colour).collect();
-        let Some(vf) = two_colour_with(n, &members, |v, out| around(v, &[2], out)) else {
+        let Some(vf) = corners.two_colour(&members, &[2]) else {
             continue;
         };
         let smallest = members.iter().position(|&m| m).unwrap_or(0);
         for v_colour in [vf[smallest], 1 - vf[smallest]] {
-            let is_v = |x: u32| members[x as usize] && vf[x as usize] == v_colour;
-            let is_f = |x: u32| members[x as usize] && vf[x as usize] != v_colour;
-            if let Some(c) = build(t, &vq_starts, &vq, &is_v, &is_f) {
+            // Each vertex's class: an old vertex, a face point or an edge point.
+            let class: Vec<Class> = (0..n)
+                .map(|x| match (members[x], vf[x] == v_colour) {
+                    (false, _) => Class::E,
+                    (true, true) => Class::V,
+                    (true, false) => Class::F,
+                })
+                .collect();
+            if let Some(c) = build(t, &corners, &class, nf) {
                 out.push(c);
             }
         }
@@ -417,25 +417,101 @@ pub(super) fn candidates(t: &Topo) -> Vec<Coarsening> {
     out
 }
 
-/// The coarse face of face point `fp`, from the fine quads around it (`quads`): its
-/// corners in order into `ring` and the edge points between them, returned (edge point
-/// `i` joins corners `i` and `i + 1`); `None` unless the quads make one closed fan of at
-/// least three with distinct corners and edge points.
+/// A vertex's part in a labeling ([`candidates`]).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Class {
+    /// An old vertex.
+    V,
+    /// A face point.
+    F,
+    /// An edge point.
+    E,
+}
+
+/// An all-quad topology's corners per vertex: corner `c` is corner `c % 4` of quad
+/// `c / 4`, vertex `idx[c]`.
+struct Corners<'a> {
+    idx: &'a [u32],
+    starts: &'a [u32],
+    of: &'a [u32],
+}
+
+impl Corners<'_> {
+    /// The corners of vertex `v`.
+    #[inline]
+    fn of(&self, v: u32) -> &[u32] {
+        &self.of[self.starts[v as usize] as usize..self.starts[v as usize + 1] as usize]
+    }
+
+    /// The corner `at` places after corner `c` in its quad.
+    #[inline]
+    fn after(&self, c: u32, at: u32) -> u32 {
+        self.idx[((c & !3) | ((c + at) & 3)) as usize]
+    }
+
+    /// [`two_colour_with`] of the graph whose neighbours of `v` are the corners at
+    /// `offsets` from `v`'s in each of its quads: the same colouring (a connected
+    /// bipartite graph has one with the first member's colour fixed, and every edge
+    /// among the vertices reached is checked in either), walked depth first without a
+    /// list of neighbours per vertex.
+    fn two_colour(&self, members: &[bool], offsets: &[u32]) -> Option<Vec<u8>> {
+        let mut colour = vec![2u8; members.len()];
+        let first = members.iter().position(|&m| m)?;
+        colour[first] = 0;
+        let mut stack = vec![first as u32];
+        let mut reached = 1usize;
+        while let Some(v) = stack.pop() {
+            let c = colour[v as usize];
+            for &corner in self.of(v) {
+                for &at in offsets {
+                    let w = self.after(corner, at);
+                    match colour[w as usize] {
+                        2 => {
+                            colour[w as usize] = 1 - c;
+                            reached += 1;
+                            stack.push(w);
+                        }
+                        x if x == c => return None,
+                        _ => {}
+                    }
+                }
+            }
+        }
+        (reached == members.iter().filter(|&&m| m).count()).then_some(colour)
+    }
+}
+
+/// Whether `v` holds a value twice (sorted into `scratch` when long).
+fn repeats(v: &[u32], scratch: &mut Vec<u32>) -> bool {
+    if v.len() <= 16 {
+        return v.iter().enumerate().any(|(i, x)| v[i + 1..].contains(x));
+    }
+    scratch.clear();
+    scratch.extend_from_slice(v);
+    scratch.sort_unstable();
+    scratch.windows(2).any(|w| w[0] == w[1])
+}
+
+/// The coarse face of face point `fp`, from the fine quads around it (`fp`'s
+/// corners): its corners in order into `ring` and the edge points between them into
+/// `edges` (edge point `i` joins corners `i` and `i + 1`); `None` unless the quads make
+/// one closed fan of at least three with distinct corners and edge points.
 fn face_ring(
-    t: &Topo,
-    quads: &[u32],
+    corners: &Corners<'_>,
     fp: u32,
-    is_v: &dyn Fn(u32) -> bool,
-    is_f: &dyn Fn(u32) -> bool,
+    class: &[Class],
     fan: &mut Vec<(u32, u32, u32)>,
     ring: &mut Vec<u32>,
-) -> Option<Vec<u32>> {
+    edges: &mut Vec<u32>,
+    scratch: &mut Vec<u32>,
+) -> Option<()> {
     fan.clear();
-    for &q in quads {
-        let quad = t.face(q as usize);
-        let i = quad.iter().position(|&x| x == fp)?;
-        let (a, v, b) = (quad[(i + 1) % 4], quad[(i + 2) % 4], quad[(i + 3) % 4]);
-        if !is_v(v) || is_v(a) || is_f(a) || is_v(b) || is_f(b) {
+    for &c in corners.of(fp) {
+        let (a, v, b) = (corners.after(c, 1), corners.after(c, 2), corners.after(c, 3));
+        if class[v as usize] != Class::V
+            || class[a as usize] != Class::E
+            || class[b as usize] != Class::E
+        {
             return None;
         }
         fan.push((a, v, b));
@@ -446,40 +522,26 @@ fn face_ring(
     }
     // Walk the fan: the quad after (a, v, b) is the one whose a is this b.
     ring.clear();
-    let mut edges_of_face: Vec<u32> = Vec::with_capacity(k);
+    edges.clear();
     let mut cur = 0usize;
     for _ in 0..k {
         let (_, v, b) = fan[cur];
         ring.push(v);
-        edges_of_face.push(b);
-        let next = fan.iter().position(|&(a2, _, _)| a2 == b)?;
-        cur = next;
+        edges.push(b);
+        cur = fan.iter().position(|&(a2, _, _)| a2 == b)?;
     }
     if cur != 0 {
         return None;
     }
     // Every quad of the fan visited once: the ring's edge points are distinct.
-    let mut sorted = edges_of_face.clone();
-    sorted.sort_unstable();
-    if sorted.windows(2).any(|w| w[0] == w[1]) {
+    if repeats(edges, scratch) || repeats(ring, scratch) {
         return None;
     }
-    let mut corners = ring.clone();
-    corners.sort_unstable();
-    if corners.windows(2).any(|w| w[0] == w[1]) {
-        return None;
-    }
-    Some(edges_of_face)
+    Some(())
 }
 
-/// Builds and checks the coarse mesh for one labeling.
-fn build(
-    t: &Topo,
-    vq_starts: &[u32],
-    vq: &[u32],
-    is_v: &dyn Fn(u32) -> bool,
-    is_f: &dyn Fn(u32) -> bool,
-) -> Option<Coarsening> {
+/// Builds and checks the coarse mesh for one labeling (`class`; `nf` fine quads).
+fn build(t: &Topo, corners: &Corners<'_>, class: &[Class], nf: usize) -> Option<Coarsening> {
     let n = t.nv;
     let mut coarse_id = vec![NONE; n];
     let mut to_fine = Vec::new();
@@ -490,15 +552,15 @@ fn build(
     let mut e_faces = vec![0u8; n];
     let mut visited_quads = 0usize;
     let mut fan: Vec<(u32, u32, u32)> = Vec::new(); // (a, v, b) per quad around f
-    let mut ring: Vec<u32> = Vec::new();
+    let (mut ring, mut edges, mut face, mut scratch) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for fp in 0..n as u32 {
-        if !is_f(fp) {
+        if class[fp as usize] != Class::F {
             continue;
         }
-        let edges_of_face = face_ring(t, &vq[vq_starts[fp as usize] as usize..vq_starts[fp as usize + 1] as usize], fp, is_v, is_f, &mut fan, &mut ring)?;
+        face_ring(corners, fp, class, &mut fan, &mut ring, &mut edges, &mut scratch)?;
         let k = ring.len();
         visited_quads += k;
-        let mut face = Vec::with_capacity(k);
+        face.clear();
         for &v in &ring {
             if coarse_id[v as usize] == NONE {
                 coarse_id[v as usize] = to_fine.len() as u32;
@@ -507,8 +569,8 @@ fn build(
             face.push(coarse_id[v as usize]);
         }
         for i in 0..k {
-            // edges_of_face[i] joins ring[i] and ring[i + 1].
-            let e = edges_of_face[i] as usize;
+            // edges[i] joins ring[i] and ring[i + 1].
+            let e = edges[i] as usize;
             let (a, b) = (face[i], face[(i + 1) % k]);
             if a == b {
                 return None;
@@ -526,7 +588,7 @@ fn build(
         coarse.push(&face);
         face_points.push(fp);
     }
-    if visited_quads != t.nf() {
+    if visited_quads != nf {
         return None;
     }
     coarse.nv = to_fine.len();
@@ -542,15 +604,14 @@ fn build(
             return None;
         }
         // An edge point lies in two quads per coarse face beside it, and in no others.
-        let quads = vq_starts[e + 1] - vq_starts[e];
-        if quads != 2 * e_faces[e] as u32 {
+        if corners.of(e as u32).len() != 2 * e_faces[e] as usize {
             return None;
         }
         edge_points.push((key, e as u32));
     }
     // Every vertex that is neither v nor f must be an edge point that was met.
-    for x in 0..n as u32 {
-        if !is_v(x) && !is_f(x) && e_ends[x as usize][0] == NONE {
+    for x in 0..n {
+        if class[x] == Class::E && e_ends[x][0] == NONE {
             return None;
         }
     }
