@@ -10,8 +10,6 @@
 //! Every step is linear in the mesh size; both choices are explored at each level, and as
 //! a level has a quarter of the faces of the one above, the whole search stays linear.
 
-use std::collections::VecDeque;
-
 use super::{PairMap, Recovered, Topo, NONE};
 
 /// One coarsening of a component: the coarse mesh in the fine mesh's local numbers.
@@ -280,7 +278,7 @@ pub(super) fn best(mut all: Vec<Chain>, nv: usize, keep: usize) -> Vec<Chain> {
     all
 }
 
-/// BFS 2-colouring over an adjacency given as CSR; `None` if not bipartite or not
+/// 2-colouring over an adjacency given as CSR; `None` if not bipartite or not
 /// connected (a component must be one piece).
 pub(super) fn two_colour(
     n: usize,
@@ -288,35 +286,36 @@ pub(super) fn two_colour(
     adj: &[u32],
     members: &[bool],
 ) -> Option<Vec<u8>> {
-    two_colour_with(n, members, |v, out| {
-        out.extend_from_slice(&adj[starts[v as usize] as usize..starts[v as usize + 1] as usize])
+    two_colour_with(n, members, |v| {
+        adj[starts[v as usize] as usize..starts[v as usize + 1] as usize]
+            .iter()
+            .copied()
     })
 }
 
-/// [`two_colour`] over the graph whose neighbours of `v` `neighbours(v, out)` appends to
-/// `out` (repeats allowed): the same colouring for the same edges, without a CSR
-/// adjacency (the memory of large meshes).
-pub(super) fn two_colour_with(
+/// [`two_colour`] over the graph whose neighbours of `v` are `neighbours(v)` (repeats
+/// allowed): the same colouring for the same edges, without a CSR adjacency (the
+/// memory of large meshes). A connected bipartite graph has one colouring with the
+/// first member's colour fixed, and the walk (depth first) checks every edge among
+/// the vertices it reaches, so any walk gives the same answer.
+pub(super) fn two_colour_with<I: IntoIterator<Item = u32>>(
     n: usize,
     members: &[bool],
-    neighbours: impl Fn(u32, &mut Vec<u32>),
+    neighbours: impl Fn(u32) -> I,
 ) -> Option<Vec<u8>> {
     let mut colour = vec![2u8; n];
     let first = members.iter().position(|&m| m)?;
     colour[first] = 0;
-    let mut queue = VecDeque::from([first as u32]);
+    let mut stack = vec![first as u32];
     let mut reached = 1usize;
-    let mut around = Vec::new();
-    while let Some(v) = queue.pop_front() {
+    while let Some(v) = stack.pop() {
         let c = colour[v as usize];
-        around.clear();
-        neighbours(v, &mut around);
-        for &w in &around {
+        for w in neighbours(v) {
             match colour[w as usize] {
                 2 => {
                     colour[w as usize] = 1 - c;
                     reached += 1;
-                    queue.push_back(w);
+                    stack.push(w);
                 }
                 x if x == c => return None,
                 _ => {}
@@ -450,34 +449,13 @@ impl Corners<'_> {
     }
 
     /// [`two_colour_with`] of the graph whose neighbours of `v` are the corners at
-    /// `offsets` from `v`'s in each of its quads: the same colouring (a connected
-    /// bipartite graph has one with the first member's colour fixed, and every edge
-    /// among the vertices reached is checked in either), walked depth first without a
-    /// list of neighbours per vertex.
+    /// `offsets` from `v`'s in each of its quads.
     fn two_colour(&self, members: &[bool], offsets: &[u32]) -> Option<Vec<u8>> {
-        let mut colour = vec![2u8; members.len()];
-        let first = members.iter().position(|&m| m)?;
-        colour[first] = 0;
-        let mut stack = vec![first as u32];
-        let mut reached = 1usize;
-        while let Some(v) = stack.pop() {
-            let c = colour[v as usize];
-            for &corner in self.of(v) {
-                for &at in offsets {
-                    let w = self.after(corner, at);
-                    match colour[w as usize] {
-                        2 => {
-                            colour[w as usize] = 1 - c;
-                            reached += 1;
-                            stack.push(w);
-                        }
-                        x if x == c => return None,
-                        _ => {}
-                    }
-                }
-            }
-        }
-        (reached == members.iter().filter(|&&m| m).count()).then_some(colour)
+        two_colour_with(members.len(), members, |v| {
+            self.of(v)
+                .iter()
+                .flat_map(move |&corner| offsets.iter().map(move |&at| self.after(corner, at)))
+        })
     }
 }
 
