@@ -5,7 +5,6 @@
 use super::*;
 use crate::topology::Level;
 use crate::transform::fit::Rules;
-use std::cell::RefCell;
 
 /// Mean [`fit::defect`] over the axes of the finest level above which `auto` does not
 /// try the fit, unless [`ROUGH_SCREEN`] lets it: rounded subdivision gives about 70 /
@@ -162,14 +161,12 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
             }
         }
         let limit = smooth.iter().min().is_none_or(|&(_, l)| l);
-        let found = distances.map_or_else(Vec::new, |d| {
-            semi_sharp(canon, finest, pos, &fine, &d, limit, caps)
-        });
-        for rules in found.iter().filter(|r| !sets.contains(r)) {
-            let op = fit::Operator::new(&canon.levels, finest, rules);
+        let found = distances.and_then(|d| semi_sharp(canon, finest, pos, &fine, &d, limit, caps));
+        if let Some(rules) = found.filter(|r| !sets.contains(r)) {
+            let op = fit::Operator::new(&canon.levels, finest, &rules);
             let control = robust_fit(&op, &fine, nb, caps);
             drop(op);
-            if let Some(p) = code_rules(target, header, bits, rules, &control) {
+            if let Some(p) = code_rules(target, header, bits, &rules, &control) {
                 keep(&mut best, p);
             }
         }
@@ -222,13 +219,8 @@ fn screened(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level, fine: &[[f64
     // the runs and the two-level fit but fold few finest edges, so every rule set is
     // tried where the finest faces meet at a small angle at their median (detail
     // folds most by far more; a flat chart keeps its UV rule).
-    // A tiny mesh is tried whatever it folds (over fewer levels a smooth surface
-    // folds more: Blender's creased cylinders over two levels by 0.2, as much as
-    // scans do), since the search there is cheap.
-    let far = far
-        && (chart
-            || finest.nv > SMOOTH_VERTICES
-            || (finest.nv > TINY_VERTICES && median_fold(finest, pos) > SMOOTH_FOLD));
+    let far =
+        far && (chart || finest.nv > SMOOTH_VERTICES || median_fold(finest, pos) > SMOOTH_FOLD);
     match (far, chart) {
         (false, _) => Screen::Open,
         (true, true) => Screen::Chart,
@@ -239,11 +231,6 @@ fn screened(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level, fine: &[[f64
 /// Finest vertices up to which a smooth surface is screened by its folds alone
 /// ([`screened`]): the fit's whole search there takes about a second at most.
 const SMOOTH_VERTICES: usize = 16_384;
-
-/// Finest vertices up to which every rule set is tried whatever the screens say
-/// ([`screened`]): the fit's whole search there takes a few tenths of a second at
-/// most.
-const TINY_VERTICES: usize = 1024;
 
 /// The median fold (radians) at the finest edges ([`median_fold`]) at or below which a
 /// small mesh is smooth enough for the fit: Blender's creased subdivision surfaces of
@@ -509,10 +496,10 @@ fn code_rules(
             ),
         };
         match target.glued {
-            None => fit::refine(&canon.levels, target.finest, rules, &mut x).ok()?,
+            None => fit::refine(&canon.levels, target.finest, rules, &mut x),
             Some(g) => {
                 h.seams = g.pairs.clone();
-                fit::refine(&g.canon.levels, &g.finest, rules, &mut x).ok()?;
+                fit::refine(&g.canon.levels, &g.finest, rules, &mut x);
                 x = x.each_ref().map(|xs| fit::spread(&g.map, xs));
             }
         }
@@ -526,7 +513,6 @@ fn code_rules(
             linear: rules.linear,
             bilinear: rules.bilinear,
             limit_corners: rules.limit_corners,
-            extra_levels: rules.extra_levels,
         };
         let listed = |sharpness: &[u32]| -> (Vec<u32>, Vec<u32>) {
             sharpness
@@ -811,7 +797,6 @@ const BILINEAR: Rules = Rules {
     linear: false,
     bilinear: true,
     limit_corners: false,
-    extra_levels: None,
 };
 
 /// The mean angle (radians) between the finest faces beside a base edge's descendants
@@ -907,26 +892,6 @@ const SCREEN_ITERATIONS: usize = 15;
 const SEARCH_ITERATIONS: usize = 200;
 const SEARCH_TOLERANCE: f64 = 1e-3;
 
-/// OpenSubdiv's isolation level by default (Blender's Subdivision Surface "Quality").
-const ISOLATION: usize = 3;
-
-/// Most vertices the encoder's search refines the extra levels to ([`isolation`]):
-/// every least squares fit past the isolation level works on that many points, and
-/// converges slowly there (a 48,898-vertex CAD model with one extra level, 196,000
-/// points: 135 s for one sharpness search, 65 s for its robust fit). Blender's
-/// shallow exports that need the extra levels are small (a creased 32-sided
-/// cylinder over two levels, 2,306 vertices, refines to 9,218).
-const EXTRA_SEARCH_VERTICES: usize = 1 << 15;
-
-/// The extra levels that reach [`ISOLATION`] from the hierarchy's levels, where it
-/// has at most that many and the extra levels stay within the search's bound
-/// ([`EXTRA_SEARCH_VERTICES`], below the format's): Blender's default limit of
-/// semi-sharp creases over 1 to 3 levels (SPEC.md 9.10).
-fn isolation(canon: &Canonical, finest: &Level) -> Option<u8> {
-    let e = ISOLATION.checked_sub(canon.levels.len())? as u8;
-    (e > 0 && fit::extra_vertices(finest, e) <= EXTRA_SEARCH_VERTICES).then_some(e)
-}
-
 /// The sharpness (units of 2^-16) of Blender's crease value `c`.
 fn crease_sharpness(c: f64) -> u32 {
     ((10.0 * c * c * fit::SHARP_ONE as f64).round() as u32).clamp(1, fit::SHARP_INFINITE)
@@ -939,8 +904,7 @@ fn crease_sharpness(c: f64) -> u32 {
 /// each is screened at a few sharpnesses, and the best, if it fits far better than the
 /// smooth surface, gets the sharpness that fits best by least squares. Then base
 /// vertices still far off are tried as vertex creases the same way (on the creases
-/// found, and alone). The rules found that fit better than the smooth surface (none
-/// where nothing does).
+/// found, and alone). `None` when nothing fits better than the smooth surface.
 fn semi_sharp(
     canon: &Canonical,
     finest: &Level,
@@ -949,7 +913,7 @@ fn semi_sharp(
     smooth: &(Vec<f64>, Vec<[f64; 3]>),
     limit: bool,
     caps: &[bool],
-) -> Vec<Rules> {
+) -> Option<Rules> {
     let (distances, start) = (&smooth.0[..], &smooth.1[..]);
     let median = median_of(distances);
     let cut = outlier_cut(median);
@@ -1005,21 +969,17 @@ fn semi_sharp(
         limit,
         ..Rules::default()
     };
-    // Vertices far off the smooth surface (placed by other rules) do not count; but
-    // a vertex crease's own vertices do while their search runs (else nothing in the
-    // fit tells its sharpness).
-    let counted: RefCell<Vec<bool>> = RefCell::new(
-        distances
-            .iter()
-            .zip(caps)
-            .map(|(&d, &c)| !c && d <= cut)
-            .collect(),
-    );
-    let ignored = RefCell::new(counted.borrow().iter().map(|&c| !c).collect::<Vec<bool>>());
+    // Vertices far off the smooth surface (placed by other rules) do not count.
+    let counted: Vec<bool> = distances
+        .iter()
+        .zip(caps)
+        .map(|(&d, &c)| !c && d <= cut)
+        .collect();
+    let ignored: Vec<bool> = counted.iter().map(|&c| !c).collect();
     let square = |p: &[[f64; 3]]| -> f64 {
         p.iter()
             .zip(fine)
-            .zip(counted.borrow().iter())
+            .zip(&counted)
             .filter(|(_, &c)| c)
             .map(|((p, y), _)| (0..3).map(|k| (y[k] - p[k]).powi(2)).sum::<f64>())
             .sum()
@@ -1028,7 +988,7 @@ fn semi_sharp(
     // vertices), and every vertex's distance.
     let misfit = |rules: &Rules, iterations: usize| -> (f64, Vec<f64>) {
         let op = fit::Operator::new(&canon.levels, finest, rules);
-        let control = op.fit(fine, start, &ignored.borrow(), iterations, SEARCH_TOLERANCE);
+        let control = op.fit(fine, start, &ignored, iterations, SEARCH_TOLERANCE);
         let p = op.apply(&control);
         let d = p
             .iter()
@@ -1050,17 +1010,9 @@ fn semi_sharp(
     // (between two whole sharpnesses k and k + 1 only level k's rules blend, by the
     // fraction, so the finest values move in proportion to it: a quadratic).
     let search = |set: &dyn Fn(u32) -> Rules| -> (u32, f64) {
-        // (Past the extra levels' refinements a finite sharpness changes nothing.)
-        let levels = levels + u32::from(set(1).extra_levels.unwrap_or(0));
         let fitted = |s: u32, from: &[[f64; 3]]| {
             let op = fit::Operator::new(&canon.levels, finest, &set(s));
-            let control = op.fit(
-                fine,
-                from,
-                &ignored.borrow(),
-                SEARCH_ITERATIONS,
-                SEARCH_TOLERANCE,
-            );
+            let control = op.fit(fine, from, &ignored, SEARCH_ITERATIONS, SEARCH_TOLERANCE);
             let m = square(&op.apply(&control));
             (m, control)
         };
@@ -1117,7 +1069,7 @@ fn semi_sharp(
             }
             s = now;
             let op = fit::Operator::new(&canon.levels, finest, &set(s));
-            control = op.fit(fine, &control, &ignored.borrow(), 400, FIT_TOLERANCE);
+            control = op.fit(fine, &control, &ignored, 400, FIT_TOLERANCE);
             let p = op.apply(&control);
             let p0 = fit::Operator::new(&canon.levels, finest, &set((k * fit::SHARP_ONE).max(1)))
                 .apply(&control);
@@ -1128,10 +1080,9 @@ fn semi_sharp(
                 .zip(&p0)
                 .map(|(a, b)| std::array::from_fn(|i| a[i] - b[i]))
                 .collect();
-            let along = op.fit(&v, &zero, &ignored.borrow(), 400, FIT_TOLERANCE);
+            let along = op.fit(&v, &zero, &ignored, 400, FIT_TOLERANCE);
             let q = op.apply(&along);
             let (mut rv, mut vv) = (0.0, 0.0);
-            let counted = counted.borrow();
             for i in (0..fine.len()).filter(|&i| counted[i]) {
                 for a in 0..3 {
                     let w = v[i][a] - q[i][a];
@@ -1161,60 +1112,28 @@ fn semi_sharp(
         }
         v
     };
-    // The limits tried: the limit surface (and plain refinement where it coded
-    // smaller), and past OpenSubdiv's isolation level (Blender's default Quality)
-    // where the hierarchy has fewer levels.
-    let isolated = isolation(canon, finest);
-    let mut limits = vec![(true, None)];
-    if !limit {
-        limits.push((false, None));
-    }
-    if isolated.is_some() {
-        limits.push((true, isolated));
-    }
-    // The best screened set of each kind of limit: without extra levels (the limit,
-    // or plain refinement), and with them, each searched if it fits far better than
-    // the smooth surface (a screen's two sharpnesses do not tell the kinds apart: a
-    // crease sharp for all levels but the last fits either nearly as well).
-    let screened = |kinds: &[(bool, Option<u8>)]| {
-        sets.iter()
-            .flat_map(|set| kinds.iter().map(move |&l| (set, l)))
-            .map(|(set, (limit, extra_levels))| {
-                let (m, _) = screen(&|s| Rules {
-                    limit,
-                    extra_levels,
-                    sharpness: with(set, base.ne(), s),
-                    ..Rules::default()
-                });
-                (m, set, limit, extra_levels)
-            })
-            .min_by(|a, b| a.0.total_cmp(&b.0))
-            .filter(|s| s.0 < SCREEN_GAIN * smooth)
-    };
-    let (plain_kinds, extra_kinds) = limits.split_at(limits.len() - isolated.is_some() as usize);
-    let mut edge_found: Vec<(Rules, f64)> = Vec::new();
-    // (The extra levels are screened only where a set screened well without them: at
-    // the larger screening value a crease is infinitely sharp in either kind, so a
-    // set that does not fit far better then is no crease set; and a screen past the
-    // isolation level refines four to sixteen times the finest vertices.)
-    for kinds in [plain_kinds, extra_kinds] {
-        if kinds == extra_kinds && edge_found.is_empty() {
-            break;
-        }
-        if let Some((_, edges, limit, extra_levels)) = screened(kinds) {
-            let set = |s| Rules {
+    let limits: &[bool] = if limit { &[true] } else { &[true, false] };
+    let screened = sets
+        .iter()
+        .flat_map(|set| limits.iter().map(move |&l| (set, l)))
+        .map(|(set, limit)| {
+            let (m, _) = screen(&|s| Rules {
                 limit,
-                extra_levels,
-                sharpness: with(edges, base.ne(), s),
+                sharpness: with(set, base.ne(), s),
                 ..Rules::default()
-            };
-            let (s, m) = search(&set);
-            edge_found.push((set(s), m));
-        }
-    }
-    for f in &edge_found {
-        if f.1 < best.1 {
-            best = f.clone();
+            });
+            (m, set, limit)
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0));
+    if let Some((_, edges, limit)) = screened.filter(|s| s.0 < SCREEN_GAIN * smooth) {
+        let set = |s| Rules {
+            limit,
+            sharpness: with(edges, base.ne(), s),
+            ..Rules::default()
+        };
+        let (s, m) = search(&set);
+        if m < best.1 {
+            best = (set(s), m);
         }
     }
     // Vertex creases: base vertices still far off, on the creases found and on the
@@ -1234,27 +1153,15 @@ fn semi_sharp(
         if screen(&set).0 >= SCREEN_GAIN * now {
             return None;
         }
-        // (Counted while searched: base vertex v is finest vertex v.)
-        let was: Vec<bool> = vertices.iter().map(|&v| counted.borrow()[v]).collect();
-        for &v in &vertices {
-            counted.borrow_mut()[v] = true;
-            ignored.borrow_mut()[v] = false;
-        }
         let (s, m) = search(&set);
-        for (&v, &c) in vertices.iter().zip(&was) {
-            counted.borrow_mut()[v] = c;
-            ignored.borrow_mut()[v] = !c;
-        }
         Some((set(s), m))
     };
     let mut found = Vec::new();
-    for (rules, _) in &edge_found {
-        let (m, d) = misfit(rules, SEARCH_ITERATIONS);
-        found.extend(vertex_creases(rules, &d, m));
+    if !best.0.sharpness.is_empty() {
+        let (m, d) = misfit(&best.0, SEARCH_ITERATIONS);
+        found.extend(vertex_creases(&best.0, &d, m));
     }
-    let alone = vertex_creases(&smooth_rules, distances, smooth);
-    let vertices_found = alone.is_some();
-    found.extend(alone);
+    found.extend(vertex_creases(&smooth_rules, distances, smooth));
     // (Where the plain smooth surface coded smaller, the vertex creases on the limit
     // too: an infinitely sharp corner pulls the smooth limit fit further off.)
     if !limit {
@@ -1264,25 +1171,12 @@ fn semi_sharp(
         };
         found.extend(vertex_creases(&on_limit, distances, smooth));
     }
-    // (And past the isolation level, where a finite vertex sharpness is smooth at the
-    // limit: where vertex creases screened well on the smooth surface.)
-    if isolated.is_some() && vertices_found {
-        let past = Rules {
-            limit: true,
-            extra_levels: isolated,
-            ..Rules::default()
-        };
-        found.extend(vertex_creases(&past, distances, smooth));
-    }
-    // Each that fits better than the smooth surface is coded (the vertex creases'
-    // misfits count their own vertices, so coding decides between them).
-    let mut out: Vec<Rules> = Vec::new();
-    for (rules, m) in std::iter::once(best).chain(edge_found).chain(found) {
-        if m < smooth && !out.contains(&rules) {
-            out.push(rules);
+    for f in found {
+        if f.1 < best.1 {
+            best = f;
         }
     }
-    out
+    (best.1 < smooth).then_some(best.0)
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
