@@ -350,7 +350,6 @@ pub(super) fn adjacency(n: usize, pairs: &[(u32, u32)]) -> (Vec<u32>, Vec<u32>) 
 /// old-vertex class containing the smallest non-edge vertex number first.
 pub(super) fn candidates(t: &Topo) -> Vec<Coarsening> {
     let n = t.nv;
-    let nf = t.nf();
     // (All quads: face f's corners are idx[4 f..4 f + 4].)
     for q in t.idx.chunks_exact(4) {
         if q[0] == q[1]
@@ -365,20 +364,7 @@ pub(super) fn candidates(t: &Topo) -> Vec<Coarsening> {
     }
     // The corners of each vertex (corner c is corner c % 4 of quad c / 4): the graphs
     // coloured below are walked through them.
-    let mut vc_starts = vec![0u32; n + 1];
-    for &v in &t.idx {
-        vc_starts[v as usize + 1] += 1;
-    }
-    for i in 0..n {
-        vc_starts[i + 1] += vc_starts[i];
-    }
-    let mut fill = vc_starts.clone();
-    let mut vc = vec![0u32; t.idx.len()];
-    for (c, &v) in t.idx.iter().enumerate() {
-        vc[fill[v as usize] as usize] = c as u32;
-        fill[v as usize] += 1;
-    }
-    drop(fill);
+    let (vc_starts, vc) = super::csr(n, t.idx.iter().enumerate().map(|(c, &v)| (v, c as u32)));
     let corners = Corners {
         idx: &t.idx,
         starts: &vc_starts,
@@ -408,7 +394,7 @@ pub(super) fn candidates(t: &Topo) -> Vec<Coarsening> {
                     (true, false) => Class::F,
                 })
                 .collect();
-            if let Some(c) = build(t, &corners, &class, nf) {
+            if let Some(c) = build(t, &corners, &class) {
                 out.push(c);
             }
         }
@@ -518,8 +504,8 @@ fn face_ring(
     Some(())
 }
 
-/// Builds and checks the coarse mesh for one labeling (`class`; `nf` fine quads).
-fn build(t: &Topo, corners: &Corners<'_>, class: &[Class], nf: usize) -> Option<Coarsening> {
+/// Builds and checks the coarse mesh for one labeling (`class`).
+fn build(t: &Topo, corners: &Corners<'_>, class: &[Class]) -> Option<Coarsening> {
     let n = t.nv;
     let mut coarse_id = vec![NONE; n];
     let mut to_fine = Vec::new();
@@ -566,7 +552,7 @@ fn build(t: &Topo, corners: &Corners<'_>, class: &[Class], nf: usize) -> Option<
         coarse.push(&face);
         face_points.push(fp);
     }
-    if visited_quads != nf {
+    if visited_quads != t.nf() {
         return None;
     }
     coarse.nv = to_fine.len();
