@@ -84,7 +84,7 @@ fn main() {
                 let s = (1i64 << extra) as f64;
                 let mut xs: [Vec<i64>; 3] =
                     std::array::from_fn(|k| b.iter().map(|v| (v[k] * s).round() as i64).collect());
-                refine(&canon.levels, &finest, &rules, &mut xs);
+                refine(&canon.levels, &finest, &rules, &mut xs).expect("within bounds");
                 for (k, x) in xs.iter().enumerate() {
                     let half = (1i64 << extra) >> 1;
                     let mut hist = std::collections::BTreeMap::new();

@@ -1,19 +1,16 @@
 //! How far a Blender export is from the project's integer subdivision rules (SPEC.md
 //! 9.10) applied to Blender's own control mesh: no fit, so a miss is a rule's.
-//! `cargo run --release --example rules_probe -- FINE.obj CONTROL.txt [plain] [extra=N]
-//! [smoothlimit]` (`extra=N`: N more levels refined before the limit, the finest
-//! level's vertices read from them: the limit of a crease with sharpness left past the
-//! last level; `smoothlimit`: the limit ignores the sharpness left, as OpenSubdiv's
-//! patches do past their isolation level, Blender's quality.)
+//! `cargo run --release --example rules_probe -- FINE.obj CONTROL.txt [plain] [extra=N]`
+//! (`extra=N`: the rules' extra levels, `Rules::extra_levels`: N more levels refined
+//! before the limit, where a finite sharpness left is smooth, as OpenSubdiv's patches
+//! are past their isolation level, Blender's Quality.)
 //! CONTROL.txt (written by `benches/blender/make_rules_set.py --control`): lines
 //! `v x y z` (the control mesh in the exported file's frame, its vertices first in the
 //! export), `e a b crease` and `c a crease` (edge and vertex creases, Blender's 0..1).
 //! Prints, per kind of finest vertex (base, edge, face points of the levels), how many
 //! miss by more than the rounding and the largest miss, on the file's 1e-6 grid.
 use subwave_codec::topology::{canonicalise, cc, Topo};
-use subwave_codec::transform::fit::{
-    place_on_limit, refine, Hard, Rules, SHARP_INFINITE, SHARP_ONE,
-};
+use subwave_codec::transform::fit::{refine, Rules, SHARP_INFINITE, SHARP_ONE};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -96,45 +93,11 @@ fn main() {
                 .collect()
         });
         let finest = canon.levels.last().expect("a level").next();
-        let extra: usize = args
+        rules.extra_levels = args
             .iter()
             .find_map(|a| a.strip_prefix("extra="))
-            .map_or(0, |n| n.parse().expect("extra=N"));
-        let smooth_limit = args.iter().any(|a| a == "smoothlimit");
-        if extra == 0 && !smooth_limit {
-            refine(&canon.levels, &finest, &rules, &mut x);
-        } else {
-            let mut levels = canon.levels.clone();
-            let mut last = finest.clone();
-            for _ in 0..extra {
-                let next = last.next();
-                levels.push(last);
-                last = next;
-            }
-            if smooth_limit {
-                let plain = Rules {
-                    limit: false,
-                    ..rules.clone()
-                };
-                refine(&levels, &last, &plain, &mut x);
-                let hard = Hard {
-                    edges: &[],
-                    vertices: &[],
-                    corners: rules.corners,
-                    linear: false,
-                    bilinear: false,
-                    limit_corners: false,
-                };
-                for xs in x.iter_mut() {
-                    place_on_limit(&last, hard, xs);
-                }
-            } else {
-                refine(&levels, &last, &rules, &mut x);
-            }
-            for xs in x.iter_mut() {
-                xs.truncate(finest.nv);
-            }
-        }
+            .map(|n| n.parse().expect("extra=N"));
+        refine(&canon.levels, &finest, &rules, &mut x).expect("extra levels within bounds");
         // Kinds: the level a vertex first appears at, and whether it is a vertex, edge
         // or face point there.
         let mut starts = vec![(0usize, "base")];

@@ -69,6 +69,10 @@ pub fn info(info: &Info) -> Value {
             Transform::Fit { limit_corners, .. } => Some(limit_corners),
             _ => None,
         },
+        "fit_extra_levels": match h.transform {
+            Transform::Fit { extra_levels, .. } => extra_levels,
+            _ => None,
+        },
         "creases": h.creases,
         "crease_sharpness": h.crease_sharpness,
         "vertex_creases": h.vertex_creases,

@@ -174,6 +174,7 @@ fn hostile_fit_containers_are_refused() {
         linear,
         bilinear,
         limit_corners,
+        extra_levels,
     } = enc.header.transform
     else {
         panic!("not a fit")
@@ -187,6 +188,7 @@ fn hostile_fit_containers_are_refused() {
         linear,
         bilinear,
         limit_corners,
+        extra_levels,
     };
     let at = head
         .iter()
@@ -266,6 +268,7 @@ fn hostile_fit_containers_are_refused() {
         ("linear everywhere with linear boundaries", 128 | 8),
         ("corners kept at the limit without the limit", 256),
         ("vertex sharpnesses without creased vertices", 512),
+        ("extra levels without the limit", 1024),
     ] {
         match subwave::decode_slice(&rewritten(rules_as(rules), |_, _| {})) {
             Err(Error::Container(e)) => {
@@ -278,8 +281,25 @@ fn hostile_fit_containers_are_refused() {
             other => panic!("{what}: expected a malformed header, got {other:?}"),
         }
     }
+    // Extra levels past 3 are malformed (the header's byte follows the rules).
+    let extra_as = |e: u8| {
+        move |h: &mut Vec<u8>| {
+            rules_as(u64::from(h[at + 1]) | 1 | 1024)(h);
+            h.insert(at + 3, e);
+        }
+    };
+    match subwave::decode_slice(&rewritten(extra_as(4), |_, _| {})) {
+        Err(Error::Container(e)) => assert!(e.to_string().contains("extra levels"), "{e}"),
+        other => panic!("4 extra levels: expected a malformed header, got {other:?}"),
+    }
+    // One extra level is a header the decoder reads: the residuals then meet another
+    // prediction, which decodes or fails cleanly.
+    match subwave::decode_slice(&rewritten(extra_as(1), |_, _| {})) {
+        Ok(_) | Err(Error::CorruptLevel { .. }) => {}
+        other => panic!("one extra level: {other:?}"),
+    }
     // Fit rules the format does not define are unsupported, not guessed at.
-    match subwave::decode_slice(&rewritten(rules_as(1024), |_, _| {})) {
+    match subwave::decode_slice(&rewritten(rules_as(2048), |_, _| {})) {
         Err(Error::Unsupported(what)) => assert!(what.contains("fit rules"), "{what}"),
         other => panic!("unknown fit rules: {other:?}"),
     }
@@ -301,6 +321,20 @@ fn prism_and_rims() -> (subwave_corpus::PolyMesh, Vec<[u32; 2]>) {
         .flat_map(|f| (0..f.len()).map(move |i| [f[i], f[(i + 1) % f.len()]]))
         .collect();
     (control, rims)
+}
+
+/// The container decodes to `mesh` exactly and its residuals cost under a bit per
+/// vertex.
+fn exact_with_near_zero_residuals(enc: &subwave::Encoded, mesh: &Mesh, what: &str) {
+    assert_exact(&enc.bytes, mesh, what);
+    let (n, r) = (mesh.vertex_count(), residual_bytes(&enc.bytes));
+    assert!(
+        8 * r < n,
+        "{what}: {r} B of residuals for {n} vertices ({:?}, {:?} {:?})",
+        enc.header.crease_sharpness,
+        enc.header.vertex_creases,
+        enc.header.vertex_sharpness
+    );
 }
 
 /// Bytes of a container's finest LEVL section (a fit's residuals).
@@ -445,19 +479,92 @@ fn semi_sharp_creases_are_found_with_their_sharpness() {
                 assert!((s - v).abs() < 0.01, "{what}: sharpness {s}");
             }
         }
-        assert_exact(&enc.bytes, &mesh, &what);
-        let (n, r) = (mesh.vertex_count(), residual_bytes(&enc.bytes));
-        assert!(
-            8 * r < n,
-            "{what}: {r} B of residuals for {n} vertices ({:?}, {:?} {:?})",
-            enc.header.crease_sharpness,
-            enc.header.vertex_creases,
-            enc.header.vertex_sharpness
-        );
+        exact_with_near_zero_residuals(&enc, &mesh, &what);
         // Infinitely sharp rules miss these surfaces (but where the sharpness
         // outlasts the four levels).
         let sharp = common::to_mesh(&control.subdivision_surface(4, &rims, true), 1e5);
         assert_eq!(sharp.positions == mesh.positions, sharpness > 4.0, "{what}");
+    }
+}
+
+#[test]
+fn semi_sharp_creases_over_fewer_levels_than_the_isolation_level_are_found() {
+    // Blender's default Quality (OpenSubdiv's isolation level 3) over two levels:
+    // the limit of three levels' refinement, where a finite sharpness left is smooth
+    // (the corpus crate's float evaluation). The prism's rims at crease 0.5 and 0.7
+    // (sharpness 2.5 and 4.9) and one vertex crease (sharpness 2.6): the fit finds the
+    // creases, their sharpness and the extra level, decodes exactly, and its residuals
+    // cost next to nothing; the limit of the two levels alone is another surface.
+    // (Seven prisms side by side: two levels of one are too few vertices to weigh a
+    // residual against the coder's fixed costs; seven, 910 vertices, stay a mesh
+    // small enough that `auto` tries the fit whatever it folds.)
+    let (prism, prism_rims) = prism_and_rims();
+    let copies = 7u32;
+    let nv = prism.positions.len() as u32;
+    let control = subwave_corpus::union(
+        &(0..copies)
+            .map(|i| subwave_corpus::translate(prism.clone(), [3.0 * i as f64, 0.0, 0.0]))
+            .collect::<Vec<_>>(),
+    );
+    let rims: Vec<[u32; 2]> = (0..copies)
+        .flat_map(|i| prism_rims.iter().map(move |e| e.map(|v| v + i * nv)))
+        .collect();
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    let corner = control.faces[0][0];
+    for (crease, vertex) in [(0.5, None), (0.7, None), (0.0, Some(2.6))] {
+        let sharpness: f64 = 10.0 * crease * crease;
+        let edges: Vec<([u32; 2], f64)> = if vertex.is_none() {
+            rims.iter().map(|&e| (e, sharpness)).collect()
+        } else {
+            Vec::new()
+        };
+        let vertices: Vec<(u32, f64)> = vertex
+            .into_iter()
+            .flat_map(|s| (0..copies).map(move |i| (corner + i * nv, s)))
+            .collect();
+        let surface = control.subdivision_surface_isolated(2, 1, &edges, &vertices, Kept::Nothing);
+        let mesh = common::to_mesh(&surface, 1e6);
+        let what = format!("crease {crease}, vertex {vertex:?}");
+        let two = control.subdivision_surface_sharp(2, &edges, &vertices, true, Kept::Nothing);
+        assert_ne!(
+            common::to_mesh(&two, 1e6).positions,
+            mesh.positions,
+            "{what}"
+        );
+        // (`auto` tries the fit on so few vertices, though two levels of a smooth
+        // surface fold as much as a scan does.)
+        let enc = encode(&mesh, &q, TransformChoice::Auto);
+        assert!(
+            matches!(
+                enc.header.transform,
+                Transform::Fit {
+                    limit: true,
+                    extra_levels: Some(1),
+                    ..
+                }
+            ),
+            "{what}: {:?} {:?} {:?} {} B of residuals, {} vertices",
+            enc.header.transform,
+            enc.header.vertex_creases,
+            enc.header.vertex_sharpness,
+            residual_bytes(&enc.bytes),
+            mesh.vertex_count()
+        );
+        let found = if vertex.is_none() {
+            enc.header.creases.len()
+        } else {
+            enc.header.vertex_creases.len()
+        };
+        assert_eq!(
+            found,
+            if vertex.is_none() {
+                rims.len()
+            } else {
+                vertices.len()
+            },
+            "{what}"
+        );
+        exact_with_near_zero_residuals(&enc, &mesh, &what);
     }
 }
 

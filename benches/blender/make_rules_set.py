@@ -7,7 +7,8 @@ Runs inside Blender 5.0.1's Python module (`pip install bpy==5.0.1`, Python 3.11
 and writes, with Blender's own OBJ and PLY exporters at their defaults, one file per
 rule the subdivision fit must know: semi-sharp edge creases, vertex creases, the
 boundary options, the end caps' quality, the limit surface off, triangle and n-gon
-control meshes, and UV smoothing options. Nothing is displaced: every position is
+control meshes, and UV smoothing options; creases also over two levels, fewer than
+the Quality's. Nothing is displaced: every position is
 Blender's evaluation of its Subdivision Surface modifier. The files are made at run
 time and never committed (the project ships no Blender output); `rules_set.sh` codes
 them. Blender is deterministic here: two runs give the same bytes.
@@ -106,6 +107,18 @@ def cylinder(crease, levels=4):
     return ob
 
 
+def mixed_cube(out, levels):
+    """A cube with its top edges creased at 0.6 and two bottom corners at 0.9."""
+    fresh()
+    bpy.ops.mesh.primitive_cube_add(size=1.4)
+    ob = bpy.context.active_object
+    crease_edges(ob.data, lambda a, b: a.z > 0 and b.z > 0, 0.6)
+    crease_vertices(ob.data, lambda co: co.z < 0 and co.x < 0, 0.9)
+    bpy.ops.object.shade_smooth()
+    subdivide(ob, levels)
+    export(out, f"cube_mixed_creases_cc{levels}")
+
+
 def main(out):
     # Semi-sharp edge creases (OpenSubdiv's sharpness is Blender's 10 c^2 here).
     for crease in (0.3, 0.5, 0.7):
@@ -113,6 +126,15 @@ def main(out):
         ob = cylinder(crease)
         subdivide(ob, 4)
         export(out, f"cylinder8_crease{int(crease * 10):02d}_cc4")
+    # The same over Blender's default render levels (2), below its default Quality
+    # (3): OpenSubdiv evaluates the limit one level further, where the sharpness left
+    # is smooth. Creased rims, and a cube with edge and vertex creases.
+    for crease in (0.5, 0.7):
+        fresh()
+        ob = cylinder(crease)
+        subdivide(ob, 2)
+        export(out, f"cylinder8_crease{int(crease * 10):02d}_cc2")
+    mixed_cube(out, 2)
     # Vertex creases: a cube's eight corners, and one corner of a box sharp.
     for crease in (0.5, 1.0):
         fresh()
@@ -123,14 +145,7 @@ def main(out):
         subdivide(ob, 4)
         export(out, f"cube_vcrease{int(crease * 10):02d}_cc4")
     # Edge and vertex creases together, mixed sharpness on one mesh.
-    fresh()
-    bpy.ops.mesh.primitive_cube_add(size=1.4)
-    ob = bpy.context.active_object
-    crease_edges(ob.data, lambda a, b: a.z > 0 and b.z > 0, 0.6)
-    crease_vertices(ob.data, lambda co: co.z < 0 and co.x < 0, 0.9)
-    bpy.ops.object.shade_smooth()
-    subdivide(ob, 4)
-    export(out, "cube_mixed_creases_cc4")
+    mixed_cube(out, 4)
     # Open boundaries: the boundary option, a grid of 4 x 4 quads, bent.
     for smooth in ("PRESERVE_CORNERS", "ALL"):
         fresh()

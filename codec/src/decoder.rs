@@ -241,6 +241,7 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
             linear,
             bilinear,
             limit_corners,
+            extra_levels,
         } => {
             let rules = fit::Rules {
                 limit,
@@ -248,6 +249,7 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
                 linear,
                 bilinear,
                 limit_corners,
+                extra_levels,
                 ..fit::Rules::default()
             };
             synthesise_fit(&c, &h, base, bits, &rules, level)?
@@ -951,12 +953,9 @@ fn synthesise_fit(
             }
         };
     }
-    if rules.limit {
-        let rl = glued.as_ref().map_or(&level, |g| &g.0);
-        for xs in x.iter_mut() {
-            fit::place_on_limit(rl, rules.hard(&sharp), xs);
-        }
-    }
+    let rl = glued.as_ref().map_or(&level, |g| &g.0);
+    fit::place_finest(rl, rules, sharp, &mut x)
+        .map_err(|e| Error::corrupt("HEAD", e.to_string()))?;
     if let Some((_, map)) = &glued {
         for xs in x.iter_mut() {
             *xs = fit::spread(map, xs);

@@ -163,6 +163,7 @@ pub fn fit_rules(h: &Header) -> String {
         linear,
         bilinear,
         limit_corners,
+        extra_levels,
         ..
     } = h.transform
     else {
@@ -219,6 +220,12 @@ pub fn fit_rules(h: &Header) -> String {
     }
     if limit_corners {
         rules.push("corners kept at the limit".to_string());
+    }
+    if let Some(e) = extra_levels {
+        rules.push(format!(
+            "the limit {e} level{} further, finite sharpness smooth there",
+            if e == 1 { "" } else { "s" }
+        ));
     }
     rules.join(", ")
 }

@@ -279,6 +279,22 @@ impl PolyMesh {
         limit: bool,
         kept: Kept,
     ) -> PolyMesh {
+        let (mut m, sharp) = self.creased(levels, edges, vertices, kept);
+        if limit {
+            m.positions = m.limit_positions(&sharp, kept);
+        }
+        m
+    }
+
+    /// `levels` Catmull-Clark steps with the creases `edges` and `vertices` (as
+    /// [`PolyMesh::subdivision_surface_sharp`] takes them), and the creases left.
+    fn creased(
+        &self,
+        levels: u32,
+        edges: &[([u32; 2], f64)],
+        vertices: &[(u32, f64)],
+        kept: Kept,
+    ) -> (PolyMesh, Creases) {
         let mut sharp = Creases {
             edges: edges
                 .iter()
@@ -290,10 +306,29 @@ impl PolyMesh {
         for _ in 0..levels {
             (m, sharp) = m.catmull_clark_creased(&sharp, kept);
         }
-        if limit {
-            m.positions = m.limit_positions(&sharp, kept);
-        }
-        m
+        (m, sharp)
+    }
+
+    /// [`PolyMesh::subdivision_surface_sharp`] on the limit as OpenSubdiv evaluates it
+    /// past its isolation level (Blender's Quality) over fewer levels: `extra` more
+    /// steps with the creases, then the limit with a finite sharpness left smooth (an
+    /// infinite one sharp); the mesh of `levels` steps, its vertices placed there.
+    pub fn subdivision_surface_isolated(
+        &self,
+        levels: u32,
+        extra: u32,
+        edges: &[([u32; 2], f64)],
+        vertices: &[(u32, f64)],
+        kept: Kept,
+    ) -> PolyMesh {
+        let (mut out, _) = self.creased(levels, edges, vertices, kept);
+        let (m, mut sharp) = self.creased(levels + extra, edges, vertices, kept);
+        sharp.edges.retain(|_, s| *s >= INFINITELY_SHARP);
+        sharp.vertices.retain(|_, s| *s >= INFINITELY_SHARP);
+        let placed = m.limit_positions(&sharp, kept);
+        let n = out.positions.len();
+        out.positions.copy_from_slice(&placed[..n]);
+        out
     }
 
     /// The limit positions of [`PolyMesh::subdivision_surface`].

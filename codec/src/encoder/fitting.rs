@@ -5,6 +5,7 @@
 use super::*;
 use crate::topology::Level;
 use crate::transform::fit::Rules;
+use std::cell::{Cell, RefCell};
 
 /// Mean [`fit::defect`] over the axes of the finest level above which `auto` does not
 /// try the fit, unless [`ROUGH_SCREEN`] lets it: rounded subdivision gives about 70 /
@@ -45,11 +46,13 @@ pub(crate) fn code_fit(
         Some(f) => f,
         None => canon.levels.last()?.next(),
     };
+    let budget = Budget::new(&finest);
     let mut target = Target {
         canon,
         pos,
         finest: &finest,
         glued: None,
+        budget: &budget,
     };
     let cut = search(&target, header, bits, screen);
     // Where the mesh is cut at seams, the search again on it glued (the cut codes
@@ -161,12 +164,14 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
             }
         }
         let limit = smooth.iter().min().is_none_or(|&(_, l)| l);
-        let found = distances.and_then(|d| semi_sharp(canon, finest, pos, &fine, &d, limit, caps));
-        if let Some(rules) = found.filter(|r| !sets.contains(r)) {
-            let op = fit::Operator::new(&canon.levels, finest, &rules);
+        let found = distances.map_or_else(Vec::new, |d| {
+            semi_sharp(canon, finest, pos, &d, limit, caps, target.budget)
+        });
+        for rules in found.iter().filter(|r| !sets.contains(r)) {
+            let op = fit::Operator::new(&canon.levels, finest, rules);
             let control = robust_fit(&op, &fine, nb, caps);
             drop(op);
-            if let Some(p) = code_rules(target, header, bits, &rules, &control) {
+            if let Some(p) = code_rules(target, header, bits, rules, &control) {
                 keep(&mut best, p);
             }
         }
@@ -219,8 +224,13 @@ fn screened(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level, fine: &[[f64
     // the runs and the two-level fit but fold few finest edges, so every rule set is
     // tried where the finest faces meet at a small angle at their median (detail
     // folds most by far more; a flat chart keeps its UV rule).
-    let far =
-        far && (chart || finest.nv > SMOOTH_VERTICES || median_fold(finest, pos) > SMOOTH_FOLD);
+    // A tiny mesh is tried whatever it folds (over fewer levels a smooth surface
+    // folds more: Blender's creased cylinders over two levels by 0.2, as much as
+    // scans do), since the search there is cheap.
+    let far = far
+        && (chart
+            || finest.nv > SMOOTH_VERTICES
+            || (finest.nv > TINY_VERTICES && median_fold(finest, pos) > SMOOTH_FOLD));
     match (far, chart) {
         (false, _) => Screen::Open,
         (true, true) => Screen::Chart,
@@ -231,6 +241,20 @@ fn screened(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level, fine: &[[f64
 /// Finest vertices up to which a smooth surface is screened by its folds alone
 /// ([`screened`]): the fit's whole search there takes about a second at most.
 const SMOOTH_VERTICES: usize = 16_384;
+
+/// Finest vertices up to which every rule set is tried whatever the screens say
+/// ([`screened`]): the fit's whole search there takes a few tenths of a second at
+/// most.
+const TINY_VERTICES: usize = 1024;
+
+/// The crease searches' budget per finest vertex on a mesh of at most
+/// [`TINY_VERTICES`] of them, in weights applied ([`fit::Operator::work`]; about 30
+/// instructions each with callgrind). Blender's creased cylinders over two levels (194
+/// vertices) take 190,000 to 250,000 a vertex to the end of the search (their creases
+/// are found by 80,000), seven creased prisms over two levels (910 vertices, `tests/fit.rs`)
+/// 160,000; `corpus/two_components_cc2.obj` (132 vertices) took 740,000, 0.28 s of
+/// its encoding's 0.29 s, where a fuzzing build runs about 20 times slower.
+const TINY_WORK: u64 = 1 << 18;
 
 /// The median fold (radians) at the finest edges ([`median_fold`]) at or below which a
 /// small mesh is smooth enough for the fit: Blender's creased subdivision surfaces of
@@ -378,6 +402,8 @@ struct Target<'a> {
     /// The level after the hierarchy's last.
     finest: &'a Level,
     glued: Option<&'a GluedMesh>,
+    /// The crease searches' budget, shared by every search on the mesh.
+    budget: &'a Budget,
 }
 
 /// A hierarchy glued at its seams (SPEC.md 9.10): the glued levels and finest values,
@@ -496,10 +522,10 @@ fn code_rules(
             ),
         };
         match target.glued {
-            None => fit::refine(&canon.levels, target.finest, rules, &mut x),
+            None => fit::refine(&canon.levels, target.finest, rules, &mut x).ok()?,
             Some(g) => {
                 h.seams = g.pairs.clone();
-                fit::refine(&g.canon.levels, &g.finest, rules, &mut x);
+                fit::refine(&g.canon.levels, &g.finest, rules, &mut x).ok()?;
                 x = x.each_ref().map(|xs| fit::spread(&g.map, xs));
             }
         }
@@ -513,6 +539,7 @@ fn code_rules(
             linear: rules.linear,
             bilinear: rules.bilinear,
             limit_corners: rules.limit_corners,
+            extra_levels: rules.extra_levels,
         };
         let listed = |sharpness: &[u32]| -> (Vec<u32>, Vec<u32>) {
             sharpness
@@ -797,6 +824,7 @@ const BILINEAR: Rules = Rules {
     linear: false,
     bilinear: true,
     limit_corners: false,
+    extra_levels: None,
 };
 
 /// The mean angle (radians) between the finest faces beside a base edge's descendants
@@ -892,6 +920,26 @@ const SCREEN_ITERATIONS: usize = 15;
 const SEARCH_ITERATIONS: usize = 200;
 const SEARCH_TOLERANCE: f64 = 1e-3;
 
+/// OpenSubdiv's isolation level by default (Blender's Subdivision Surface "Quality").
+const ISOLATION: usize = 3;
+
+/// Most vertices the encoder's search refines the extra levels to ([`isolation`]):
+/// every least squares fit past the isolation level works on that many points, and
+/// converges slowly there (a 48,898-vertex CAD model with one extra level, 196,000
+/// points: 135 s for one sharpness search, 65 s for its robust fit). Blender's
+/// shallow exports that need the extra levels are small (a creased 32-sided
+/// cylinder over two levels, 2,306 vertices, refines to 9,218).
+const EXTRA_SEARCH_VERTICES: usize = 1 << 15;
+
+/// The extra levels that reach [`ISOLATION`] from the hierarchy's levels, where it
+/// has at most that many and the extra levels stay within the search's bound
+/// ([`EXTRA_SEARCH_VERTICES`], below the format's): Blender's default limit of
+/// semi-sharp creases over 1 to 3 levels (SPEC.md 9.10).
+fn isolation(canon: &Canonical, finest: &Level) -> Option<u8> {
+    let e = ISOLATION.checked_sub(canon.levels.len())? as u8;
+    (e > 0 && fit::extra_vertices(finest, e) <= EXTRA_SEARCH_VERTICES).then_some(e)
+}
+
 /// The sharpness (units of 2^-16) of Blender's crease value `c`.
 fn crease_sharpness(c: f64) -> u32 {
     ((10.0 * c * c * fit::SHARP_ONE as f64).round() as u32).clamp(1, fit::SHARP_INFINITE)
@@ -904,17 +952,26 @@ fn crease_sharpness(c: f64) -> u32 {
 /// each is screened at a few sharpnesses, and the best, if it fits far better than the
 /// smooth surface, gets the sharpness that fits best by least squares. Then base
 /// vertices still far off are tried as vertex creases the same way (on the creases
-/// found, and alone). `None` when nothing fits better than the smooth surface.
+/// found, and alone). The rules found that fit better than the smooth surface (none
+/// where nothing does), within `budget` (what it has found when that is spent).
 fn semi_sharp(
     canon: &Canonical,
     finest: &Level,
     pos: &[Vec<i64>; 3],
-    fine: &[[f64; 3]],
     smooth: &(Vec<f64>, Vec<[f64; 3]>),
     limit: bool,
     caps: &[bool],
-) -> Option<Rules> {
+    budget: &Budget,
+) -> Vec<Rules> {
     let (distances, start) = (&smooth.0[..], &smooth.1[..]);
+    let fine = &floats(pos)[..];
+    // Every operator's work is charged to the budget; once it is spent, the search
+    // keeps what it has found and tries nothing more.
+    let operator = |rules: &Rules| Charged {
+        op: fit::Operator::new(&canon.levels, finest, rules),
+        to: budget,
+    };
+    let exhausted = || budget.exhausted();
     let median = median_of(distances);
     let cut = outlier_cut(median);
     let base = &canon.levels[0];
@@ -969,17 +1026,21 @@ fn semi_sharp(
         limit,
         ..Rules::default()
     };
-    // Vertices far off the smooth surface (placed by other rules) do not count.
-    let counted: Vec<bool> = distances
-        .iter()
-        .zip(caps)
-        .map(|(&d, &c)| !c && d <= cut)
-        .collect();
-    let ignored: Vec<bool> = counted.iter().map(|&c| !c).collect();
+    // Vertices far off the smooth surface (placed by other rules) do not count; but
+    // a vertex crease's own vertices do while their search runs (else nothing in the
+    // fit tells its sharpness).
+    let counted: RefCell<Vec<bool>> = RefCell::new(
+        distances
+            .iter()
+            .zip(caps)
+            .map(|(&d, &c)| !c && d <= cut)
+            .collect(),
+    );
+    let ignored = RefCell::new(counted.borrow().iter().map(|&c| !c).collect::<Vec<bool>>());
     let square = |p: &[[f64; 3]]| -> f64 {
         p.iter()
             .zip(fine)
-            .zip(&counted)
+            .zip(counted.borrow().iter())
             .filter(|(_, &c)| c)
             .map(|((p, y), _)| (0..3).map(|k| (y[k] - p[k]).powi(2)).sum::<f64>())
             .sum()
@@ -987,8 +1048,8 @@ fn semi_sharp(
     // The least-squares misfit of `rules` (the sum of squares over the counted
     // vertices), and every vertex's distance.
     let misfit = |rules: &Rules, iterations: usize| -> (f64, Vec<f64>) {
-        let op = fit::Operator::new(&canon.levels, finest, rules);
-        let control = op.fit(fine, start, &ignored, iterations, SEARCH_TOLERANCE);
+        let op = operator(rules);
+        let control = op.fit(fine, start, &ignored.borrow(), iterations, SEARCH_TOLERANCE);
         let p = op.apply(&control);
         let d = p
             .iter()
@@ -1001,7 +1062,10 @@ fn semi_sharp(
     let screen = |set: &dyn Fn(u32) -> Rules| -> (f64, f64) {
         SCREEN_CREASES
             .iter()
-            .map(|&c| (misfit(&set(crease_sharpness(c)), SCREEN_ITERATIONS).0, c))
+            .map(|&c| match exhausted() {
+                true => (f64::MAX, c),
+                false => (misfit(&set(crease_sharpness(c)), SCREEN_ITERATIONS).0, c),
+            })
             .fold((f64::MAX, 1.0), |a, b| if b.0 < a.0 { b } else { a })
     };
     // The sharpness that fits best: the control values fitted at each whole
@@ -1010,9 +1074,17 @@ fn semi_sharp(
     // (between two whole sharpnesses k and k + 1 only level k's rules blend, by the
     // fraction, so the finest values move in proportion to it: a quadratic).
     let search = |set: &dyn Fn(u32) -> Rules| -> (u32, f64) {
+        // (Past the extra levels' refinements a finite sharpness changes nothing.)
+        let levels = levels + u32::from(set(1).extra_levels.unwrap_or(0));
         let fitted = |s: u32, from: &[[f64; 3]]| {
-            let op = fit::Operator::new(&canon.levels, finest, &set(s));
-            let control = op.fit(fine, from, &ignored, SEARCH_ITERATIONS, SEARCH_TOLERANCE);
+            let op = operator(&set(s));
+            let control = op.fit(
+                fine,
+                from,
+                &ignored.borrow(),
+                SEARCH_ITERATIONS,
+                SEARCH_TOLERANCE,
+            );
             let m = square(&op.apply(&control));
             (m, control)
         };
@@ -1022,6 +1094,9 @@ fn semi_sharp(
             .map(|k| k * fit::SHARP_ONE)
             .chain([fit::SHARP_INFINITE])
         {
+            if exhausted() {
+                break;
+            }
             let (m, c) = fitted(s.max(1), start);
             if m < best.0 {
                 best = (m, s.max(1), c);
@@ -1042,6 +1117,9 @@ fn semi_sharp(
         let (mut x1, mut x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
         let (mut f1, mut f2) = (at(x1), at(x2));
         for _ in 0..GOLDEN_STEPS {
+            if exhausted() {
+                break;
+            }
             if f1 <= f2 {
                 (hi, x2, f2) = (x2, x1, f1);
                 x1 = hi - g * (hi - lo);
@@ -1063,26 +1141,28 @@ fn semi_sharp(
         let mut m = f64::MAX;
         let zero = vec![[0.0; 3]; nb];
         for _ in 0..SETTLE_ROUNDS {
+            if exhausted() {
+                break;
+            }
             let now = (((k as f64 + t) * one).round() as u32).max(1);
             if now == s {
                 break;
             }
             s = now;
-            let op = fit::Operator::new(&canon.levels, finest, &set(s));
-            control = op.fit(fine, &control, &ignored, 400, FIT_TOLERANCE);
+            let op = operator(&set(s));
+            control = op.fit(fine, &control, &ignored.borrow(), 400, FIT_TOLERANCE);
             let p = op.apply(&control);
-            let p0 = fit::Operator::new(&canon.levels, finest, &set((k * fit::SHARP_ONE).max(1)))
-                .apply(&control);
-            let p1 = fit::Operator::new(&canon.levels, finest, &set((k + 1) * fit::SHARP_ONE))
-                .apply(&control);
+            let p0 = operator(&set((k * fit::SHARP_ONE).max(1))).apply(&control);
+            let p1 = operator(&set((k + 1) * fit::SHARP_ONE)).apply(&control);
             let v: Vec<[f64; 3]> = p1
                 .iter()
                 .zip(&p0)
                 .map(|(a, b)| std::array::from_fn(|i| a[i] - b[i]))
                 .collect();
-            let along = op.fit(&v, &zero, &ignored, 400, FIT_TOLERANCE);
+            let along = op.fit(&v, &zero, &ignored.borrow(), 400, FIT_TOLERANCE);
             let q = op.apply(&along);
             let (mut rv, mut vv) = (0.0, 0.0);
+            let counted = counted.borrow();
             for i in (0..fine.len()).filter(|&i| counted[i]) {
                 for a in 0..3 {
                     let w = v[i][a] - q[i][a];
@@ -1101,7 +1181,7 @@ fn semi_sharp(
             (best.1, best.0)
         }
     };
-    let smooth = square(&fit::Operator::new(&canon.levels, finest, &smooth_rules).apply(start));
+    let smooth = square(&operator(&smooth_rules).apply(start));
     let mut best = (smooth_rules.clone(), smooth);
     // Edge creases: the set (and limit rule) that fits best at a few sharpnesses is
     // searched, if it fits far better than the smooth surface.
@@ -1112,33 +1192,68 @@ fn semi_sharp(
         }
         v
     };
-    let limits: &[bool] = if limit { &[true] } else { &[true, false] };
-    let screened = sets
-        .iter()
-        .flat_map(|set| limits.iter().map(move |&l| (set, l)))
-        .map(|(set, limit)| {
-            let (m, _) = screen(&|s| Rules {
+    // The limits tried: the limit surface (and plain refinement where it coded
+    // smaller), and past OpenSubdiv's isolation level (Blender's default Quality)
+    // where the hierarchy has fewer levels.
+    let isolated = isolation(canon, finest);
+    let mut limits = vec![(true, None)];
+    if !limit {
+        limits.push((false, None));
+    }
+    if isolated.is_some() {
+        limits.push((true, isolated));
+    }
+    // The best screened set of each kind of limit: without extra levels (the limit,
+    // or plain refinement), and with them, each searched if it fits far better than
+    // the smooth surface (a screen's two sharpnesses do not tell the kinds apart: a
+    // crease sharp for all levels but the last fits either nearly as well).
+    let screened = |kinds: &[(bool, Option<u8>)]| {
+        sets.iter()
+            .flat_map(|set| kinds.iter().map(move |&l| (set, l)))
+            .map(|(set, (limit, extra_levels))| {
+                let (m, _) = screen(&|s| Rules {
+                    limit,
+                    extra_levels,
+                    sharpness: with(set, base.ne(), s),
+                    ..Rules::default()
+                });
+                (m, set, limit, extra_levels)
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .filter(|s| s.0 < SCREEN_GAIN * smooth)
+    };
+    let (plain_kinds, extra_kinds) = limits.split_at(limits.len() - isolated.is_some() as usize);
+    let mut edge_found: Vec<(Rules, f64)> = Vec::new();
+    // (The extra levels are screened only where a set screened well without them: at
+    // the larger screening value a crease is infinitely sharp in either kind, so a
+    // set that does not fit far better then is no crease set; and a screen past the
+    // isolation level refines four to sixteen times the finest vertices.)
+    for kinds in [plain_kinds, extra_kinds] {
+        if kinds == extra_kinds && edge_found.is_empty() {
+            break;
+        }
+        if let Some((_, edges, limit, extra_levels)) = screened(kinds) {
+            let set = |s| Rules {
                 limit,
-                sharpness: with(set, base.ne(), s),
+                extra_levels,
+                sharpness: with(edges, base.ne(), s),
                 ..Rules::default()
-            });
-            (m, set, limit)
-        })
-        .min_by(|a, b| a.0.total_cmp(&b.0));
-    if let Some((_, edges, limit)) = screened.filter(|s| s.0 < SCREEN_GAIN * smooth) {
-        let set = |s| Rules {
-            limit,
-            sharpness: with(edges, base.ne(), s),
-            ..Rules::default()
-        };
-        let (s, m) = search(&set);
-        if m < best.1 {
-            best = (set(s), m);
+            };
+            let (s, m) = search(&set);
+            edge_found.push((set(s), m));
+        }
+    }
+    for f in &edge_found {
+        if f.1 < best.1 {
+            best = f.clone();
         }
     }
     // Vertex creases: base vertices still far off, on the creases found and on the
     // smooth surface (a vertex crease's edges may pass for creases).
     let vertex_creases = |rules: &Rules, d: &[f64], now: f64| -> Option<(Rules, f64)> {
+        if exhausted() {
+            return None;
+        }
         let median = median_of(d);
         let vertices: Vec<usize> = (0..nb)
             .filter(|&v| d[v] > (VERTEX_FACTOR * median).max(OUTLIER_FLOOR))
@@ -1153,15 +1268,27 @@ fn semi_sharp(
         if screen(&set).0 >= SCREEN_GAIN * now {
             return None;
         }
+        // (Counted while searched: base vertex v is finest vertex v.)
+        let was: Vec<bool> = vertices.iter().map(|&v| counted.borrow()[v]).collect();
+        for &v in &vertices {
+            counted.borrow_mut()[v] = true;
+            ignored.borrow_mut()[v] = false;
+        }
         let (s, m) = search(&set);
+        for (&v, &c) in vertices.iter().zip(&was) {
+            counted.borrow_mut()[v] = c;
+            ignored.borrow_mut()[v] = !c;
+        }
         Some((set(s), m))
     };
     let mut found = Vec::new();
-    if !best.0.sharpness.is_empty() {
-        let (m, d) = misfit(&best.0, SEARCH_ITERATIONS);
-        found.extend(vertex_creases(&best.0, &d, m));
+    for (rules, _) in edge_found.iter().take_while(|_| !exhausted()) {
+        let (m, d) = misfit(rules, SEARCH_ITERATIONS);
+        found.extend(vertex_creases(rules, &d, m));
     }
-    found.extend(vertex_creases(&smooth_rules, distances, smooth));
+    let alone = vertex_creases(&smooth_rules, distances, smooth);
+    let vertices_found = alone.is_some();
+    found.extend(alone);
     // (Where the plain smooth surface coded smaller, the vertex creases on the limit
     // too: an infinitely sharp corner pulls the smooth limit fit further off.)
     if !limit {
@@ -1171,14 +1298,150 @@ fn semi_sharp(
         };
         found.extend(vertex_creases(&on_limit, distances, smooth));
     }
-    for f in found {
-        if f.1 < best.1 {
-            best = f;
+    // (And past the isolation level, where a finite vertex sharpness is smooth at the
+    // limit: where vertex creases screened well on the smooth surface.)
+    if isolated.is_some() && vertices_found {
+        let past = Rules {
+            limit: true,
+            extra_levels: isolated,
+            ..Rules::default()
+        };
+        found.extend(vertex_creases(&past, distances, smooth));
+    }
+    // Each that fits better than the smooth surface is coded (the vertex creases'
+    // misfits count their own vertices, so coding decides between them).
+    let mut out: Vec<Rules> = Vec::new();
+    for (rules, m) in std::iter::once(best).chain(edge_found).chain(found) {
+        if m < smooth && !out.contains(&rules) {
+            out.push(rules);
         }
     }
-    (best.1 < smooth).then_some(best.0)
+    out
+}
+
+/// The work ([`fit::Operator::work`]) the fit's crease searches on one mesh may do
+/// ([`semi_sharp`]): bounded on tiny meshes ([`TINY_WORK`]), where every rule set is
+/// tried whatever the screens say.
+struct Budget {
+    spent: Cell<u64>,
+    limit: Option<u64>,
+}
+
+impl Budget {
+    fn new(finest: &Level) -> Budget {
+        Budget {
+            spent: Cell::new(0),
+            limit: (finest.nv <= TINY_VERTICES).then(|| TINY_WORK * finest.nv as u64),
+        }
+    }
+
+    fn exhausted(&self) -> bool {
+        self.limit.is_some_and(|b| self.spent.get() >= b)
+    }
+}
+
+/// An operator whose work ([`fit::Operator::work`]) is charged to a budget when it
+/// is dropped.
+struct Charged<'a> {
+    op: fit::Operator,
+    to: &'a Budget,
+}
+
+impl std::ops::Deref for Charged<'_> {
+    type Target = fit::Operator;
+    fn deref(&self) -> &fit::Operator {
+        &self.op
+    }
+}
+
+impl Drop for Charged<'_> {
+    fn drop(&mut self) {
+        self.to.spent.set(self.to.spent.get() + self.op.work());
+    }
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     std::array::from_fn(|k| a[k] - b[k])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::topology::{self, fixtures::pseudo, Topo};
+
+    /// A cube's six quads refined twice, its hierarchy (two levels) and values: a
+    /// random control mesh refined with two of its edges creased (sharpness 1.5),
+    /// plus a little noise.
+    fn creased_cube() -> (Canonical, Level, [Vec<i64>; 3]) {
+        let mut t = Topo::new(8);
+        t.starts = (0..=6).map(|f| 4 * f).collect();
+        t.idx = vec![
+            0, 1, 3, 2, 4, 6, 7, 5, 0, 4, 5, 1, 2, 3, 7, 6, 0, 2, 6, 4, 1, 5, 7, 3,
+        ];
+        for _ in 0..2 {
+            t = Level::new(&t).unwrap().fine();
+        }
+        let rec = topology::cc::recover_all(t.nv, &t, 16).remove(0);
+        let canon = topology::canonicalise(&rec, true).unwrap();
+        let finest = canon.levels.last().unwrap().next();
+        let mut sharpness = vec![0; canon.levels[0].ne()];
+        sharpness[0] = 3 * fit::SHARP_ONE / 2;
+        sharpness[1] = 3 * fit::SHARP_ONE / 2;
+        let rules = Rules {
+            limit: true,
+            sharpness,
+            ..Rules::default()
+        };
+        let mut x: [Vec<i64>; 3] = std::array::from_fn(|k| {
+            pseudo(k as u64 + 7, canon.base.nv, 12)
+                .iter()
+                .map(|&v| v * 16)
+                .collect()
+        });
+        fit::refine(&canon.levels, &finest, &rules, &mut x).unwrap();
+        for (k, xs) in x.iter_mut().enumerate() {
+            for (v, n) in xs.iter_mut().zip(pseudo(k as u64 + 20, finest.nv, 2)) {
+                *v += n;
+            }
+        }
+        (canon, finest, x)
+    }
+
+    /// The crease search stops once its budget is spent, well before it would have
+    /// without one, and a budget it keeps within changes nothing.
+    #[test]
+    fn the_crease_search_stops_at_its_budget() {
+        let (canon, finest, pos) = creased_cube();
+        let fine = floats(&pos);
+        let smooth = Rules {
+            limit: true,
+            ..Rules::default()
+        };
+        let op = fit::Operator::new(&canon.levels, &finest, &smooth);
+        let caps = vec![false; finest.nv];
+        let control = robust_fit(&op, &fine, canon.base.nv, &caps);
+        let start = (distances_from(&op, &control, &fine), control);
+        let search = |limit: Option<u64>| {
+            let budget = Budget {
+                spent: Cell::new(0),
+                limit,
+            };
+            let found = semi_sharp(&canon, &finest, &pos, &start, true, &caps, &budget);
+            (found, budget.spent.get())
+        };
+        let (found, free) = search(None);
+        assert!(!found.is_empty(), "the creases are found");
+        for limit in [free / 16, free / 8] {
+            let (_, spent) = search(Some(limit));
+            assert!(
+                (limit..free / 2).contains(&spent),
+                "{spent} spent on a budget of {limit} (unbounded {free})"
+            );
+        }
+        assert_eq!(
+            search(Some(free)),
+            (found, free),
+            "a budget it keeps within"
+        );
+    }
 }

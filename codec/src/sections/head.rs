@@ -45,6 +45,9 @@ pub enum Transform {
         /// At the limit, boundary vertices with one face keep their values (SPEC.md
         /// 9.10).
         limit_corners: bool,
+        /// With the limit, `Some(e)`: `e` more levels refined before it, where a
+        /// finite sharpness left is smooth (SPEC.md 9.10), `0..=3`.
+        extra_levels: Option<u8>,
     },
 }
 
@@ -205,6 +208,8 @@ const FIT_BILINEAR: u64 = 128;
 const FIT_LIMIT_CORNERS: u64 = 256;
 /// Fit rules: the creased vertices' sharpnesses follow their list.
 const FIT_VERTEX_SEMI_SHARP: u64 = 512;
+/// Fit rules: a byte of extra levels refined before the limit follows the rules.
+const FIT_EXTRA_LEVELS: u64 = 1024;
 /// The largest crease sharpness a header holds: infinitely sharp (SPEC.md 9.10).
 const MAX_SHARPNESS: u64 = crate::transform::fit::SHARP_INFINITE as u64;
 
@@ -232,6 +237,7 @@ impl Header {
             linear,
             bilinear,
             limit_corners,
+            extra_levels,
         } = self.transform
         {
             w.u8(bits);
@@ -246,8 +252,12 @@ impl Header {
                     | flag(!self.seams.is_empty(), FIT_SEAMS)
                     | flag(bilinear, FIT_BILINEAR)
                     | flag(limit_corners, FIT_LIMIT_CORNERS)
-                    | flag(!self.vertex_sharpness.is_empty(), FIT_VERTEX_SEMI_SHARP),
+                    | flag(!self.vertex_sharpness.is_empty(), FIT_VERTEX_SEMI_SHARP)
+                    | flag(extra_levels.is_some(), FIT_EXTRA_LEVELS),
             );
+            if let Some(e) = extra_levels {
+                w.u8(e);
+            }
         }
         match self.quantization {
             Quantization::Decimal { decimals } => {
@@ -644,7 +654,8 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, u64)> {
                 | FIT_SEAMS
                 | FIT_BILINEAR
                 | FIT_LIMIT_CORNERS
-                | FIT_VERTEX_SEMI_SHARP;
+                | FIT_VERTEX_SEMI_SHARP
+                | FIT_EXTRA_LEVELS;
             if rules & !known != 0 {
                 return Err(Error::Unsupported(format!(
                     "fit rules {rules:#x} (byte {at})"
@@ -667,6 +678,22 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, u64)> {
             if rules & FIT_LIMIT_CORNERS != 0 && rules & FIT_LIMIT == 0 {
                 return Err(malformed(at, "limit corners without the limit"));
             }
+            if rules & FIT_EXTRA_LEVELS != 0 && rules & FIT_LIMIT == 0 {
+                return Err(malformed(at, "extra levels without the limit"));
+            }
+            let extra_levels = if rules & FIT_EXTRA_LEVELS != 0 {
+                let at = r.offset();
+                let e = r.u8("fit extra levels")?;
+                if e > crate::transform::fit::MAX_EXTRA_LEVELS {
+                    return Err(malformed(
+                        at,
+                        format!("a fit with {e} extra levels, at most 3"),
+                    ));
+                }
+                Some(e)
+            } else {
+                None
+            };
             let fit = Transform::Fit {
                 bits,
                 limit: rules & FIT_LIMIT != 0,
@@ -674,6 +701,7 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, u64)> {
                 linear: rules & FIT_LINEAR != 0,
                 bilinear: rules & FIT_BILINEAR != 0,
                 limit_corners: rules & FIT_LIMIT_CORNERS != 0,
+                extra_levels,
             };
             (fit, rules)
         }
