@@ -325,24 +325,10 @@ pub(super) fn two_colour_with<I: IntoIterator<Item = u32>>(
     (reached == members.iter().filter(|&&m| m).count()).then_some(colour)
 }
 
+/// The CSR adjacency of the undirected graph of `n` vertices with edges `pairs`:
+/// each vertex's neighbours in the order of the pairs.
 pub(super) fn adjacency(n: usize, pairs: &[(u32, u32)]) -> (Vec<u32>, Vec<u32>) {
-    let mut starts = vec![0u32; n + 1];
-    for &(a, b) in pairs {
-        starts[a as usize + 1] += 1;
-        starts[b as usize + 1] += 1;
-    }
-    for i in 0..n {
-        starts[i + 1] += starts[i];
-    }
-    let mut fill = starts.clone();
-    let mut adj = vec![0u32; starts[n] as usize];
-    for &(a, b) in pairs {
-        adj[fill[a as usize] as usize] = b;
-        fill[a as usize] += 1;
-        adj[fill[b as usize] as usize] = a;
-        fill[b as usize] += 1;
-    }
-    (starts, adj)
+    super::csr(n, pairs.iter().flat_map(|&(a, b)| [(a, b), (b, a)]))
 }
 
 /// Every valid coarsening of a connected all-quad component, in a fixed order: edge
