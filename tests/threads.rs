@@ -1,7 +1,8 @@
 //! The encoder's thread count changes nothing in the container: every mesh of `corpus/`
 //! (Catmull-Clark, polar, sqrt(2), fit, grid and flat, shuffled too; cube_cc4 is both a
-//! Catmull-Clark and a sqrt(2) hierarchy, so its two families code at once) coded on
-//! one, two and three threads, exact and at 12 bits, with and without the stored order.
+//! Catmull-Clark and a sqrt(2) hierarchy, so its two families code at once; the fits'
+//! rule sets are fitted at once) coded on one, two and three threads, exact and at 12
+//! bits, with and without the stored order.
 
 use subwave::EncodeOptions;
 

@@ -5,7 +5,8 @@
 use super::*;
 use crate::topology::Level;
 use crate::transform::fit::Rules;
-use std::cell::{Cell, RefCell};
+use std::cell::RefCell;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 /// Mean [`fit::defect`] over the axes of the finest level above which `auto` does not
 /// try the fit, unless [`ROUGH_SCREEN`] lets it: rounded subdivision gives about 70 /
@@ -29,7 +30,8 @@ pub(crate) const FIT_BITS: [u8; 3] = [6, 8, 10];
 /// values from least squares, then for each precision in `bits` the integer subdivision
 /// and the residuals; the smallest coding (B = 0 when no precision in `bits` keeps the
 /// values in range). `None` when `screen` is set and the finest level is far from any
-/// subdivision.
+/// subdivision. The rule sets' fits run on up to `threads` threads at once; the result
+/// is the same for every count.
 pub(crate) fn code_fit(
     canon: &Canonical,
     pos: &[Vec<i64>; 3],
@@ -37,6 +39,7 @@ pub(crate) fn code_fit(
     bits: &[u8],
     screen: bool,
     finest: Option<Level>,
+    threads: usize,
 ) -> Option<Payloads> {
     if !canon.poles.is_empty() {
         return None;
@@ -53,6 +56,7 @@ pub(crate) fn code_fit(
         finest: &finest,
         glued: None,
         budget: &budget,
+        threads: threads.max(1),
     };
     let cut = search(&target, header, bits, screen);
     // Where the mesh is cut at seams, the search again on it glued (the cut codes
@@ -120,7 +124,10 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
         let mut distances = None;
         // The smallest coding with kept corners: its size, rules and control values.
         let mut kept_corners = None;
-        for rules in &sets {
+        // Each rule set's control values by least squares, the limit surface's
+        // distances where it is the plain limit, and its coding: on the threads at
+        // once, taken in the sets' order (the same for every count).
+        let fitted = super::search::par_map(&sets, target.threads, |rules| {
             let op = fit::Operator::new(&canon.levels, finest, rules);
             let control = robust_fit(&op, &fine, nb, caps);
             // (Smooth: no rule but the limit's.)
@@ -129,11 +136,16 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
                     limit: rules.limit,
                     ..Rules::default()
                 };
-            if plain && rules.limit {
-                distances = Some((distances_from(&op, &control, &fine), control.clone()));
-            }
+            let d = (plain && rules.limit).then(|| distances_from(&op, &control, &fine));
             drop(op);
-            if let Some(p) = code_rules(target, header, bits, rules, &control) {
+            let p = code_rules(target, header, bits, rules, &control);
+            (plain, control, d, p)
+        });
+        for (rules, (plain, control, d, p)) in sets.iter().zip(fitted) {
+            if let Some(d) = d {
+                distances = Some((d, control.clone()));
+            }
+            if let Some(p) = p {
                 if plain {
                     smooth.push((p.size(), rules.limit));
                 }
@@ -404,6 +416,8 @@ struct Target<'a> {
     glued: Option<&'a GluedMesh>,
     /// The crease searches' budget, shared by every search on the mesh.
     budget: &'a Budget,
+    /// Threads the rule sets' fits may take at once (at least 1).
+    threads: usize,
 }
 
 /// A hierarchy glued at its seams (SPEC.md 9.10): the glued levels and finest values,
@@ -1323,20 +1337,20 @@ fn semi_sharp(
 /// ([`semi_sharp`]): bounded on tiny meshes ([`TINY_WORK`]), where every rule set is
 /// tried whatever the screens say.
 struct Budget {
-    spent: Cell<u64>,
+    spent: AtomicU64,
     limit: Option<u64>,
 }
 
 impl Budget {
     fn new(finest: &Level) -> Budget {
         Budget {
-            spent: Cell::new(0),
+            spent: AtomicU64::new(0),
             limit: (finest.nv <= TINY_VERTICES).then(|| TINY_WORK * finest.nv as u64),
         }
     }
 
     fn exhausted(&self) -> bool {
-        self.limit.is_some_and(|b| self.spent.get() >= b)
+        self.limit.is_some_and(|b| self.spent.load(Relaxed) >= b)
     }
 }
 
@@ -1356,7 +1370,7 @@ impl std::ops::Deref for Charged<'_> {
 
 impl Drop for Charged<'_> {
     fn drop(&mut self) {
-        self.to.spent.set(self.to.spent.get() + self.op.work());
+        self.to.spent.fetch_add(self.op.work(), Relaxed);
     }
 }
 
@@ -1423,11 +1437,11 @@ mod tests {
         let start = (distances_from(&op, &control, &fine), control);
         let search = |limit: Option<u64>| {
             let budget = Budget {
-                spent: Cell::new(0),
+                spent: AtomicU64::new(0),
                 limit,
             };
             let found = semi_sharp(&canon, &finest, &pos, &start, true, &caps, &budget);
-            (found, budget.spent.get())
+            (found, budget.spent.load(Relaxed))
         };
         let (found, free) = search(None);
         assert!(!found.is_empty(), "the creases are found");

@@ -1076,7 +1076,15 @@ fn best_hierarchy(
             canon.unstow()?;
             let pos = canonical_positions(mesh, canon);
             let made = finest.take().filter(|_| i == 0);
-            let fitted = code_fit(canon, &pos, flat_h, &FIT_BITS, !fit_only, made);
+            let fitted = code_fit(
+                canon,
+                &pos,
+                flat_h,
+                &FIT_BITS,
+                !fit_only,
+                made,
+                opts.threads,
+            );
             let missed = fitted.as_ref().filter(|p| {
                 p.levels
                     .last()
@@ -1120,8 +1128,15 @@ fn best_hierarchy(
                     if !fit_only && !fitting::near_subdivision(&canon, &pos) {
                         continue;
                     }
-                    let Some(mut p) = code_fit(&canon, &pos, flat_h, &FIT_BITS, !fit_only, None)
-                    else {
+                    let Some(mut p) = code_fit(
+                        &canon,
+                        &pos,
+                        flat_h,
+                        &FIT_BITS,
+                        !fit_only,
+                        None,
+                        opts.threads,
+                    ) else {
                         continue;
                     };
                     size = Some(size.map_or(p.size(), |s| s.min(p.size())));
