@@ -177,7 +177,7 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
         }
         let limit = smooth.iter().min().is_none_or(|&(_, l)| l);
         let found = distances.map_or_else(Vec::new, |d| {
-            semi_sharp(canon, finest, pos, &d, limit, caps, target.budget)
+            semi_sharp(canon, finest, pos, &fine, &d, limit, caps, target.budget)
         });
         for rules in found.iter().filter(|r| !sets.contains(r)) {
             let op = fit::Operator::new(&canon.levels, finest, rules);
@@ -968,17 +968,18 @@ fn crease_sharpness(c: f64) -> u32 {
 /// vertices still far off are tried as vertex creases the same way (on the creases
 /// found, and alone). The rules found that fit better than the smooth surface (none
 /// where nothing does), within `budget` (what it has found when that is spent).
+#[allow(clippy::too_many_arguments)]
 fn semi_sharp(
     canon: &Canonical,
     finest: &Level,
     pos: &[Vec<i64>; 3],
+    fine: &[[f64; 3]],
     smooth: &(Vec<f64>, Vec<[f64; 3]>),
     limit: bool,
     caps: &[bool],
     budget: &Budget,
 ) -> Vec<Rules> {
     let (distances, start) = (&smooth.0[..], &smooth.1[..]);
-    let fine = &floats(pos)[..];
     // Every operator's work is charged to the budget; once it is spent, the search
     // keeps what it has found and tries nothing more.
     let operator = |rules: &Rules| Charged {
@@ -1440,7 +1441,7 @@ mod tests {
                 spent: AtomicU64::new(0),
                 limit,
             };
-            let found = semi_sharp(&canon, &finest, &pos, &start, true, &caps, &budget);
+            let found = semi_sharp(&canon, &finest, &pos, &fine, &start, true, &caps, &budget);
             (found, budget.spent.load(Relaxed))
         };
         let (found, free) = search(None);
