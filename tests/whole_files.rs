@@ -419,3 +419,57 @@ fn floats_in_exponent_form_are_markers_not_literals() {
         "template {t_exp} B with exponent forms, {t_plain} B without"
     );
 }
+
+/// A writer that takes `room` bytes and then fails (a full disk).
+struct Full {
+    taken: Vec<u8>,
+    room: usize,
+}
+
+impl std::io::Write for Full {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.taken.len() + buf.len() > self.room {
+            return Err(std::io::Error::other("no room"));
+        }
+        self.taken.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// `Decoded::write_file` writes the file as it is made, in pieces: into a writer it is
+/// the file's bytes, and a writer that fails part way gives an I/O error, having taken
+/// the file's first bytes only.
+#[test]
+fn a_file_is_written_in_pieces_and_a_failing_writer_is_an_error() {
+    // A file of several of the writer's pieces (64 KiB each).
+    let mesh = subwave_corpus::large_cube(5);
+    let bytes = mesh.to_obj(6).into_bytes();
+    assert!(bytes.len() > 3 << 16, "{} bytes", bytes.len());
+    let m = subwave::load(&bytes, None).unwrap();
+    let opts = EncodeOptions {
+        keep_order: true,
+        source: m.source(),
+        ..Default::default()
+    };
+    let enc = subwave::encode_file(&m.mesh, &m.quantization, &opts, &bytes, m.format).unwrap();
+    let dec = subwave::decode_slice(&enc.bytes).unwrap();
+    let mut whole = Vec::new();
+    let n = dec.write_file(&mut whole).unwrap().unwrap();
+    assert_eq!(n, bytes.len() as u64);
+    assert!(whole == bytes, "the file's bytes back");
+    for room in [0, 1000, 1 << 16, bytes.len() - 1] {
+        let mut w = Full {
+            taken: Vec::new(),
+            room,
+        };
+        match dec.write_file(&mut w).unwrap() {
+            Err(subwave::Error::Io(_)) => {}
+            other => panic!("room {room}: {other:?}"),
+        }
+        assert!(w.taken.len() <= room && bytes.starts_with(&w.taken));
+    }
+}

@@ -797,31 +797,52 @@ fn decompress(
         Source::Unknown => false,
     };
     let original = format.is_none() && Format::from_path(output).is_none_or(same_kind);
-    let buf = match dec.file().filter(|_| original) {
-        Some(file) => file.map_err(|e| fail(input, e))?,
-        None => {
-            let lost: Vec<&str> = dec
-                .mesh
-                .attributes
-                .iter()
-                .filter(|a| !subwave::writes_attribute(fmt, a))
-                .map(|a| a.name.as_str())
-                .collect();
-            if !cli.quiet && !lost.is_empty() {
-                eprintln!(
-                    "subwave: warning: {output}: {} holds no such attribute channel, not written: {}",
-                    fmt.name(),
-                    lost.join(", ")
-                );
-            }
-            let mut buf = Vec::new();
-            subwave::write_mesh(&mut buf, &dec.mesh, &dec.quantization, fmt)
-                .map_err(|e| fail(output, e))?;
-            buf
+    let keeps_file = original && dec.template.is_some();
+    if !keeps_file {
+        let lost: Vec<&str> = dec
+            .mesh
+            .attributes
+            .iter()
+            .filter(|a| !subwave::writes_attribute(fmt, a))
+            .map(|a| a.name.as_str())
+            .collect();
+        if !cli.quiet && !lost.is_empty() {
+            eprintln!(
+                "subwave: warning: {output}: {} holds no such attribute channel, not written: {}",
+                fmt.name(),
+                lost.join(", ")
+            );
         }
-    };
-    write_output(output, &buf)?;
-    Ok(buf.len() as u64)
+    }
+    // Written as it is made, not held whole (a large file's memory).
+    stream_output(input, output, |w| {
+        if keeps_file {
+            if let Some(n) = dec.write_file(&mut *w) {
+                return n;
+            }
+        }
+        let mut counted = Counted { inner: w, bytes: 0 };
+        subwave::write_mesh(&mut counted, &dec.mesh, &dec.quantization, fmt)?;
+        Ok(counted.bytes)
+    })
+}
+
+/// A writer that counts the bytes written through it.
+struct Counted<W> {
+    inner: W,
+    bytes: u64,
+}
+
+impl<W: Write> Write for Counted<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.bytes += n as u64;
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
 }
 
 /// A mesh file whose extension names one format and whose content is another is refused
@@ -883,6 +904,58 @@ fn check_output(input: &str, output: &str, binary: bool, force: bool) -> Result<
 
 /// Writes the output whole or not at all: to a temporary file beside it, renamed into
 /// place once written. A closed standard output ends quietly.
+/// Writes `output` (a file, or standard output for `-`) with `write`, through a buffer
+/// and, for a file, into a temporary file beside it that is renamed when complete (and
+/// removed on an error); the bytes written. An error writing is the output's; any
+/// other (a container whose file does not match its channels) is `input`'s.
+fn stream_output(
+    input: &str,
+    output: &str,
+    write: impl FnOnce(&mut dyn Write) -> subwave::Result<u64>,
+) -> Result<u64, Failure> {
+    let blame = |e: subwave::Error| match e {
+        subwave::Error::Io(e) => Failure {
+            closed_pipe: e.kind() == std::io::ErrorKind::BrokenPipe,
+            ..fail(output, e)
+        },
+        e => fail(input, e),
+    };
+    if output == "-" {
+        let mut out = std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
+        let n = write(&mut out).map_err(blame)?;
+        out.flush().map_err(|e| blame(e.into()))?;
+        return Ok(n);
+    }
+    let tmp = temporary_beside(output);
+    let written = std::fs::File::create(&tmp)
+        .map_err(subwave::Error::from)
+        .and_then(|f| {
+            let mut out = std::io::BufWriter::with_capacity(1 << 16, f);
+            let n = write(&mut out)?;
+            let f = out.into_inner().map_err(|e| e.into_error())?;
+            f.sync_all()?;
+            std::fs::rename(&tmp, output)?;
+            Ok(n)
+        });
+    written.map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        blame(e)
+    })
+}
+
+/// The temporary file an output is written to before it is renamed into place.
+fn temporary_beside(path: &str) -> std::path::PathBuf {
+    let target = Path::new(path);
+    let dir = target
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = target
+        .file_name()
+        .map_or("out".into(), |n| n.to_string_lossy());
+    dir.join(format!(".{name}.{}.subwave-tmp", std::process::id()))
+}
+
 fn write_output(path: &str, bytes: &[u8]) -> Result<(), Failure> {
     if path == "-" {
         let mut out = std::io::stdout().lock();
@@ -894,18 +967,10 @@ fn write_output(path: &str, bytes: &[u8]) -> Result<(), Failure> {
                 ..fail(path, e)
             });
     }
-    let target = Path::new(path);
-    let dir = target
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = target
-        .file_name()
-        .map_or("out".into(), |n| n.to_string_lossy());
-    let tmp = dir.join(format!(".{name}.{}.subwave-tmp", std::process::id()));
+    let tmp = temporary_beside(path);
     let written = std::fs::File::create(&tmp)
         .and_then(|mut f| f.write_all(bytes).and_then(|_| f.sync_all()))
-        .and_then(|_| std::fs::rename(&tmp, target));
+        .and_then(|_| std::fs::rename(&tmp, path));
     if let Err(e) = written {
         let _ = std::fs::remove_file(&tmp);
         return Err(fail(path, e));

@@ -57,12 +57,22 @@ impl Decoded {
     /// The input file, byte for byte, when the container keeps its own bytes (a
     /// container written by [`crate::encode_file`], decoded whole).
     pub fn file(&self) -> Option<Result<Vec<u8>>> {
+        let mut out = Vec::new();
+        Some(self.write_file(&mut out)?.map(|_| out))
+    }
+
+    /// Writes the input file, byte for byte, to `out` as [`Decoded::file`] makes it,
+    /// without holding it whole (a large file's memory); the bytes written. `None`
+    /// when the container does not keep the file. On an error (a template that does
+    /// not match its channels) part of the file may have been written.
+    pub fn write_file<W: std::io::Write>(&self, out: W) -> Option<Result<u64>> {
         let t = self.template.as_ref()?;
-        Some(crate::io::template::expand(
+        Some(crate::io::template::expand_into(
             t,
             &self.mesh,
             &self.quantization,
             &self.channels,
+            out,
         ))
     }
 }

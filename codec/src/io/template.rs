@@ -554,7 +554,32 @@ pub(super) fn checked(b: Builder<'_>, bytes: &[u8]) -> Option<(Vec<u8>, Channels
     {
         ch.indices.channels.pop();
     }
-    (expand(&t, mesh, q, &ch).ok()? == bytes).then_some((t, ch))
+    // Compared as it is written, not made whole beside the file (a large file's memory).
+    let mut same = Same { rest: bytes };
+    let n = expand_into(&t, mesh, q, &ch, &mut same).ok()?;
+    (n == bytes.len() as u64).then_some((t, ch))
+}
+
+/// A writer that takes only the bytes `rest` starts with (each write the next of them);
+/// any other byte is an error.
+struct Same<'a> {
+    rest: &'a [u8],
+}
+
+impl std::io::Write for Same<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match self.rest.strip_prefix(buf) {
+            Some(rest) => {
+                self.rest = rest;
+                Ok(buf.len())
+            }
+            None => Err(std::io::Error::other("not the file's bytes")),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
 }
 
 /// How many normal components a template's markers write.
@@ -598,17 +623,25 @@ pub(crate) fn verbatim(bytes: &[u8], mesh: &Mesh, q: &Quantization) -> Vec<u8> {
 
 /// The file a template stands for, with the decoded `mesh` (in the file's order) and
 /// its corner index channels.
-pub(crate) fn expand(
+/// Bytes [`expand_into`] gathers before it hands them to its writer.
+const CHUNK: usize = 1 << 16;
+
+/// The file of template `t` written to `sink` in chunks of about [`CHUNK`] bytes (the
+/// file is not held whole); the bytes written. On an error part of the file may have
+/// been written.
+pub(crate) fn expand_into<W: std::io::Write>(
     t: &[u8],
     mesh: &Mesh,
     q: &Quantization,
     channels: &Channels,
-) -> Result<Vec<u8>> {
+    mut sink: W,
+) -> Result<u64> {
     let indices = &channels.indices;
     let mut normals = channels.normals.iter();
     let mut attr_used = vec![0usize; channels.attributes.len()];
     let bad = |what: &str| Error::corrupt("TMPL", what.to_string());
-    let mut out = Vec::with_capacity(t.len() + 24 * mesh.vertex_count());
+    let mut out = Vec::with_capacity(2 * CHUNK);
+    let mut written = 0u64;
     let (mut coord, mut corner) = (0usize, 0usize);
     let mut used = [0usize; MAX_CHANNELS];
     let mut text = String::new();
@@ -624,6 +657,11 @@ pub(crate) fn expand(
         mesh.faces.get(c).copied()
     };
     while i < t.len() {
+        if out.len() >= CHUNK {
+            sink.write_all(&out)?;
+            written += out.len() as u64;
+            out.clear();
+        }
         let b = t[i];
         i += 1;
         match b {
@@ -722,5 +760,7 @@ pub(crate) fn expand(
             "CIDX, NRML or ATTR carries values the template does not write",
         ));
     }
-    Ok(out)
+    sink.write_all(&out)?;
+    sink.flush()?;
+    Ok(written + out.len() as u64)
 }
