@@ -114,6 +114,12 @@ pub(super) fn joint_correction(n: [i128; 3], frac: [i16; 3]) -> Option<([i64; 3]
     Some((c, q))
 }
 
+/// Whether a prediction's fraction `frac` alone makes a 0 joint correction: the axis
+/// of [`joint_correction`] with a 0 numerator, without its other axes and phase.
+pub(super) fn joint_rounds_to_0(frac: i16) -> bool {
+    (2 * frac as i128 + FRAC_DIV) >> (2 * FRAC_DIV).trailing_zeros() == 0
+}
+
 /// Modes 8 and 9's correction numerators of every detail of the level whose details are
 /// `x[k][nv..]`; `None` if a correction (mode 8's) is beyond the bound of a detail (the
 /// numerators then fit 64 bits).

@@ -1013,6 +1013,20 @@ fn joint_correction_rounds_the_fraction_and_the_correction_together() {
     assert!(joint_correction([big - 32, 0, 0], [0; 3]).is_some());
 }
 
+/// The encoder's shortcut for a zero axis under joint rounding is the joint correction
+/// of a 0 numerator, for every fraction.
+#[test]
+fn joint_rounds_to_0_is_the_joint_correction_of_0() {
+    let mut zeros = 0;
+    for f in i16::MIN..=i16::MAX {
+        let full = joint_correction([0; 3], [f, 0, 0]).is_some_and(|(c, _)| c[0] == 0);
+        assert_eq!(joint_rounds_to_0(f), full, "fraction {f}");
+        zeros += full as u32;
+    }
+    // Both answers occur: [-256, 256) rounds to 0.
+    assert_eq!(zeros, 512);
+}
+
 /// Zero slots: on a level whose x and y details are all 0 (a terrain grid's, say)
 /// the modes that code the axes themselves flag slots 0 and 1 and leave them out,
 /// which codes smaller than coding them and decodes exactly; a level read with them

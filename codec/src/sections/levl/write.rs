@@ -109,6 +109,7 @@ pub fn encode(
         level, family, x, coarse, targets, phases, rotated, open, sample,
     );
     let start = models.start();
+    let zeros = AxisZeros::new(level, family, x);
     // The smallest mode's payload, with the magnitudes and models it leaves.
     struct Tried {
         mode: Vec<u8>,
@@ -155,7 +156,7 @@ pub fn encode(
                 models: m,
             })
         };
-        let Some(mut tried) = code(axis_zero_slots(level, family, x, mode, prep, phases)) else {
+        let Some(mut tried) = code(zeros.slots(mode, prep, phases)) else {
             return;
         };
         // A mode whose slots are not the axes (a frame's) shows its zero slots once coded,
@@ -189,7 +190,7 @@ pub fn encode(
             let mode = modes[i];
             let mut mg = models.mags.clone();
             let mut m = models.ready(start.clone(), mode);
-            let zero = axis_zero_slots(level, family, x, mode, &prep, phases);
+            let zero = zeros.slots(mode, &prep, phases);
             let head = mode.bytes().len();
             encode_mode(
                 level, family, x, coarse, &prep, phases, &mut mg, mode, unbinned, &mut m,
@@ -442,6 +443,7 @@ pub(super) fn encode_mode(
 /// whose details `x[k][nv..nv + nd]` are all 0 and stay 0 once corrected (modes 8 and 9;
 /// with joint rounding a prediction's fraction alone can make a correction). 0 for the
 /// other modes and on a level without details.
+#[cfg(test)]
 pub(super) fn axis_zero_slots(
     level: &Level,
     family: Family,
@@ -450,27 +452,51 @@ pub(super) fn axis_zero_slots(
     prep: &Prepared,
     phases: Option<&Phases>,
 ) -> u8 {
-    let (nv, nd) = (level.nv, family.details(level));
-    if mode.framed() || nd == 0 {
-        return 0;
-    }
-    let corrected = matches!(mode, Mode::Corrected(_) | Mode::CorrectedPhased(..));
-    let joint = matches!(mode, Mode::CorrectedPhased(_, Rounding::Joint));
-    let mut zero = 0;
-    for k in 0..3 {
-        let fractions_round_to_0 = || {
-            phases.is_some_and(|p| {
-                p.fracs[k]
-                    .iter()
-                    .all(|&f| joint_correction([0; 3], [f, 0, 0]).is_some_and(|(c, _)| c[0] == 0))
-            })
-        };
-        if x[k][nv..nv + nd].iter().all(|&v| v == 0)
-            && (!corrected || prep.corrections.iter().all(|n| n[k] == 0))
-            && (!joint || fractions_round_to_0())
-        {
-            zero |= 1 << k;
+    AxisZeros::new(level, family, x).slots(mode, prep, phases)
+}
+
+/// What [`axis_zero_slots`] reads that every mode of a level shares, found once per
+/// level rather than once per mode tried: which axes' details are all 0, and (when a
+/// joint-rounded mode first asks) whether every prediction's fraction rounds to a 0
+/// correction.
+pub(super) struct AxisZeros {
+    /// The details `x[k][nv..nv + nd]` of axis `k` are all 0 (and the level has some).
+    axes: [bool; 3],
+    fractions: [std::cell::OnceCell<bool>; 3],
+}
+
+impl AxisZeros {
+    pub(super) fn new(level: &Level, family: Family, x: &[Vec<i64>; 3]) -> Self {
+        let (nv, nd) = (level.nv, family.details(level));
+        AxisZeros {
+            axes: std::array::from_fn(|k| nd > 0 && x[k][nv..nv + nd].iter().all(|&v| v == 0)),
+            fractions: Default::default(),
         }
     }
-    zero
+
+    /// [`axis_zero_slots`] of `mode`.
+    pub(super) fn slots(&self, mode: Mode<'_>, prep: &Prepared, phases: Option<&Phases>) -> u8 {
+        if mode.framed() {
+            return 0;
+        }
+        let corrected = matches!(mode, Mode::Corrected(_) | Mode::CorrectedPhased(..));
+        let joint = matches!(mode, Mode::CorrectedPhased(_, Rounding::Joint));
+        let fractions_round_to_0 = |k: usize| {
+            *self.fractions[k].get_or_init(|| {
+                phases.is_some_and(|p| {
+                    p.fracs[k].iter().all(|&f| joint_rounds_to_0(f))
+                })
+            })
+        };
+        let mut zero = 0;
+        for k in 0..3 {
+            if self.axes[k]
+                && (!corrected || prep.corrections.iter().all(|n| n[k] == 0))
+                && (!joint || fractions_round_to_0(k))
+            {
+                zero |= 1 << k;
+            }
+        }
+        zero
+    }
 }
