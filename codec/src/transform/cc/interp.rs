@@ -478,15 +478,55 @@ impl<'a> Phaser<'a> {
         n: usize,
         fracs: bool,
     ) -> crate::transform::phase::Phases {
+        use crate::transform::phase::{phase, FRAC_DIV};
         let mut p = crate::transform::phase::Phases::default();
         for k in 0..3 {
-            for i in 0..n {
-                if fracs {
-                    let (_, q, f) = self.predict_frac(&x[k], i);
-                    p.codes[k].push(q);
-                    p.fracs[k].push(f);
-                } else {
-                    p.codes[k].push(self.predict(&x[k], i).1);
+            p.codes[k].reserve_exact(n);
+            if fracs {
+                p.fracs[k].reserve_exact(n);
+            }
+        }
+        let mut push = |k: usize, r: i128, d: i128| {
+            p.codes[k].push(phase(r, d));
+            if fracs {
+                p.fracs[k].push(round_div(FRAC_DIV * r, d) as i16);
+            }
+        };
+        let level = self.level;
+        match self.interp4.as_deref() {
+            // Each stencil looked up once for the three axes, summed in 64 bits where
+            // the values it reads allow (as [`interp4_axes`]): the same phases and
+            // fractions as [`Phaser::predict_frac`] gives axis by axis.
+            Some(st) => {
+                let ne = level.ne();
+                let read = (level.nv + ne).min(x.iter().map(Vec::len).min().unwrap_or(0));
+                let narrow = x.each_ref().map(|xk| i64::narrow(&xk[..read]));
+                for i in 0..n {
+                    if i < ne {
+                        let (t, d) = edge_stencil(level, st, i);
+                        for k in 0..3 {
+                            let s = stencil_sum(&x[k], &t, narrow[k]);
+                            push(k, s - round_div(s, d) as i128 * d, d);
+                        }
+                    } else if let Some((t, d)) = face_stencil(level, st, i - ne) {
+                        for k in 0..3 {
+                            let s = stencil_sum(&x[k], &t, narrow[k]);
+                            push(k, s - round_div(s, d) as i128 * d, d);
+                        }
+                    } else {
+                        for k in 0..3 {
+                            let (_, r, d) = self.exact(&x[k], i);
+                            push(k, r, d);
+                        }
+                    }
+                }
+            }
+            None => {
+                for i in 0..n {
+                    for k in 0..3 {
+                        let (_, r, d) = self.exact(&x[k], i);
+                        push(k, r, d);
+                    }
                 }
             }
         }

@@ -451,3 +451,37 @@ fn stencils_on_three_axes_are_each_axis() {
         assert!(!st.lift_axes(level, Wavelet::Interp6, &mut [vec![0; level.fine_nv()], vec![0; level.fine_nv()], vec![0; level.fine_nv()]], true));
     }
 }
+
+/// A phaser's phases and fractions of the three axes at once are each axis's
+/// [`Phaser::predict_frac`], for lazy, interp4 and interp6: triangles, a pentagon and
+/// quads, an all-quad grid; values that sum in 64 bits and values that need 128 (one
+/// axis narrow beside wide ones).
+#[test]
+fn phases_on_three_axes_are_each_axis() {
+    let t = crate::topology::fixtures::prism_with_triangles();
+    let first = Level::new(&t).unwrap();
+    let levels = [first.next(), first, Level::new(&grid(5)).unwrap()];
+    for level in &levels {
+        let n = level.ne() + level.nf();
+        for w in [Wavelet::Lazy, Wavelet::Interp4, Wavelet::Interp6] {
+            let st = Stencils::new(level, w);
+            let p = Phaser::new(level, w, &st).unwrap();
+            for (seed, bits) in [(3u64, [20u32, 20, 20]), (4, [53, 12, 60]), (5, [60, 60, 3])] {
+                let x: [Vec<i64>; 3] = std::array::from_fn(|k| {
+                    crate::topology::fixtures::pseudo(seed + k as u64, level.fine_nv(), bits[k])
+                });
+                for fracs in [true, false] {
+                    let got = p.phases(&x, n, fracs);
+                    for k in 0..3 {
+                        let want: Vec<(u8, i16)> =
+                            (0..n).map(|i| p.predict_frac(&x[k], i)).map(|(_, q, f)| (q, f)).collect();
+                        let codes: Vec<u8> = want.iter().map(|w| w.0).collect();
+                        assert_eq!(got.codes[k], codes, "{w:?}, axis {k}, {bits:?}");
+                        let f: Vec<i16> = want.iter().map(|w| w.1).filter(|_| fracs).collect();
+                        assert_eq!(got.fracs[k], f, "{w:?}, axis {k}, {bits:?}");
+                    }
+                }
+            }
+        }
+    }
+}
