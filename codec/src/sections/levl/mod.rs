@@ -122,10 +122,18 @@ const SAMPLE_STRIDE: usize = 8;
 /// ... and on a larger level about this many details: enough to rank the modes (at
 /// 2,400 details a mode 6 % larger on the whole level ranked first).
 const SAMPLE_DETAILS: usize = 8_192;
+/// A level of fewer than `2 * SAMPLE_DETAILS` details samples every `n / SMALL_SAMPLE`-th
+/// block, but at least every second and at most every [`SAMPLE_STRIDE`]-th: half the
+/// level's details or at least this many, denser than a large level's sample (fewer
+/// than 2,400 details misrank modes).
+const SMALL_SAMPLE: usize = 4_096;
 
 impl Sample {
     /// The sample of a level of `nd` details.
     fn of(nd: usize) -> Sample {
+        if nd < 2 * SAMPLE_DETAILS {
+            return Sample::Blocks((nd / SMALL_SAMPLE).clamp(2, SAMPLE_STRIDE));
+        }
         Sample::Blocks((nd / SAMPLE_DETAILS).max(SAMPLE_STRIDE))
     }
 

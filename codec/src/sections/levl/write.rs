@@ -63,9 +63,9 @@ pub(super) fn put(
 }
 
 /// The fewest details of a level whose mode the encoder chooses on a sample, when asked
-/// ([`LevelModels::sampled`]): an eighth of them or fewer, [`Sample::of`] (not part of the
+/// ([`LevelModels::sampled`]): half of them or fewer, [`Sample::of`] (not part of the
 /// format).
-const SAMPLE_FROM: usize = 16_384;
+const SAMPLE_FROM: usize = 2 * SMALL_SAMPLE;
 
 /// Codes the details `x[k][nv..]` of one level (a sqrt(2) step when `sqrt2`). `coarse`
 /// holds the level's coarse values (what the decoder has when it reads this level).
