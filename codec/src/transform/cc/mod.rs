@@ -123,6 +123,108 @@ fn e_from_ends<T: Sample>(level: &Level, x: &[T], e: usize, s: Step) -> T {
     T::combine(s.p as i128, sv, 0, T::Acc::default(), s.q as i128)
 }
 
+/// Sums of the three axes of `x` over indices `it`, widened.
+#[inline(always)]
+fn sum3(x: &[Vec<i64>; 3], it: impl Iterator<Item = usize>) -> [i128; 3] {
+    let mut s = [0i128; 3];
+    for i in it {
+        for k in 0..3 {
+            s[k] += x[k][i] as i128;
+        }
+    }
+    s
+}
+
+/// [`v_update`] on the three axes at once.
+#[inline]
+fn v_update3(level: &Level, x: &[Vec<i64>; 3], v: usize, s: Step) -> Option<[i64; 3]> {
+    let (e0, f0) = (level.nv, level.nv + level.ne());
+    let (p, q) = (s.p as i128, s.q as i128);
+    let edges = level.v_edges(v);
+    if edges.is_empty() {
+        return None;
+    }
+    let (nb, be) = level.boundary_edges(v);
+    if nb > 0 {
+        if nb != 2 {
+            return None;
+        }
+        let se = sum3(x, be[..2].iter().map(|&e| e0 + e as usize));
+        return Some(se.map(|se| i64::combine(p, se, 0, 0, q)));
+    }
+    let faces = level.v_faces(v);
+    let se = sum3(x, edges.iter().map(|&e| e0 + e as usize));
+    let sf = sum3(x, faces.iter().map(|&f| f0 + f as usize));
+    let (ne, nf) = (edges.len() as i128, faces.len() as i128);
+    Some(std::array::from_fn(|k| {
+        i64::combine(4 * p * p * ne, sf[k], 4 * p * q * nf, se[k], q * q * nf * ne)
+    }))
+}
+
+/// One lifting step on the three axes at once (integers, no skipped values): each
+/// element's neighbours looked up once for the three. The same values as [`step`] on
+/// each axis (an element's update reads no element of its own kind, so the order of
+/// the axes does not matter).
+fn step_axes(level: &Level, x: &mut [Vec<i64>; 3], s: Step, forward: bool) {
+    let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
+    let (e0, f0) = (nv, nv + ne);
+    let (p, q) = (s.p as i128, s.q as i128);
+    let put = |x: &mut [Vec<i64>; 3], i: usize, d: [i64; 3]| {
+        for (xk, d) in x.iter_mut().zip(d) {
+            xk[i] = if forward { xk[i].plus(d) } else { xk[i].minus(d) };
+        }
+    };
+    let vertices = |x: &mut [Vec<i64>; 3]| {
+        for v in 0..nv {
+            if let Some(d) = v_update3(level, x, v, s) {
+                put(x, v, d);
+            }
+        }
+    };
+    let edges_from_faces = |x: &mut [Vec<i64>; 3]| {
+        for e in (0..ne).filter(|&e| !level.is_boundary(e)) {
+            let [a, b] = level.edge_faces[e];
+            let sf = sum3(x, [f0 + a as usize, f0 + b as usize].into_iter());
+            put(x, e0 + e, sf.map(|sf| i64::combine(p, sf, 0, 0, q)));
+        }
+    };
+    let faces = |x: &mut [Vec<i64>; 3]| {
+        for f in 0..nf {
+            let corners = level.coarse.face(f);
+            let sv = sum3(x, corners.iter().map(|&v| v as usize));
+            let se = sum3(x, level.f_edges(f).iter().map(|&e| e0 + e as usize));
+            let k = corners.len() as i128;
+            let d = std::array::from_fn(|a| i64::combine(4 * p * p, sv[a], 4 * p * q, se[a], q * q * k));
+            put(x, f0 + f, d);
+        }
+    };
+    let edges_from_ends = |x: &mut [Vec<i64>; 3]| {
+        for e in 0..ne {
+            let [a, b] = level.edges[e];
+            let sv = sum3(x, [a as usize, b as usize].into_iter());
+            put(x, e0 + e, sv.map(|sv| i64::combine(p, sv, 0, 0, q)));
+        }
+    };
+    match (s.kind, forward) {
+        (Kind::S, true) => {
+            vertices(x);
+            edges_from_faces(x);
+        }
+        (Kind::S, false) => {
+            edges_from_faces(x);
+            vertices(x);
+        }
+        (Kind::W, true) => {
+            faces(x);
+            edges_from_ends(x);
+        }
+        (Kind::W, false) => {
+            edges_from_ends(x);
+            faces(x);
+        }
+    }
+}
+
 fn step<T: Sample>(level: &Level, x: &mut [T], s: Step, forward: bool, skip: &[bool]) {
     let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
     let e0 = nv;
@@ -226,18 +328,33 @@ impl Stencils {
         Some(Stencils(Some(st)))
     }
 
-    /// Analysis (`forward`) or synthesis of an interp4 or interp6 level on the three
-    /// axes at once, with these stencils, where they are `w`'s and no value is skipped:
-    /// the same values as [`analyse_with`] or [`synthesise_with`] on each axis. False
-    /// (nothing done) otherwise.
+    /// Analysis (`forward`) or synthesis of a level on the three axes at once, where no
+    /// value is skipped: interp4 or interp6 with these stencils where they are `w`'s,
+    /// and the lifting wavelets (lazy, bilinear, bicubic, biquintic); the same values as
+    /// [`analyse_with`] or [`synthesise_with`] on each axis. False (nothing done)
+    /// otherwise.
     pub fn lift_axes(&self, level: &Level, w: Wavelet, x: &mut [Vec<i64>; 3], forward: bool) -> bool {
-        match self.of(w) {
-            Some(st) if x.iter().all(|xk| xk.len() >= level.fine_nv()) => {
-                interp4_axes(level, st, x, forward);
-                true
-            }
-            _ => false,
+        if x.iter().any(|xk| xk.len() < level.fine_nv()) {
+            return false;
         }
+        if let Some(st) = self.of(w) {
+            interp4_axes(level, st, x, forward);
+            return true;
+        }
+        let steps = w.steps();
+        if steps.is_empty() {
+            return false;
+        }
+        if forward {
+            for &s in steps {
+                step_axes(level, x, s, true);
+            }
+        } else {
+            for &s in steps.iter().rev() {
+                step_axes(level, x, s, false);
+            }
+        }
+        true
     }
 
     /// interp4's stencils (`six`: interp6's): these, or made now if they were made for

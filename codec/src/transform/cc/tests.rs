@@ -417,16 +417,24 @@ fn derived_stencils_are_the_next_levels() {
     assert!(derived >= 20 && refused >= 2, "derived {derived}, refused {refused}");
 }
 
-/// interp4 and interp6 on the three axes at once are each axis alone, both ways: a
-/// level of triangles, a pentagon and quads, and an all-quad one; values that sum in 64
-/// bits and values that need 128.
+/// interp4, interp6 and the lifting wavelets on the three axes at once are each axis
+/// alone, both ways: a level of triangles, a pentagon and quads, and an all-quad one;
+/// an open level (boundary rules); values that sum in 64 bits and values that need 128.
 #[test]
 fn stencils_on_three_axes_are_each_axis() {
     let t = crate::topology::fixtures::prism_with_triangles();
     let first = Level::new(&t).unwrap();
     let second = first.next();
-    for (name, level) in [("prism", &first), ("refined prism", &second)] {
-        for w in [Wavelet::Interp4, Wavelet::Interp6] {
+    let open = Level::new(&open_mixed()).unwrap().next();
+    for (name, level) in [("prism", &first), ("refined prism", &second), ("open", &open)] {
+        for w in [
+            Wavelet::Interp4,
+            Wavelet::Interp6,
+            Wavelet::Lazy,
+            Wavelet::Bilinear,
+            Wavelet::Bicubic,
+            Wavelet::Biquintic,
+        ] {
             let st = Stencils::new(level, w);
             for (seed, bits) in [(3u64, 20u32), (4, 53), (5, 60)] {
                 let x: [Vec<i64>; 3] = std::array::from_fn(|k| {
@@ -449,6 +457,9 @@ fn stencils_on_three_axes_are_each_axis() {
         // Another wavelet's stencils do not serve.
         let st = Stencils::new(level, Wavelet::Interp4);
         assert!(!st.lift_axes(level, Wavelet::Interp6, &mut [vec![0; level.fine_nv()], vec![0; level.fine_nv()], vec![0; level.fine_nv()]], true));
+        // Nor for dyadic-sym, which has no three-axis form.
+        let st = Stencils::new(level, Wavelet::DyadicSym);
+        assert!(!st.lift_axes(level, Wavelet::DyadicSym, &mut [vec![0; level.fine_nv()], vec![0; level.fine_nv()], vec![0; level.fine_nv()]], true));
     }
 }
 
