@@ -870,7 +870,7 @@ const MAP_MARGIN: u64 = 3;
 struct Recovered {
     canons: Vec<Canonical>,
     /// A transform and its details' bits ([`search::detail_bits`]) on `canons[0]`.
-    bits: Option<(Wavelet, u64)>,
+    bits: Option<(Wavelet, search::DetailBits)>,
     /// The level after `canons[0]`'s last (the fit's), where made.
     finest: Option<Level>,
     /// Whether the subdivision fit is tried: not on a value map's ranks, chosen by
@@ -889,7 +889,7 @@ struct MapEstimate {
     canons: Vec<Canonical>,
     /// A transform and its details' bits on `canons[0]` with the ranks and with the
     /// values, where estimated.
-    bits: Option<(Wavelet, [u64; 2])>,
+    bits: Option<(Wavelet, [search::DetailBits; 2])>,
     /// The level after `canons[0]`'s last, where made.
     finest: Option<Level>,
 }
@@ -936,7 +936,7 @@ fn map_by_estimate(
         return Ok(Some(found));
     };
     found.bits = Some((w, [ranks, values]));
-    let ranks = ranks + 8 * map.encode().len() as u64;
+    let (ranks, values) = (ranks.all + 8 * map.encode().len() as u64, values.all);
     found.choice = if ranks * 100 <= values * (100 - MAP_MARGIN) {
         Some(true)
     } else if values * 100 <= ranks * (100 - MAP_MARGIN) {
@@ -1328,7 +1328,7 @@ enum FamilyJob {
         Vec<Canonical>,
         Wavelet,
         &'static [Wavelet],
-        Option<(Wavelet, u64)>,
+        Option<(Wavelet, search::DetailBits)>,
     ),
     Sqrt2,
 }

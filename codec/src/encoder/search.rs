@@ -196,14 +196,61 @@ fn analyse_all(
 
 /// What ranks a hierarchy's transforms at the default effort without coding them: the
 /// bits of its details as a plain integer code would spend them (each nonzero value
-/// its bit length and a sign). `None` if a lifted value leaves the supported range.
+/// its bit length and a sign), all of them and the finest level's ([`by_bits`] ranks
+/// by those). `None` if a lifted value leaves the supported range.
 pub(crate) fn detail_bits(
     canon: &Canonical,
     mesh: &Mesh,
     w: Wavelet,
     disc: DiscTransform,
-) -> Option<u64> {
-    analysed(canon, mesh, w, disc).map(|x| value_bits(&x, canon.base.nv))
+) -> Option<DetailBits> {
+    let x = analysed(canon, mesh, w, disc)?;
+    Some(DetailBits {
+        all: value_bits(&x, canon.base.nv),
+        finest: value_bits(&x, canon.levels.last().map_or(0, |l| l.nv)),
+    })
+}
+
+/// The details' bits of a transform on a hierarchy ([`detail_bits`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct DetailBits {
+    /// Of every level's details.
+    pub all: u64,
+    /// Of the finest level's details.
+    pub finest: u64,
+}
+
+/// The values of hierarchy `canon` with its finest level analysed (the coarser levels
+/// not yet) by `scheme`, and the bits of that level's details ([`value_bits`]);
+/// `None` if a detail leaves the supported range.
+fn finest_analysed(canon: &Canonical, mesh: &Mesh, scheme: &Scheme<'_>) -> Option<(Values, u64)> {
+    let mut x = canonical_positions(mesh, canon);
+    let Some((l, level)) = canon.levels.iter().enumerate().next_back() else {
+        return Some((x, 0));
+    };
+    let t = LevelTransform::new(scheme, level, l, &x, true);
+    t.analyse(level, canon.family.fine_nv(level), &mut x);
+    if x.iter()
+        .any(|xk| xk[level.nv..].iter().any(|v| v.abs() > levl::MAX_LIFTED))
+    {
+        return None;
+    }
+    let bits = value_bits(&x, level.nv);
+    Some((x, bits))
+}
+
+/// [`analysed`] from the values [`finest_analysed`] left: the coarser levels analysed
+/// too; `None` if a value leaves the supported range.
+fn finish_analysis(canon: &Canonical, scheme: &Scheme<'_>, mut x: Values) -> Option<Values> {
+    let last = canon.levels.len().saturating_sub(1);
+    for (l, level) in canon.levels.iter().enumerate().take(last).rev() {
+        let t = LevelTransform::new(scheme, level, l, &x, true);
+        t.analyse(level, canon.family.fine_nv(level), &mut x);
+    }
+    if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
+        return None;
+    }
+    Some(x)
 }
 
 /// Values per axis.
@@ -220,17 +267,20 @@ fn analysed(canon: &Canonical, mesh: &Mesh, w: Wavelet, disc: DiscTransform) -> 
 /// large meshes: every transform's analysis is held until they are ranked).
 const KEEP_ANALYSIS: usize = 500_000;
 
-/// `first` and `others` ranked by the bits their details take on hierarchy `canon`
-/// ([`detail_bits`]; `known` a transform's where already estimated), fewest first
-/// (`first` first on ties); those out of range last, in their order; with the first's
-/// analysed values where made and kept ([`KEEP_ANALYSIS`]). The analyses run on up to
-/// `threads` threads.
+/// `first` and `others` ranked by the bits their finest level's details take on
+/// hierarchy `canon` ([`DetailBits::finest`]; `known` a transform's where already
+/// estimated), fewest first (`first` first on ties); those out of range last, in their
+/// order; with the first's analysed values where made and kept ([`KEEP_ANALYSIS`]).
+/// Only the finest level is analysed for the ranking (it holds most details), the
+/// coarser ones then for the first alone; should they take it out of range, every
+/// transform is analysed whole and ranked by all its details instead. The analyses run
+/// on up to `threads` threads.
 fn by_bits(
     canon: &Canonical,
     mesh: &Mesh,
     (first, others): (Wavelet, &[Wavelet]),
     disc: DiscTransform,
-    known: Option<(Wavelet, u64)>,
+    known: Option<(Wavelet, DetailBits)>,
     threads: usize,
 ) -> (Vec<Wavelet>, Option<Values>) {
     let all: Vec<Wavelet> = std::iter::once(first)
@@ -240,8 +290,54 @@ fn by_bits(
         return (all, None);
     }
     let keep = mesh.vertex_count() <= KEEP_ANALYSIS;
+    if !keep {
+        return by_all_bits(canon, mesh, &all, disc, known, threads);
+    }
     let found = par_map(&all, threads, |&w| match known {
-        Some((k, bits)) if k == w => (Some(bits), None),
+        Some((k, bits)) if k == w => (Some(bits.finest), None),
+        _ => match finest_analysed(canon, mesh, &scheme_of(canon, w, disc)) {
+            Some((x, bits)) => (Some(bits), Some(x)),
+            None => (None, None),
+        },
+    });
+    let mut ranked: Vec<(u64, Wavelet, Option<Values>)> = all
+        .iter()
+        .zip(found)
+        .map(|(&w, (b, x))| (b.unwrap_or(u64::MAX), w, x))
+        .collect();
+    // (A stable sort: equal bits keep their order.)
+    ranked.sort_by_key(|&(b, ..)| b);
+    let (bits, w, x) = ranked.swap_remove(0);
+    let x = match x {
+        Some(x) => finish_analysis(canon, &scheme_of(canon, w, disc), x),
+        // The known transform: its coding analyses it.
+        None if bits != u64::MAX => {
+            ranked.insert(0, (bits, w, None));
+            return (ranked.into_iter().map(|(_, w, _)| w).collect(), None);
+        }
+        None => None,
+    };
+    let Some(x) = x else {
+        return by_all_bits(canon, mesh, &all, disc, known, threads);
+    };
+    let order = std::iter::once(w)
+        .chain(ranked.iter().map(|r| r.1))
+        .collect();
+    (order, Some(x))
+}
+
+/// [`by_bits`] ranking by every level's details, each transform analysed whole.
+fn by_all_bits(
+    canon: &Canonical,
+    mesh: &Mesh,
+    all: &[Wavelet],
+    disc: DiscTransform,
+    known: Option<(Wavelet, DetailBits)>,
+    threads: usize,
+) -> (Vec<Wavelet>, Option<Values>) {
+    let keep = mesh.vertex_count() <= KEEP_ANALYSIS;
+    let found = par_map(all, threads, |&w| match known {
+        Some((k, bits)) if k == w => (Some(bits.all), None),
         _ => {
             let x = analysed(canon, mesh, w, disc);
             (
@@ -251,9 +347,9 @@ fn by_bits(
         }
     });
     let mut ranked: Vec<(u64, Wavelet, Option<Values>)> = all
-        .into_iter()
+        .iter()
         .zip(found)
-        .map(|(w, (b, x))| (b.unwrap_or(u64::MAX), w, x))
+        .map(|(&w, (b, x))| (b.unwrap_or(u64::MAX), w, x))
         .collect();
     // (A stable sort: equal bits keep their order.)
     ranked.sort_by_key(|&(b, ..)| b);
@@ -401,7 +497,7 @@ pub(crate) fn code_family(
     canons: Vec<Canonical>,
     auto_first: Wavelet,
     others: &[Wavelet],
-    known: Option<(Wavelet, u64)>,
+    known: Option<(Wavelet, DetailBits)>,
     threads: usize,
 ) -> Result<Option<(Payloads, Canonical)>> {
     let first = match opts.transform {
@@ -629,6 +725,39 @@ pub(crate) fn par_map<T: Sync, R: Send>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The finest level analysed alone and then the rest is the whole analysis, for
+    /// every Catmull-Clark transform; its bits are the finest level's of
+    /// [`detail_bits`]; and the ranking puts the fewest finest bits first, with its
+    /// values analysed whole.
+    #[test]
+    fn the_finest_level_first_then_the_rest_is_the_whole_analysis() {
+        let (canon, mesh, _) = super::super::tests::refined_prism();
+        assert!(canon.levels.len() >= 2);
+        let d = DiscTransform::None;
+        let mut fewest: Option<(u64, Wavelet)> = None;
+        for w in Wavelet::ALL.into_iter().filter(|w| !w.is_sqrt2()) {
+            let scheme = scheme_of(&canon, w, d);
+            let (x, bits) = finest_analysed(&canon, &mesh, &scheme).unwrap();
+            let bits_whole = detail_bits(&canon, &mesh, w, d).unwrap();
+            assert_eq!(bits, bits_whole.finest, "{w:?}");
+            assert!(bits_whole.all > bits_whole.finest, "{w:?}");
+            let whole = analysed(&canon, &mesh, w, d).unwrap();
+            assert_eq!(finish_analysis(&canon, &scheme, x).unwrap(), whole, "{w:?}");
+            if fewest.is_none_or(|(b, _)| bits < b) {
+                fewest = Some((bits, w));
+            }
+        }
+        let others: Vec<Wavelet> = Wavelet::ALL
+            .into_iter()
+            .filter(|w| !w.is_sqrt2() && *w != Wavelet::Bicubic)
+            .collect();
+        let (order, x) = by_bits(&canon, &mesh, (Wavelet::Bicubic, &others), d, None, 1);
+        let (_, best) = fewest.unwrap();
+        assert_eq!(order[0], best);
+        assert_eq!(order.len(), others.len() + 1);
+        assert_eq!(x.unwrap(), analysed(&canon, &mesh, best, d).unwrap());
+    }
 
     /// A coding from values analysed beforehand (their phases then found level by
     /// level from the synthesised values) is the coding that analyses them itself,
