@@ -26,10 +26,11 @@ const MAX_PERIOD: u32 = 512;
 /// An adaptive distribution over `0..n` (SPEC.md 4.2).
 #[derive(Debug, Clone)]
 pub struct AdaptiveModel {
-    counts: Vec<u32>,
+    /// The counts of the `n` symbols, then the table `cum` of `n + 1` entries:
+    /// `cum[s]..cum[s + 1]` is symbol `s`'s quantised range, `cum[n] = 2^16` (one
+    /// buffer: a model is cloned for every mode the encoder tries).
+    table: Vec<u32>,
     total: u32,
-    /// `cum[s]..cum[s + 1]` is symbol `s`'s quantised range; `cum[n] = 2^16`.
-    cum: Vec<u32>,
     /// `lut[b]`: the symbol whose range holds quantile `b << LUT_SHIFT`, so that a
     /// quantile in bucket b belongs to a symbol from `lut[b]` to `lut[b + 1]` (the
     /// decoder's search, not part of the format).
@@ -50,10 +51,11 @@ impl AdaptiveModel {
     /// after one symbol.
     pub fn new(n: usize) -> Self {
         assert!((2..=4096).contains(&n), "alphabet size {n} out of range");
+        let mut table = vec![1; 2 * n + 1];
+        table[n..].fill(0);
         let mut m = AdaptiveModel {
-            counts: vec![1; n],
+            table,
             total: n as u32,
-            cum: vec![0; n + 1],
             lut: [0; LUT_LEN + 1],
             stale: true,
             until_rebuild: FIRST_PERIOD,
@@ -77,13 +79,31 @@ impl AdaptiveModel {
 
     /// How often `s` has been seen (the encoder's choice among equal codings).
     pub(crate) fn count_of(&self, s: usize) -> u32 {
-        self.counts[s]
+        self.counts()[s]
+    }
+
+    /// The alphabet's size.
+    #[inline]
+    fn n(&self) -> usize {
+        self.table.len() / 2
+    }
+
+    /// The symbols' counts.
+    #[inline]
+    fn counts(&self) -> &[u32] {
+        &self.table[..self.n()]
+    }
+
+    /// The quantised table: `cum[s]..cum[s + 1]` is symbol `s`'s range.
+    #[inline]
+    fn cum(&self) -> &[u32] {
+        &self.table[self.n()..]
     }
 
     /// Alphabet size.
     #[cfg(feature = "internals")]
     pub fn len(&self) -> usize {
-        self.counts.len()
+        self.n()
     }
 
     /// Always false: models have at least two symbols.
@@ -93,24 +113,25 @@ impl AdaptiveModel {
     }
 
     fn rebuild(&mut self) {
-        let n = self.counts.len() as u64;
-        let spare = ONE as u64 - n;
+        let n = self.n();
+        let spare = ONE as u64 - n as u64;
         let total = self.total as u64;
+        let (counts, cum) = self.table.split_at_mut(n);
         let mut acc = 0u32;
         let mut best = 0usize;
-        for (s, &c) in self.counts.iter().enumerate() {
-            self.cum[s] = acc;
+        for (s, &c) in counts.iter().enumerate() {
+            cum[s] = acc;
             acc += 1 + ((c as u64 * spare) / total) as u32;
-            if c > self.counts[best] {
+            if c > counts[best] {
                 best = s;
             }
         }
         // Give the rounding remainder to the most frequent symbol (the first on ties).
         let rest = ONE - acc;
-        for c in &mut self.cum[best + 1..] {
+        for c in &mut cum[best + 1..] {
             *c += rest;
         }
-        self.cum[self.counts.len()] = ONE;
+        cum[n] = ONE;
         self.stale = true;
     }
 
@@ -120,15 +141,17 @@ impl AdaptiveModel {
         if !self.stale {
             return;
         }
+        let n = self.n();
+        let cum = &self.table[n..];
         let mut s = 0;
         for (b, l) in self.lut[..LUT_LEN].iter_mut().enumerate() {
             let q = (b as u32) << LUT_SHIFT;
-            while self.cum[s + 1] <= q {
+            while cum[s + 1] <= q {
                 s += 1;
             }
             *l = s as u16;
         }
-        self.lut[LUT_LEN] = (self.counts.len() - 1) as u16;
+        self.lut[LUT_LEN] = (n - 1) as u16;
         self.stale = false;
     }
 
@@ -137,7 +160,7 @@ impl AdaptiveModel {
     /// which rebuilds it, this is the same as [`AdaptiveModel::update`].
     #[inline]
     fn count(&mut self, s: usize) {
-        self.counts[s] += INCREMENT;
+        self.table[s] += INCREMENT;
         self.total += INCREMENT;
         if self.total > MAX_TOTAL {
             self.halve();
@@ -146,8 +169,9 @@ impl AdaptiveModel {
 
     /// Every count becomes `(c + 1) >> 1`, the total their sum.
     fn halve(&mut self) {
+        let n = self.n();
         self.total = 0;
-        for c in &mut self.counts {
+        for c in &mut self.table[..n] {
             *c = (*c + 1) >> 1;
             self.total += *c;
         }
@@ -178,8 +202,9 @@ impl EncoderModel<PRECISION> for AdaptiveModel {
         symbol: impl std::borrow::Borrow<usize>,
     ) -> Option<(u32, NonZeroU32)> {
         let s = *symbol.borrow();
-        let lo = *self.cum.get(s)?;
-        let hi = *self.cum.get(s + 1)?;
+        let cum = self.cum();
+        let lo = *cum.get(s)?;
+        let hi = *cum.get(s + 1)?;
         Some((lo, NonZeroU32::new(hi - lo)?))
     }
 }
@@ -192,15 +217,17 @@ impl DecoderModel<PRECISION> for AdaptiveModel {
         let b = ((quantile >> LUT_SHIFT) as usize).min(LUT_LEN - 1);
         // (A stale search table, which [`Decoder::symbol`] never leaves, means the whole
         // table.)
+        let n = self.n();
+        let cum = &self.table[n..];
         let (lo, hi) = if self.stale {
-            (0, self.counts.len() - 1)
+            (0, n - 1)
         } else {
             (self.lut[b] as usize, self.lut[b + 1] as usize)
         };
-        let s = lo + self.cum[lo + 1..=hi].partition_point(|&c| c <= quantile);
-        let s = s.min(self.counts.len() - 1);
-        let lo = self.cum[s];
-        let p = self.cum[s + 1] - lo;
+        let s = lo + cum[lo + 1..=hi].partition_point(|&c| c <= quantile);
+        let s = s.min(n - 1);
+        let lo = cum[s];
+        let p = cum[s + 1] - lo;
         (s, lo, NonZeroU32::new(p).unwrap_or(NonZeroU32::MIN))
     }
 }
@@ -704,8 +731,8 @@ mod tests {
         let mut m = AdaptiveModel::new(40);
         for i in 0..100_000usize {
             m.update((i * i) % 7);
-            assert_eq!(m.cum[40], ONE);
-            assert!(m.cum.windows(2).all(|w| w[1] > w[0]));
+            assert_eq!(m.cum()[40], ONE);
+            assert!(m.cum().windows(2).all(|w| w[1] > w[0]));
         }
     }
 
@@ -721,17 +748,17 @@ mod tests {
                 // is searched; after it, the bucket's symbols.
                 for q in (0..ONE).step_by(7) {
                     let (s, ..) = m.quantile_function(q);
-                    assert!(m.cum[s] <= q && q < m.cum[s + 1], "stale: n {n}, q {q}");
+                    assert!(m.cum()[s] <= q && q < m.cum()[s + 1], "stale: n {n}, q {q}");
                 }
                 m.refresh();
                 assert!(!m.stale);
                 for q in 0..ONE {
                     let (s, lo, p) = m.quantile_function(q);
                     assert!(
-                        m.cum[s] <= q && q < m.cum[s + 1],
+                        m.cum()[s] <= q && q < m.cum()[s + 1],
                         "n {n}, round {round}, q {q}"
                     );
-                    assert_eq!((lo, p.get()), (m.cum[s], m.cum[s + 1] - m.cum[s]));
+                    assert_eq!((lo, p.get()), (m.cum()[s], m.cum()[s + 1] - m.cum()[s]));
                 }
                 // Skew the model towards a few symbols, then a few more.
                 for _ in 0..(700 << round.min(4)) {
@@ -746,7 +773,7 @@ mod tests {
     }
 
     fn width(m: &AdaptiveModel, s: usize) -> u32 {
-        m.cum[s + 1] - m.cum[s]
+        m.cum()[s + 1] - m.cum()[s]
     }
 
     #[test]
@@ -767,9 +794,9 @@ mod tests {
         let before = (width(&m, 1), width(&m, 5));
         m.reseed(1024);
         assert!(m.total <= 1024 && m.total > 512, "{}", m.total);
-        assert_eq!(m.total, m.counts.iter().sum::<u32>());
-        assert_eq!(m.cum[6], ONE);
-        assert!(m.cum.windows(2).all(|w| w[1] > w[0]));
+        assert_eq!(m.total, m.counts().iter().sum::<u32>());
+        assert_eq!(m.cum()[6], ONE);
+        assert!(m.cum().windows(2).all(|w| w[1] > w[0]));
         // Still mostly 1, then 5; the halving rounds small counts up, so close, not equal.
         let after = (width(&m, 1), width(&m, 5));
         assert!(
@@ -786,9 +813,9 @@ mod tests {
         assert!(width(&m, 3) > w3);
         // A fresh model is left as it is.
         let mut fresh = AdaptiveModel::new(6);
-        let cum = fresh.cum.clone();
+        let cum = fresh.cum().to_vec();
         fresh.reseed(1024);
-        assert_eq!(fresh.cum, cum);
+        assert_eq!(fresh.cum(), cum);
     }
 
     #[test]
