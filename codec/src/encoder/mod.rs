@@ -385,13 +385,15 @@ pub(crate) fn face_order(mesh: &Mesh, fine: &Topo, vorder: &[u32]) -> Result<(Ve
 
 /// The mesh's positions in a hierarchy's canonical order, per axis.
 pub(crate) fn canonical_positions(mesh: &Mesh, canon: &Canonical) -> [Vec<i64>; 3] {
-    std::array::from_fn(|k| {
-        canon
-            .order
-            .iter()
-            .map(|&o| mesh.positions[o as usize][k])
-            .collect()
-    })
+    // One pass over the order (each position read once, not once per axis).
+    let mut x: [Vec<i64>; 3] = std::array::from_fn(|_| Vec::with_capacity(canon.order.len()));
+    for &o in &canon.order {
+        let p = mesh.positions[o as usize];
+        for (xk, v) in x.iter_mut().zip(p) {
+            xk.push(v);
+        }
+    }
+    x
 }
 
 /// Encodes an integer mesh whose values map to the file's through `q`: as a
