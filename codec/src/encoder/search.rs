@@ -300,30 +300,34 @@ fn by_bits(
             None => (None, None),
         },
     });
-    let mut ranked: Vec<(u64, Wavelet, Option<Values>)> = all
-        .iter()
-        .zip(found)
-        .map(|(&w, (b, x))| (b.unwrap_or(u64::MAX), w, x))
-        .collect();
-    // (A stable sort: equal bits keep their order.)
-    ranked.sort_by_key(|&(b, ..)| b);
-    let (bits, w, x) = ranked.swap_remove(0);
-    let x = match x {
+    let mut ranked = rank(&all, found);
+    let (bits, w) = (ranked[0].0, ranked[0].1);
+    let x = match ranked[0].2.take() {
         Some(x) => finish_analysis(canon, &scheme_of(canon, w, disc), x),
         // The known transform: its coding analyses it.
-        None if bits != u64::MAX => {
-            ranked.insert(0, (bits, w, None));
-            return (ranked.into_iter().map(|(_, w, _)| w).collect(), None);
-        }
+        None if bits != u64::MAX => return (ranked.into_iter().map(|(_, w, _)| w).collect(), None),
         None => None,
     };
     let Some(x) = x else {
         return by_all_bits(canon, mesh, &all, disc, known, threads);
     };
-    let order = std::iter::once(w)
-        .chain(ranked.iter().map(|r| r.1))
+    (ranked.into_iter().map(|(_, w, _)| w).collect(), Some(x))
+}
+
+/// Transforms `all` with what their analyses `found` (bits, where in range, and
+/// values, where kept), fewest bits first (a stable sort: equal bits keep their order;
+/// those out of range last).
+fn rank(
+    all: &[Wavelet],
+    found: Vec<(Option<u64>, Option<Values>)>,
+) -> Vec<(u64, Wavelet, Option<Values>)> {
+    let mut ranked: Vec<(u64, Wavelet, Option<Values>)> = all
+        .iter()
+        .zip(found)
+        .map(|(&w, (b, x))| (b.unwrap_or(u64::MAX), w, x))
         .collect();
-    (order, Some(x))
+    ranked.sort_by_key(|&(b, ..)| b);
+    ranked
 }
 
 /// [`by_bits`] ranking by every level's details, each transform analysed whole.
@@ -346,13 +350,7 @@ fn by_all_bits(
             )
         }
     });
-    let mut ranked: Vec<(u64, Wavelet, Option<Values>)> = all
-        .iter()
-        .zip(found)
-        .map(|(&w, (b, x))| (b.unwrap_or(u64::MAX), w, x))
-        .collect();
-    // (A stable sort: equal bits keep their order.)
-    ranked.sort_by_key(|&(b, ..)| b);
+    let mut ranked = rank(all, found);
     let x = ranked.first_mut().and_then(|r| r.2.take());
     (ranked.into_iter().map(|(_, w, _)| w).collect(), x)
 }
@@ -755,8 +753,25 @@ mod tests {
         let (order, x) = by_bits(&canon, &mesh, (Wavelet::Bicubic, &others), d, None, 1);
         let (_, best) = fewest.unwrap();
         assert_eq!(order[0], best);
-        assert_eq!(order.len(), others.len() + 1);
-        assert_eq!(x.unwrap(), analysed(&canon, &mesh, best, d).unwrap());
+        assert_eq!(x.unwrap(), analysed(&canon, &mesh, order[0], d).unwrap());
+        // The whole order: by finest bits, ties in the listed order.
+        let mut want: Vec<(u64, Wavelet)> = std::iter::once(Wavelet::Bicubic)
+            .chain(others.iter().copied())
+            .map(|w| (detail_bits(&canon, &mesh, w, d).unwrap().finest, w))
+            .collect();
+        want.sort_by_key(|&(b, _)| b);
+        assert_eq!(order, want.iter().map(|&(_, w)| w).collect::<Vec<_>>());
+        // The same with the first transform's bits known beforehand.
+        let known = detail_bits(&canon, &mesh, Wavelet::Bicubic, d).unwrap();
+        let (order_known, _) = by_bits(
+            &canon,
+            &mesh,
+            (Wavelet::Bicubic, &others),
+            d,
+            Some((Wavelet::Bicubic, known)),
+            1,
+        );
+        assert_eq!(order_known, order);
     }
 
     /// A coding from values analysed beforehand (their phases then found level by
