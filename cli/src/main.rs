@@ -902,12 +902,11 @@ fn check_output(input: &str, output: &str, binary: bool, force: bool) -> Result<
     Ok(())
 }
 
-/// Writes the output whole or not at all: to a temporary file beside it, renamed into
-/// place once written. A closed standard output ends quietly.
 /// Writes `output` (a file, or standard output for `-`) with `write`, through a buffer
-/// and, for a file, into a temporary file beside it that is renamed when complete (and
-/// removed on an error); the bytes written. An error writing is the output's; any
-/// other (a container whose file does not match its channels) is `input`'s.
+/// and, for a file, whole or not at all: into a temporary file beside it that is
+/// renamed into place when complete (and removed on an error); the bytes written. An
+/// error writing is the output's (a closed standard output ends quietly); any other (a
+/// container whose file does not match its channels) is `input`'s.
 fn stream_output(
     input: &str,
     output: &str,
@@ -956,26 +955,13 @@ fn temporary_beside(path: &str) -> std::path::PathBuf {
     dir.join(format!(".{name}.{}.subwave-tmp", std::process::id()))
 }
 
+/// Writes `bytes` to `path` as [`stream_output`] does.
 fn write_output(path: &str, bytes: &[u8]) -> Result<(), Failure> {
-    if path == "-" {
-        let mut out = std::io::stdout().lock();
-        return out
-            .write_all(bytes)
-            .and_then(|_| out.flush())
-            .map_err(|e| Failure {
-                closed_pipe: e.kind() == std::io::ErrorKind::BrokenPipe,
-                ..fail(path, e)
-            });
-    }
-    let tmp = temporary_beside(path);
-    let written = std::fs::File::create(&tmp)
-        .and_then(|mut f| f.write_all(bytes).and_then(|_| f.sync_all()))
-        .and_then(|_| std::fs::rename(&tmp, path));
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(fail(path, e));
-    }
-    Ok(())
+    stream_output(path, path, |w| {
+        w.write_all(bytes)?;
+        Ok(bytes.len() as u64)
+    })
+    .map(|_| ())
 }
 
 /// Warns that what `loaded` holds besides positions and faces is left out, and why.

@@ -455,10 +455,10 @@ pub(super) fn axis_zero_slots(
     AxisZeros::new(level, family, x).slots(mode, prep, phases)
 }
 
-/// What [`axis_zero_slots`] reads that every mode of a level shares, found once per
-/// level rather than once per mode tried: which axes' details are all 0, and (when a
-/// joint-rounded mode first asks) whether every prediction's fraction rounds to a 0
-/// correction.
+/// What a mode's zero slots (the axes a mode that codes them leaves out, SPEC.md 10.2)
+/// depend on that every mode of a level shares, found once per level rather than once
+/// per mode tried: which axes' details are all 0, and (when a joint-rounded mode first
+/// asks) whether every prediction's fraction rounds to a 0 correction.
 pub(super) struct AxisZeros {
     /// The details `x[k][nv..nv + nd]` of axis `k` are all 0 (and the level has some).
     axes: [bool; 3],
@@ -474,7 +474,10 @@ impl AxisZeros {
         }
     }
 
-    /// [`axis_zero_slots`] of `mode`.
+    /// The zero slots of a mode that codes the axes themselves (0, 6, 8 or 9): the axes
+    /// whose details are all 0 and stay 0 once corrected (modes 8 and 9; with joint
+    /// rounding a prediction's fraction alone can make a correction). 0 for the other
+    /// modes and on a level without details.
     pub(super) fn slots(&self, mode: Mode<'_>, prep: &Prepared, phases: Option<&Phases>) -> u8 {
         if mode.framed() {
             return 0;
