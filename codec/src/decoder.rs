@@ -640,6 +640,7 @@ fn synthesise_levels(
             wavelet: w,
             poles: &h.poles,
             disc: h.disc,
+            stencils: None,
         },
         x: std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect()),
         models: levl::LevelModels::new(),

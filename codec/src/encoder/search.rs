@@ -144,11 +144,14 @@ impl Coding<'_> {
 
 /// The transform of hierarchy `canon` with wavelet `w` and disc transform `disc`.
 fn scheme_of(canon: &Canonical, w: Wavelet, disc: DiscTransform) -> Scheme<'_> {
+    // Every coding of the hierarchy shares its stencils but a large one's (memory).
+    let large = canon.levels.last().map_or(0, |l| canon.family.fine_nv(l)) > KEEP_ANALYSIS;
     Scheme {
         family: canon.family,
         wavelet: w,
         poles: &canon.poles,
         disc,
+        stencils: (!large).then_some(&canon.stencils),
     }
 }
 

@@ -4,6 +4,7 @@
 
 use super::{gates, sqrt2, Family, Level, PairMap, Topo, NONE};
 use crate::error::{Error, Result};
+use crate::transform::StencilCache;
 
 /// A recovered hierarchy, in the input's vertex numbers.
 #[derive(Debug, Clone)]
@@ -46,6 +47,9 @@ pub struct Canonical {
     pub poles: Vec<u32>,
     /// The number of levels [`Canonical::stow`] freed (0 when they are here).
     pub(super) stowed: usize,
+    /// The interp4 and interp6 stencils of the levels, once a coding has made them
+    /// (emptied with the levels by [`Canonical::stow`]).
+    pub(crate) stencils: StencilCache,
 }
 
 impl Canonical {
@@ -64,6 +68,7 @@ impl Canonical {
     /// A hierarchy of this family over `levels` (coarse first, not empty) with no
     /// order and no poles: the subdivision fit's base mesh glued at its seams.
     pub(crate) fn with_levels(&self, levels: Vec<Level>) -> Canonical {
+        let levels_len = levels.len();
         Canonical {
             base: levels[0].coarse.clone(),
             levels,
@@ -71,6 +76,7 @@ impl Canonical {
             family: self.family,
             poles: Vec::new(),
             stowed: 0,
+            stencils: StencilCache::new(levels_len),
         }
     }
 
@@ -91,6 +97,7 @@ impl Canonical {
         if !self.levels.is_empty() {
             self.stowed = self.levels.len();
             self.levels = Vec::new();
+            self.stencils = StencilCache::default();
         }
     }
 
@@ -103,6 +110,9 @@ impl Canonical {
         for _ in 0..n {
             let level = next_canonical_level(self.family, &self.base, self.levels.last(), &pole)?;
             self.levels.push(level);
+        }
+        if n > 0 {
+            self.stencils = StencilCache::new(self.levels.len());
         }
         Ok(())
     }
@@ -259,6 +269,7 @@ pub fn canonicalise(rec: &Recovered, gates: bool) -> Result<Canonical> {
     }
     Ok(Canonical {
         base,
+        stencils: StencilCache::new(levels.len()),
         levels,
         order,
         family,

@@ -546,6 +546,7 @@ pub fn canonicalise(mut rec: Recovered, input: &Topo, gates: bool) -> Result<Can
     drop(finest);
     Ok(Canonical {
         base,
+        stencils: crate::transform::StencilCache::new(levels.len()),
         levels,
         order,
         family: super::Family::Sqrt2,

@@ -7,7 +7,7 @@ use crate::topology::{Family, Level};
 use crate::transform::phase::Phases;
 use crate::transform::polar::{self, Disc, DiscTransform};
 use crate::transform::sqrt2::{self, Plan};
-use crate::transform::{analyse_with, synthesise_with, Phaser, Stencils, Wavelet};
+use crate::transform::{analyse_with, synthesise_with, Phaser, StencilCache, Stencils, Wavelet};
 
 /// What a hierarchy's levels are transformed with: everything but the level itself.
 #[derive(Debug, Clone, Copy)]
@@ -20,6 +20,9 @@ pub(crate) struct Scheme<'p> {
     pub poles: &'p [u32],
     /// Polar hierarchies: the transform of the poles' discs (SPEC.md 9.9).
     pub disc: DiscTransform,
+    /// The hierarchy's stencils made so far, where kept (the encoder's, on hierarchies
+    /// that are not large).
+    pub stencils: Option<&'p StencilCache>,
 }
 
 /// One level's transform, prepared once for its three axes.
@@ -97,7 +100,10 @@ impl<'a> LevelTransform<'a> {
                 let (discs, owned) = polar::discs(level, scheme.poles, index as u32, scheme.disc);
                 LevelTransform::Cc {
                     w,
-                    stencils: stencils.unwrap_or_else(|| Stencils::new(level, w)),
+                    stencils: stencils.unwrap_or_else(|| match scheme.stencils {
+                        Some(cache) => cache.stencils(index, level, w),
+                        None => Stencils::new(level, w),
+                    }),
                     discs,
                     owned,
                     disc: scheme.disc,

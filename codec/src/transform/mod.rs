@@ -13,7 +13,7 @@ pub mod phase;
 pub mod polar;
 pub mod sqrt2;
 
-pub use cc::{analyse_with, synthesise_with, Kind, Phaser, Stencils, Step};
+pub use cc::{analyse_with, synthesise_with, Kind, Phaser, StencilCache, Stencils, Step};
 #[cfg(any(test, feature = "internals"))]
 pub use cc::{analyse, synthesise};
 #[cfg(feature = "internals")]

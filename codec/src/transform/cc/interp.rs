@@ -3,14 +3,21 @@
 
 use super::*;
 use crate::transform::round_div;
+use std::sync::Arc;
 
 /// interp4's stencils (SPEC.md 9.11): per edge its two ends' beyond vertices, per quad
 /// face the beyond edge of each of its edges ([`NONE`] where there is none; non-quads
 /// take the lazy rule and no stencil). With `six` (interp6, 9.12) also the vertices and
-/// edges beyond those.
+/// edges beyond those. The tables are shared: interp6's hold interp4's, so one set made
+/// for interp6 serves both ([`Interp4::with_six`]).
 #[derive(Clone)]
 pub(super) struct Interp4 {
     pub(super) six: bool,
+    tables: Arc<Tables>,
+}
+
+/// [`Interp4`]'s tables.
+pub(super) struct Tables {
     pub(super) edge: Vec<[u32; 2]>,
     pub(super) face: Vec<[u32; 4]>,
     /// interp6: per edge the vertices beyond its ends' beyond vertices.
@@ -52,7 +59,32 @@ fn quad_slot(level: &Level, slot: &[[u8; 2]], e: usize, k: usize) -> Option<(usi
     (i != u8::MAX).then(|| (level.edge_faces[e][k] as usize, i as usize))
 }
 
+impl std::ops::Deref for Interp4 {
+    type Target = Tables;
+
+    fn deref(&self) -> &Tables {
+        &self.tables
+    }
+}
+
 impl Interp4 {
+    fn of_tables(six: bool, tables: Tables) -> Interp4 {
+        Interp4 {
+            six,
+            tables: Arc::new(tables),
+        }
+    }
+
+    /// These tables as interp4's (`six` false) or interp6's stencils; `None` for
+    /// interp6's from tables made without the far ones. (Interp4's tables are the same
+    /// whether or not the far ones were made.)
+    pub(super) fn with_six(&self, six: bool) -> Option<Interp4> {
+        (self.six || !six).then(|| Interp4 {
+            six,
+            tables: Arc::clone(&self.tables),
+        })
+    }
+
     /// The stencils of `level`, from one pass over the faces that records each edge's
     /// slot in the quads beside it, so that no edge end searches its faces. The tables
     /// are those that `beyond_vertex` and `beyond_edge` give at every edge end and face
@@ -302,15 +334,17 @@ impl Interp4 {
                 }));
             }
         }
-        Interp4 {
+        Interp4::of_tables(
             six,
-            edge,
-            face,
-            edge2,
-            face2,
-            via,
-            unique,
-        }
+            Tables {
+                edge,
+                face,
+                edge2,
+                face2,
+                via,
+                unique,
+            },
+        )
     }
 
     /// interp6's far tables from the beyond tables, as SPEC.md 9.12 defines them: per
@@ -381,15 +415,17 @@ impl Interp4 {
         } else {
             (Vec::new(), Vec::new())
         };
-        Interp4 {
+        Interp4::of_tables(
             six,
-            edge,
-            face,
-            edge2,
-            face2,
-            via,
-            unique: false,
-        }
+            Tables {
+                edge,
+                face,
+                edge2,
+                face2,
+                via,
+                unique: false,
+            },
+        )
     }
 }
 
@@ -668,7 +704,10 @@ fn face_stencil(level: &Level, st: &Interp4, f: usize) -> Option<([(usize, i64);
     for d in 0..2 {
         let (m, m2) = (e0 + fe[d] as usize, e0 + fe[d + 2] as usize);
         let (y, y2) = (beyond[d], beyond[d + 2]);
-        let far = st.face2.get(f).map_or([NONE; 2], |z| [z[d], z[d + 2]]);
+        let far = match st.six {
+            true => st.face2.get(f).map_or([NONE; 2], |z| [z[d], z[d + 2]]),
+            false => [NONE; 2],
+        };
         let part = &mut t[6 * d..6 * d + 6];
         if far.iter().all(|&z| z != NONE) {
             let (y, y2) = (e0 + y as usize, e0 + y2 as usize);

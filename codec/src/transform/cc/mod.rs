@@ -367,6 +367,51 @@ impl Stencils {
     }
 }
 
+/// Per level of one hierarchy, the interp4 and interp6 stencils once made: interp6's
+/// tables, which hold interp4's ([`Stencils`]). The encoder ranks and codes one
+/// hierarchy with several transforms, and codes it more than once with the one it
+/// keeps; each level's tables are made once for all of them.
+#[derive(Default)]
+pub struct StencilCache(Vec<std::sync::OnceLock<Interp4>>);
+
+impl StencilCache {
+    /// An empty cache for a hierarchy of `levels` levels.
+    pub fn new(levels: usize) -> StencilCache {
+        StencilCache((0..levels).map(|_| std::sync::OnceLock::new()).collect())
+    }
+
+    /// The stencils of wavelet `w` on `level`, level `index` of the hierarchy (0 = the
+    /// coarsest): the same as [`Stencils::new`] gives, from the cache (made now, for
+    /// interp6, if not yet); made apart if the cache has no such level.
+    pub fn stencils(&self, index: usize, level: &Level, w: Wavelet) -> Stencils {
+        let six = match w {
+            Wavelet::Interp4 => false,
+            Wavelet::Interp6 => true,
+            _ => return Stencils(None),
+        };
+        // (A level of another size than the one cached is not the hierarchy's.)
+        let cached = self.0.get(index).map(|cell| cell.get_or_init(|| Interp4::new(level, true)));
+        match cached.filter(|st| st.edge.len() == level.ne() && st.face.len() == level.nf()) {
+            Some(st) => Stencils(st.with_six(six)),
+            None => Stencils::new(level, w),
+        }
+    }
+}
+
+impl std::fmt::Debug for StencilCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let made = self.0.iter().filter(|c| c.get().is_some()).count();
+        write!(f, "StencilCache({made} of {} levels made)", self.0.len())
+    }
+}
+
+impl Clone for StencilCache {
+    /// A cache of as many levels, empty: a clone of a hierarchy may change its levels.
+    fn clone(&self) -> StencilCache {
+        StencilCache::new(self.0.len())
+    }
+}
+
 /// [`analyse_except`] with the level's [`Stencils`] made beforehand.
 pub fn analyse_with<T: Sample>(
     level: &Level,

@@ -115,6 +115,50 @@ fn interp4_with_stencils_of_another_wavelet_is_interp4() {
     assert_eq!(got, orig);
 }
 
+/// A hierarchy's stencil cache gives interp4 and interp6 what their own stencils give,
+/// whichever is asked for first (interp6's tables serve interp4), and on a level of
+/// another size than the cached one its own stencils.
+#[test]
+fn cached_stencils_are_each_wavelets_own() {
+    let levels: Vec<Level> = [grid(5), mixed(), open_mixed()]
+        .iter()
+        .map(|t| Level::new(t).unwrap())
+        .collect();
+    let transformed = |level: &Level, w: Wavelet, st: &Stencils| {
+        let orig: Vec<i64> = (0..level.fine_nv() as i64)
+            .map(|i| i * i * 37 % 1001 - 500)
+            .collect();
+        let mut x = orig.clone();
+        analyse_with(level, w, st, &mut x, &[]);
+        let analysed = x.clone();
+        synthesise_with(level, w, st, &mut x, &[]);
+        assert_eq!(x, orig);
+        analysed
+    };
+    for order in [[Wavelet::Interp4, Wavelet::Interp6], [Wavelet::Interp6, Wavelet::Interp4]] {
+        let cache = StencilCache::new(levels.len());
+        for (i, level) in levels.iter().enumerate() {
+            for w in order {
+                let want = transformed(level, w, &Stencils::new(level, w));
+                assert_eq!(transformed(level, w, &cache.stencils(i, level, w)), want, "{w:?} level {i}");
+            }
+        }
+        // Level 0's tables are the grid's: the prism at index 0 is not that level.
+        for w in order {
+            let want = transformed(&levels[1], w, &Stencils::new(&levels[1], w));
+            assert_eq!(transformed(&levels[1], w, &cache.stencils(0, &levels[1], w)), want);
+        }
+        // Past the cache's levels: made apart.
+        let w = order[0];
+        let want = transformed(&levels[2], w, &Stencils::new(&levels[2], w));
+        assert_eq!(transformed(&levels[2], w, &cache.stencils(9, &levels[2], w)), want);
+    }
+    // interp4's tables alone do not serve interp6.
+    let four = Interp4::new(&levels[0], false);
+    assert!(four.with_six(true).is_none());
+    assert!(four.with_six(false).is_some_and(|st| !st.six));
+}
+
 /// An `n` x `n` grid's level and the fine coordinates (u, v) of its fine values:
 /// vertices at even u and v in 0..=2n, edge points at their midpoints, face points at
 /// their centres.
