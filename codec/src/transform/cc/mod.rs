@@ -34,9 +34,96 @@ pub struct Step {
     pub q: i64,
 }
 
+/// The values a lifting step reads and updates (SPEC.md 9.2): one axis of samples
+/// (`[T]`: integers, or the f64 references), or the three axes of integer positions at
+/// once (`[Vec<i64>; 3]`: each element's neighbours looked up once for the three). The
+/// steps below are written once for both: each element's update is `(c1 s1 + c2 s2) /
+/// d` of sums `s` of its neighbours, per axis.
+trait Lanes {
+    /// A widened sum of values (per axis).
+    type Acc: Copy + Default + std::ops::AddAssign;
+    /// An update (per axis).
+    type Val: Copy;
+    /// Element `i`, widened.
+    fn acc(&self, i: usize) -> Self::Acc;
+    /// `(c1 s1 + c2 s2) / d` ([`Sample::combine`]) per axis.
+    fn combine(c1: i128, s1: Self::Acc, c2: i128, s2: Self::Acc, d: i128) -> Self::Val;
+    /// `c1 s1 / d`: [`Lanes::combine`] of one sum.
+    fn combine1(c1: i128, s1: Self::Acc, d: i128) -> Self::Val;
+    /// Element `i` plus `d` (`forward`) or minus it.
+    fn apply(&mut self, i: usize, d: Self::Val, forward: bool);
+}
+
+impl<T: Sample> Lanes for [T] {
+    type Acc = T::Acc;
+    type Val = T;
+    #[inline(always)]
+    fn acc(&self, i: usize) -> T::Acc {
+        self[i].acc()
+    }
+    #[inline(always)]
+    fn combine(c1: i128, s1: T::Acc, c2: i128, s2: T::Acc, d: i128) -> T {
+        T::combine(c1, s1, c2, s2, d)
+    }
+    #[inline(always)]
+    fn combine1(c1: i128, s1: T::Acc, d: i128) -> T {
+        T::combine(c1, s1, 0, T::Acc::default(), d)
+    }
+    #[inline(always)]
+    fn apply(&mut self, i: usize, d: T, forward: bool) {
+        self[i] = if forward { self[i].plus(d) } else { self[i].minus(d) };
+    }
+}
+
+/// Three axes' widened sums ([`Lanes`] of `[Vec<i64>; 3]`).
+#[derive(Clone, Copy, Default)]
+struct Acc3([<i64 as Sample>::Acc; 3]);
+
+impl std::ops::AddAssign for Acc3 {
+    #[inline(always)]
+    fn add_assign(&mut self, o: Acc3) {
+        for k in 0..3 {
+            self.0[k] += o.0[k];
+        }
+    }
+}
+
+impl Lanes for [Vec<i64>; 3] {
+    type Acc = Acc3;
+    type Val = [i64; 3];
+    #[inline(always)]
+    fn acc(&self, i: usize) -> Acc3 {
+        Acc3([self[0][i].acc(), self[1][i].acc(), self[2][i].acc()])
+    }
+    #[inline(always)]
+    fn combine(c1: i128, s1: Acc3, c2: i128, s2: Acc3, d: i128) -> [i64; 3] {
+        std::array::from_fn(|k| i64::combine(c1, s1.0[k], c2, s2.0[k], d))
+    }
+    #[inline(always)]
+    fn combine1(c1: i128, s1: Acc3, d: i128) -> [i64; 3] {
+        s1.0.map(|s| i64::combine(c1, s, 0, 0, d))
+    }
+    #[inline(always)]
+    fn apply(&mut self, i: usize, d: [i64; 3], forward: bool) {
+        for (xk, d) in self.iter_mut().zip(d) {
+            xk.as_mut_slice().apply(i, d, forward);
+        }
+    }
+}
+
+/// The sum of `x` over indices `it`.
+#[inline(always)]
+fn lanes_sum<L: Lanes + ?Sized>(x: &L, it: impl Iterator<Item = usize>) -> L::Acc {
+    let mut s = L::Acc::default();
+    for i in it {
+        s += x.acc(i);
+    }
+    s
+}
+
 /// The s-lift update of old vertex `v` (SPEC.md 9.2).
-#[inline]
-fn v_update<T: Sample>(level: &Level, x: &[T], v: usize, s: Step) -> Option<T> {
+#[inline(always)]
+fn v_update<L: Lanes + ?Sized>(level: &Level, x: &L, v: usize, s: Step) -> Option<L::Val> {
     let (e0, f0) = (level.nv, level.nv + level.ne());
     let (p, q) = (s.p as i128, s.q as i128);
     let edges = level.v_edges(v);
@@ -49,23 +136,15 @@ fn v_update<T: Sample>(level: &Level, x: &[T], v: usize, s: Step) -> Option<T> {
             return None;
         }
         // 1-D s-lift along the boundary curve: 2a * mean of the two boundary edge points.
-        let mut se = T::Acc::default();
-        se += x[e0 + be[0] as usize].acc();
-        se += x[e0 + be[1] as usize].acc();
-        return Some(T::combine(p, se, 0, T::Acc::default(), q));
+        let se = lanes_sum(x, be.iter().map(|&e| e0 + e as usize));
+        return Some(L::combine1(p, se, q));
     }
     let faces = level.v_faces(v);
-    let mut se = T::Acc::default();
-    for &e in edges {
-        se += x[e0 + e as usize].acc();
-    }
-    let mut sf = T::Acc::default();
-    for &f in faces {
-        sf += x[f0 + f as usize].acc();
-    }
+    let se = lanes_sum(x, edges.iter().map(|&e| e0 + e as usize));
+    let sf = lanes_sum(x, faces.iter().map(|&f| f0 + f as usize));
     let (ne, nf) = (edges.len() as i128, faces.len() as i128);
     // 4a^2 fbar + 4a ebar = (4p^2 ne Sf + 4pq nf Se) / (q^2 nf ne)
-    Some(T::combine(
+    Some(L::combine(
         4 * p * p * ne,
         sf,
         4 * p * q * nf,
@@ -75,205 +154,86 @@ fn v_update<T: Sample>(level: &Level, x: &[T], v: usize, s: Step) -> Option<T> {
 }
 
 /// The s-lift update of edge point `e`: 2a * mean of its two faces (interior only).
-#[inline]
-fn e_from_faces<T: Sample>(level: &Level, x: &[T], e: usize, s: Step) -> Option<T> {
+#[inline(always)]
+fn e_from_faces<L: Lanes + ?Sized>(level: &Level, x: &L, e: usize, s: Step) -> Option<L::Val> {
     if level.is_boundary(e) {
         return None;
     }
     let f0 = level.nv + level.ne();
-    let [a, b] = level.edge_faces[e];
-    let mut sf = T::Acc::default();
-    sf += x[f0 + a as usize].acc();
-    sf += x[f0 + b as usize].acc();
-    Some(T::combine(
-        s.p as i128,
-        sf,
-        0,
-        T::Acc::default(),
-        s.q as i128,
-    ))
+    let sf = lanes_sum(x, level.edge_faces[e].iter().map(|&f| f0 + f as usize));
+    Some(L::combine1(s.p as i128, sf, s.q as i128))
 }
 
 /// The w-lift update of face point `f` (SPEC.md 9.2).
-#[inline]
-fn f_update<T: Sample>(level: &Level, x: &[T], f: usize, s: Step) -> T {
+#[inline(always)]
+fn f_update<L: Lanes + ?Sized>(level: &Level, x: &L, f: usize, s: Step) -> L::Val {
     let e0 = level.nv;
     let (p, q) = (s.p as i128, s.q as i128);
     let corners = level.coarse.face(f);
-    let mut sv = T::Acc::default();
-    for &v in corners {
-        sv += x[v as usize].acc();
-    }
-    let mut se = T::Acc::default();
-    for &e in level.f_edges(f) {
-        se += x[e0 + e as usize].acc();
-    }
+    let sv = lanes_sum(x, corners.iter().map(|&v| v as usize));
+    let se = lanes_sum(x, level.f_edges(f).iter().map(|&e| e0 + e as usize));
     let k = corners.len() as i128;
     // 4a^2 vbar + 4a ebar = (4p^2 Sv + 4pq Se) / (q^2 k)
-    T::combine(4 * p * p, sv, 4 * p * q, se, q * q * k)
+    L::combine(4 * p * p, sv, 4 * p * q, se, q * q * k)
 }
 
 /// The w-lift update of edge point `e`: 2a * mean of its end points.
-#[inline]
-fn e_from_ends<T: Sample>(level: &Level, x: &[T], e: usize, s: Step) -> T {
-    let [a, b] = level.edges[e];
-    let mut sv = T::Acc::default();
-    sv += x[a as usize].acc();
-    sv += x[b as usize].acc();
-    T::combine(s.p as i128, sv, 0, T::Acc::default(), s.q as i128)
-}
-
-/// Sums of the three axes of `x` over indices `it`, widened.
 #[inline(always)]
-fn sum3(x: &[Vec<i64>; 3], it: impl Iterator<Item = usize>) -> [i128; 3] {
-    let mut s = [0i128; 3];
-    for i in it {
-        for k in 0..3 {
-            s[k] += x[k][i] as i128;
-        }
-    }
-    s
+fn e_from_ends<L: Lanes + ?Sized>(level: &Level, x: &L, e: usize, s: Step) -> L::Val {
+    let sv = lanes_sum(x, level.edges[e].iter().map(|&v| v as usize));
+    L::combine1(s.p as i128, sv, s.q as i128)
 }
 
-/// [`v_update`] on the three axes at once.
-#[inline]
-fn v_update3(level: &Level, x: &[Vec<i64>; 3], v: usize, s: Step) -> Option<[i64; 3]> {
-    let (e0, f0) = (level.nv, level.nv + level.ne());
-    let (p, q) = (s.p as i128, s.q as i128);
-    let edges = level.v_edges(v);
-    if edges.is_empty() {
-        return None;
-    }
-    let (nb, be) = level.boundary_edges(v);
-    if nb > 0 {
-        if nb != 2 {
-            return None;
-        }
-        let se = sum3(x, be[..2].iter().map(|&e| e0 + e as usize));
-        return Some(se.map(|se| i64::combine(p, se, 0, 0, q)));
-    }
-    let faces = level.v_faces(v);
-    let se = sum3(x, edges.iter().map(|&e| e0 + e as usize));
-    let sf = sum3(x, faces.iter().map(|&f| f0 + f as usize));
-    let (ne, nf) = (edges.len() as i128, faces.len() as i128);
-    Some(std::array::from_fn(|k| {
-        i64::combine(4 * p * p * ne, sf[k], 4 * p * q * nf, se[k], q * q * nf * ne)
-    }))
-}
-
-/// One lifting step on the three axes at once (integers, no skipped values): each
-/// element's neighbours looked up once for the three. The same values as [`step`] on
-/// each axis (an element's update reads no element of its own kind, so the order of
+/// One lifting step (`forward`) or its inverse on `x`, leaving the elements `i` with
+/// `skip[i]` unchanged. On the three axes of `[Vec<i64>; 3]` the same values as on each
+/// axis apart (an element's update reads no element of its own kind, so the order of
 /// the axes does not matter).
-fn step_axes(level: &Level, x: &mut [Vec<i64>; 3], s: Step, forward: bool) {
+fn step<L: Lanes + ?Sized>(level: &Level, x: &mut L, s: Step, forward: bool, skip: &[bool]) {
     let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
     let (e0, f0) = (nv, nv + ne);
-    let (p, q) = (s.p as i128, s.q as i128);
-    let put = |x: &mut [Vec<i64>; 3], i: usize, d: [i64; 3]| {
-        for (xk, d) in x.iter_mut().zip(d) {
-            xk[i] = if forward { xk[i].plus(d) } else { xk[i].minus(d) };
-        }
-    };
-    let vertices = |x: &mut [Vec<i64>; 3]| {
-        for v in 0..nv {
-            if let Some(d) = v_update3(level, x, v, s) {
-                put(x, v, d);
-            }
-        }
-    };
-    let edges_from_faces = |x: &mut [Vec<i64>; 3]| {
-        for e in (0..ne).filter(|&e| !level.is_boundary(e)) {
-            let [a, b] = level.edge_faces[e];
-            let sf = sum3(x, [f0 + a as usize, f0 + b as usize].into_iter());
-            put(x, e0 + e, sf.map(|sf| i64::combine(p, sf, 0, 0, q)));
-        }
-    };
-    let faces = |x: &mut [Vec<i64>; 3]| {
-        for f in 0..nf {
-            let corners = level.coarse.face(f);
-            let sv = sum3(x, corners.iter().map(|&v| v as usize));
-            let se = sum3(x, level.f_edges(f).iter().map(|&e| e0 + e as usize));
-            let k = corners.len() as i128;
-            let d = std::array::from_fn(|a| i64::combine(4 * p * p, sv[a], 4 * p * q, se[a], q * q * k));
-            put(x, f0 + f, d);
-        }
-    };
-    let edges_from_ends = |x: &mut [Vec<i64>; 3]| {
-        for e in 0..ne {
-            let [a, b] = level.edges[e];
-            let sv = sum3(x, [a as usize, b as usize].into_iter());
-            put(x, e0 + e, sv.map(|sv| i64::combine(p, sv, 0, 0, q)));
-        }
-    };
-    match (s.kind, forward) {
-        (Kind::S, true) => {
-            vertices(x);
-            edges_from_faces(x);
-        }
-        (Kind::S, false) => {
-            edges_from_faces(x);
-            vertices(x);
-        }
-        (Kind::W, true) => {
-            faces(x);
-            edges_from_ends(x);
-        }
-        (Kind::W, false) => {
-            edges_from_ends(x);
-            faces(x);
-        }
-    }
-}
-
-fn step<T: Sample>(level: &Level, x: &mut [T], s: Step, forward: bool, skip: &[bool]) {
-    let (nv, ne, nf) = (level.nv, level.ne(), level.nf());
-    let e0 = nv;
-    let f0 = nv + ne;
     let live = |i: usize| !flag(skip, i);
+    let vertices = |x: &mut L| {
+        for v in (0..nv).filter(|&v| live(v)) {
+            if let Some(d) = v_update(level, x, v, s) {
+                x.apply(v, d, forward);
+            }
+        }
+    };
+    let edges_from_faces = |x: &mut L| {
+        for e in (0..ne).filter(|&e| live(e0 + e)) {
+            if let Some(d) = e_from_faces(level, x, e, s) {
+                x.apply(e0 + e, d, forward);
+            }
+        }
+    };
+    let faces = |x: &mut L| {
+        for f in (0..nf).filter(|&f| live(f0 + f)) {
+            let d = f_update(level, x, f, s);
+            x.apply(f0 + f, d, forward);
+        }
+    };
+    let edges_from_ends = |x: &mut L| {
+        for e in (0..ne).filter(|&e| live(e0 + e)) {
+            let d = e_from_ends(level, x, e, s);
+            x.apply(e0 + e, d, forward);
+        }
+    };
     match (s.kind, forward) {
         (Kind::S, true) => {
-            for v in (0..nv).filter(|&v| live(v)) {
-                if let Some(d) = v_update(level, x, v, s) {
-                    x[v] = x[v].plus(d);
-                }
-            }
-            for e in (0..ne).filter(|&e| live(e0 + e)) {
-                if let Some(d) = e_from_faces(level, x, e, s) {
-                    x[e0 + e] = x[e0 + e].plus(d);
-                }
-            }
+            vertices(x);
+            edges_from_faces(x);
         }
         (Kind::S, false) => {
-            for e in (0..ne).filter(|&e| live(e0 + e)) {
-                if let Some(d) = e_from_faces(level, x, e, s) {
-                    x[e0 + e] = x[e0 + e].minus(d);
-                }
-            }
-            for v in (0..nv).filter(|&v| live(v)) {
-                if let Some(d) = v_update(level, x, v, s) {
-                    x[v] = x[v].minus(d);
-                }
-            }
+            edges_from_faces(x);
+            vertices(x);
         }
         (Kind::W, true) => {
-            for f in (0..nf).filter(|&f| live(f0 + f)) {
-                let d = f_update(level, x, f, s);
-                x[f0 + f] = x[f0 + f].plus(d);
-            }
-            for e in (0..ne).filter(|&e| live(e0 + e)) {
-                let d = e_from_ends(level, x, e, s);
-                x[e0 + e] = x[e0 + e].plus(d);
-            }
+            faces(x);
+            edges_from_ends(x);
         }
         (Kind::W, false) => {
-            for e in (0..ne).filter(|&e| live(e0 + e)) {
-                let d = e_from_ends(level, x, e, s);
-                x[e0 + e] = x[e0 + e].minus(d);
-            }
-            for f in (0..nf).filter(|&f| live(f0 + f)) {
-                let d = f_update(level, x, f, s);
-                x[f0 + f] = x[f0 + f].minus(d);
-            }
+            edges_from_ends(x);
+            faces(x);
         }
     }
 }
@@ -347,11 +307,11 @@ impl Stencils {
         }
         if forward {
             for &s in steps {
-                step_axes(level, x, s, true);
+                step(level, x, s, true, &[]);
             }
         } else {
             for &s in steps.iter().rev() {
-                step_axes(level, x, s, false);
+                step(level, x, s, false, &[]);
             }
         }
         true
