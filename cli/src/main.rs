@@ -992,8 +992,8 @@ fn warn_dropped(quiet: bool, file: &str, loaded: &subwave::Loaded, why: &str) {
 /// then holds far more memory than it uses (on a 1.57 M-vertex mesh about 400 MB for
 /// 332 MB in use). Handing the heap's free pages back to the system as each level's
 /// coding starts (the encoder's progress reports are the hook) keeps the peak near what
-/// is in use: 355 MB there at effort 9, 364 MB at the default, for little time
-/// (benches/RESULTS.md). (A fixed 4 MiB mmap threshold gave 331 MB but doubled the page
+/// is in use, for little time (benches/RESULTS.md: 394 MB there at the default effort,
+/// 402 MB at effort 9, for a heap peak of 393 and 383 MB). (A fixed 4 MiB mmap threshold gave 331 MB but doubled the page
 /// faults and made allocations fail under valgrind, whose profiles this project uses.)
 fn trim_heap() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]

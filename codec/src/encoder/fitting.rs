@@ -83,10 +83,9 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
     if canon.levels.is_empty() {
         return None;
     }
-    let fine = floats(pos);
     let mut sets = None;
     if screen {
-        match screened(canon, pos, finest, &fine) {
+        match screened(canon, pos, finest) {
             Screen::Open => {}
             Screen::Away => return None,
             Screen::Chart => {
@@ -101,6 +100,7 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
             }
         }
     }
+    let fine = floats(pos, pos[0].len());
     let nb = canon.base.nv;
     let mut best: Option<Payloads> = None;
     let keep = |best: &mut Option<Payloads>, p: Payloads| {
@@ -202,15 +202,15 @@ enum Screen {
     Away,
 }
 
-/// The fit's screen on hierarchy `canon` with finest values `pos` (`fine` as floats;
-/// `finest` the level after the hierarchy's last). Refinement (small defect) is fitted;
+/// The fit's screen on hierarchy `canon` with finest values `pos` (`finest` the level
+/// after the hierarchy's last). Refinement (small defect) is fitted;
 /// else a surface: five finest vertices in a row inside one level-1 face, which
 /// roughness measures, take three levels, and a shallower hierarchy is screened by one
 /// fit on the limit. A flat mesh with a boundary (one axis constant: a UV map's charts,
 /// cut at their seams) may still be a modelling tool's subdivision, by its UV rule:
 /// linear boundaries on the limit surface. That rule set alone is tried when the
 /// screens turn the fit away, and on a shallow chart.
-fn screened(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level, fine: &[[f64; 3]]) -> Screen {
+fn screened(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level) -> Screen {
     let (Some(last), Some(base)) = (canon.levels.last(), canon.levels.first()) else {
         return Screen::Away;
     };
@@ -221,7 +221,7 @@ fn screened(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level, fine: &[[f64
         pos.iter().any(|x| x.iter().all(|&v| v == x[0])) && !crate::topology::sqrt2::closed(base);
     let far = mean(&|x| fit::defect(last, x)) > FIT_SCREEN
         && if canon.levels.len() < 3 {
-            chart || !near_limit(&canon.levels, finest, fine)
+            chart || !near_limit(&canon.levels, finest, &floats(pos, finest.nv))
         } else {
             // Many extraordinary vertices leave few regular runs: the limit fit
             // decides then, on the first two levels alone (the vertices of level
@@ -230,7 +230,7 @@ fn screened(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level, fine: &[[f64
             let two = &canon.levels[2];
             let runs = fit::Runs::new(&canon.levels, finest);
             mean(&|x| runs.as_ref()?.roughness(x)) > ROUGH_SCREEN
-                && (chart || !near_limit(&canon.levels[..2], two, &fine[..two.nv]))
+                && (chart || !near_limit(&canon.levels[..2], two, &floats(pos, two.nv)))
         };
     // A smooth surface of few vertices: creases (semi-sharp, or at vertices) break
     // the runs and the two-level fit but fold few finest edges, so every rule set is
@@ -329,7 +329,7 @@ pub(crate) fn turned_away(canon: &Canonical, pos: &[Vec<i64>; 3], finest: &Level
     if glue_seams(canon, pos).is_some() {
         return false;
     }
-    screened(canon, pos, finest, &floats(pos)) == Screen::Away
+    screened(canon, pos, finest) == Screen::Away
 }
 
 /// Whether hierarchy `canon`'s finest values `pos` are near a subdivision of its base:
@@ -349,7 +349,7 @@ pub(crate) fn near_subdivision(canon: &Canonical, pos: &[Vec<i64>; 3]) -> bool {
     if defect <= FIT_SCREEN {
         return true;
     }
-    near_limit(&canon.levels, &last.next(), &floats(pos))
+    near_limit(&canon.levels, &last.next(), &floats(pos, pos[0].len()))
 }
 
 /// OpenSubdiv's isolation level in Blender's default ("Quality" 3): below it, beside
@@ -399,9 +399,9 @@ fn end_caps(canon: &Canonical, finest: &Level) -> Vec<bool> {
     caps
 }
 
-/// Values per axis as points of floats.
-fn floats(pos: &[Vec<i64>; 3]) -> Vec<[f64; 3]> {
-    (0..pos[0].len())
+/// The first `n` values per axis as points of floats.
+fn floats(pos: &[Vec<i64>; 3], n: usize) -> Vec<[f64; 3]> {
+    (0..n)
         .map(|i| std::array::from_fn(|k| pos[k][i] as f64))
         .collect()
 }
@@ -1427,7 +1427,7 @@ mod tests {
     #[test]
     fn the_crease_search_stops_at_its_budget() {
         let (canon, finest, pos) = creased_cube();
-        let fine = floats(&pos);
+        let fine = floats(&pos, pos[0].len());
         let smooth = Rules {
             limit: true,
             ..Rules::default()

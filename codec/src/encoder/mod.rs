@@ -1074,7 +1074,14 @@ fn best_hierarchy(
         // extraordinary vertex and whose fit was tried but missed (residuals of
         // MISSED_BITS per vertex or more).
         let mut regular_fit = None;
-        for (i, canon) in canons.iter_mut().enumerate().filter(|_| try_fit) {
+        // On a large mesh one hierarchy's levels at a time: the first waits stowed while
+        // the others' fits are tried.
+        let large = mesh.vertex_count() > search::LARGE_MESH;
+        for i in (0..canons.len()).filter(|_| try_fit) {
+            if i == 1 && large {
+                canons[0].stow();
+            }
+            let canon = &mut canons[i];
             canon.unstow()?;
             let pos = canonical_positions(mesh, canon);
             let made = finest.take().filter(|_| i == 0);
@@ -1108,6 +1115,9 @@ fn best_hierarchy(
             if i > 0 {
                 canon.stow();
             }
+        }
+        if let Some(first) = canons.first_mut() {
+            first.unstow()?;
         }
         // A base mesh without extraordinary vertices refines from a coarser one as
         // far as its grid allows, so the recovery finds a base coarser than a

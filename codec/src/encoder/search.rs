@@ -145,7 +145,7 @@ impl Coding<'_> {
 /// The transform of hierarchy `canon` with wavelet `w` and disc transform `disc`.
 fn scheme_of(canon: &Canonical, w: Wavelet, disc: DiscTransform) -> Scheme<'_> {
     // Every coding of the hierarchy shares its stencils but a large one's (memory).
-    let large = canon.levels.last().map_or(0, |l| canon.family.fine_nv(l)) > KEEP_ANALYSIS;
+    let large = canon.levels.last().map_or(0, |l| canon.family.fine_nv(l)) > LARGE_MESH;
     Scheme {
         family: canon.family,
         wavelet: w,
@@ -265,15 +265,18 @@ fn analysed(canon: &Canonical, mesh: &Mesh, w: Wavelet, disc: DiscTransform) -> 
     analyse_all(canon, mesh, &scheme_of(canon, w, disc), false).map(|(x, _)| x)
 }
 
-/// Meshes up to this many vertices keep the analysis of the transform their estimate
-/// ranks first for its coding ([`by_bits`]); larger ones make it again (the memory of
-/// large meshes: every transform's analysis is held until they are ranked).
-const KEEP_ANALYSIS: usize = 500_000;
+/// Meshes above this many vertices are large: for their memory the encoder holds less
+/// and makes it again. Smaller ones keep the analysis of the transform their estimate
+/// ranks first for its coding ([`by_bits`]; every transform's analysis is held until
+/// they are ranked), their hierarchies' stencils for every coding ([`scheme_of`]), and
+/// their first candidate hierarchy's levels while another's fit is tried
+/// (`best_hierarchy`).
+pub(crate) const LARGE_MESH: usize = 500_000;
 
 /// `first` and `others` ranked by the bits their finest level's details take on
 /// hierarchy `canon` ([`DetailBits::finest`]; `known` a transform's where already
 /// estimated), fewest first (`first` first on ties); those out of range last, in their
-/// order; with the first's analysed values where made and kept ([`KEEP_ANALYSIS`]).
+/// order; with the first's analysed values where made and kept ([`LARGE_MESH`]).
 /// Only the finest level is analysed for the ranking (it holds most details), the
 /// coarser ones then for the first alone; should they take it out of range, every
 /// transform is analysed whole and ranked by all its details instead. The analyses run
@@ -292,7 +295,7 @@ fn by_bits(
     if all.len() == 1 {
         return (all, None);
     }
-    let keep = mesh.vertex_count() <= KEEP_ANALYSIS;
+    let keep = mesh.vertex_count() <= LARGE_MESH;
     if !keep {
         return by_all_bits(canon, mesh, &all, disc, known, threads);
     }
@@ -342,7 +345,7 @@ fn by_all_bits(
     known: Option<(Wavelet, DetailBits)>,
     threads: usize,
 ) -> (Vec<Wavelet>, Option<Values>) {
-    let keep = mesh.vertex_count() <= KEEP_ANALYSIS;
+    let keep = mesh.vertex_count() <= LARGE_MESH;
     let found = par_map(all, threads, |&w| match known {
         Some((k, bits)) if k == w => (Some(bits.all), None),
         _ => {

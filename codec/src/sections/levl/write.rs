@@ -209,8 +209,11 @@ pub fn encode(
                 }
             }
         }
-        if let Some((size, j)) = chosen {
-            let unbinned = sampled(j, true, size.saturating_sub(1)).is_some();
+        let chosen = chosen.map(|(size, j)| (j, sampled(j, true, size.saturating_sub(1)).is_some()));
+        // What the modes read for the sample goes before the chosen one's is made for
+        // the whole level (the memory of large levels).
+        drop(prep);
+        if let Some((j, unbinned)) = chosen {
             if let Some(whole) = whole_prep(level, family, x, coarse, modes[j]) {
                 attempt(&mut best, &whole, j, unbinned, usize::MAX);
             }
