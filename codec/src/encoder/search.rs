@@ -55,11 +55,14 @@ impl Coding<'_> {
             (self.header, self.search, self.bound, self.progress);
         let sqrt2 = canon.family == Family::Sqrt2;
         let scheme = scheme_of(canon, w, disc);
-        let (mut x, phases) = match given.filter(|_| !sqrt2) {
-            Some(x) => (x, None),
+        // (A sqrt2-lazy coding keeps its levels' predictions from the analysis, but on
+        // large meshes: memory.)
+        let keep = sqrt2 && mesh.vertex_count() <= LARGE_MESH;
+        let (mut x, phases, mut kept) = match given.filter(|_| !sqrt2) {
+            Some(x) => (x, None, Vec::new()),
             None => {
-                let (x, p) = analyse_all(canon, mesh, &scheme, true)?;
-                (x, Some(p))
+                let (x, p, kept) = analyse_all(canon, mesh, &scheme, true, keep)?;
+                (x, Some(p), kept)
             }
         };
         let (mut header, base_bytes) = hierarchy_base(canon, &x, header);
@@ -88,8 +91,11 @@ impl Coding<'_> {
             // for its synthesis once it is coded (not the finest's), for a sqrt(2)
             // level's tangent targets (SPEC.md 10.3) and, the values analysed beforehand,
             // for the phases of its predictions (10.6).
-            let t = (i < last || sqrt2 || phases.is_none())
-                .then(|| LevelTransform::new(&scheme, level, i, &x, false));
+            let t = (i < last || sqrt2 || phases.is_none()).then(|| {
+                kept.get_mut(i)
+                    .and_then(Option::take)
+                    .unwrap_or_else(|| LevelTransform::new(&scheme, level, i, &x, false))
+            });
             let targets = t.as_ref().and_then(|t| t.tangent_targets(level, &x));
             // The level's coarse values and details, where `x` is already synthesised.
             let mut before: Option<Values> = None;
@@ -156,24 +162,37 @@ fn scheme_of(canon: &Canonical, w: Wavelet, disc: DiscTransform) -> Scheme<'_> {
 }
 
 /// A hierarchy's analysed values (the base values in `x[k][..base vertices]`, then every
-/// level's details) and each level's phases (modes 6 and 9).
-type Analysis = ([Vec<i64>; 3], Vec<Option<crate::transform::phase::Phases>>);
+/// level's details), each level's phases (modes 6 and 9) and, where kept, its
+/// sqrt2-lazy transforms.
+type Analysis<'c> = (
+    [Vec<i64>; 3],
+    Vec<Option<crate::transform::phase::Phases>>,
+    Vec<Option<LevelTransform<'c>>>,
+);
 
 /// A hierarchy's analysis with `scheme` (SPEC.md 9), fine to coarse, as the decoder
 /// undoes it, and the phases of its Catmull-Clark levels where `with_phases` (else
 /// none: an estimate does not read them); `None` if a lifted value leaves the
-/// supported range.
-fn analyse_all(
-    canon: &Canonical,
+/// supported range. With `keep`, each sqrt2-lazy level's transform too: its
+/// predictions are made from the coarse values, which the analysis leaves as the
+/// decoder has them, so the coding synthesises and finds its tangent targets with
+/// them rather than making them again.
+fn analyse_all<'c>(
+    canon: &'c Canonical,
     mesh: &Mesh,
     scheme: &Scheme<'_>,
     with_phases: bool,
-) -> Option<Analysis> {
+    keep: bool,
+) -> Option<Analysis<'c>> {
     // The positions in canonical order, gathered for each coding rather than held
     // beside the hierarchy (the memory of large meshes).
     let mut x = canonical_positions(mesh, canon);
     // sqrt2-lazy levels: their predictions' phases (10.6).
     let mut phases: Vec<Option<crate::transform::phase::Phases>> = vec![None; canon.levels.len()];
+    let mut kept: Vec<Option<LevelTransform<'c>>> = Vec::new();
+    if keep {
+        kept.resize_with(canon.levels.len(), || None);
+    }
     for (l, level) in canon.levels.iter().enumerate().rev() {
         // As the decoder: sqrt2-lazy predicts from the coarse values (which it keeps)
         // and finds its phases with the predictions; ir2w runs its own passes,
@@ -190,11 +209,14 @@ fn analyse_all(
             None => None,
         };
         t.analyse(level, canon.family.fine_nv(level), &mut x);
+        if keep && matches!(t, LevelTransform::Sqrt2Lazy { .. }) {
+            kept[l] = Some(t);
+        }
     }
     if x.iter().flatten().any(|v| v.abs() > levl::MAX_LIFTED) {
         return None;
     }
-    Some((x, phases))
+    Some((x, phases, kept))
 }
 
 /// What ranks a hierarchy's transforms at the default effort without coding them: the
@@ -262,7 +284,7 @@ type Values = [Vec<i64>; 3];
 /// A hierarchy's values analysed with `w` (its phases not found: [`analyse_all`]);
 /// `None` if a lifted value leaves the supported range.
 fn analysed(canon: &Canonical, mesh: &Mesh, w: Wavelet, disc: DiscTransform) -> Option<Values> {
-    analyse_all(canon, mesh, &scheme_of(canon, w, disc), false).map(|(x, _)| x)
+    analyse_all(canon, mesh, &scheme_of(canon, w, disc), false, false).map(|(x, ..)| x)
 }
 
 /// Meshes above this many vertices are large: for their memory the encoder holds less
