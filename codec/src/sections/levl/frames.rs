@@ -585,22 +585,24 @@ impl RotFrames {
 }
 
 /// Every detail's [`RotFrame`] (`None` where the coarse normal is zero), computed once
-/// per level for all the encoder's rotated modes, from the details' normal `frames`.
+/// per level for all the encoder's rotated modes, from the details' normal `frames`;
+/// with the edge points' offsets where `offsets` (only [`Mode::Shifted`] reads them).
 pub(super) fn rot_frames(
     level: &Level,
     coarse: &[Vec<i64>; 3],
     frames: &[NormalFrame],
     family: Family,
+    offsets: bool,
 ) -> RotFrames {
     let ne = if family == Family::Sqrt2 { level.ne() } else { 0 };
-    let edges = if family == Family::Sqrt2 { 0 } else { level.ne() };
+    let edges = if family == Family::Sqrt2 || !offsets { 0 } else { level.ne() };
     let mut out = RotFrames {
         rots: Vec::with_capacity(frames.len()),
         offsets: Vec::with_capacity(edges.min(frames.len())),
     };
     for (i, f) in frames.iter().enumerate() {
         let fd = ne + i;
-        let made = f.get().map(|(_, n)| RotFrame::new(level, slices(coarse), family, fd, n, true));
+        let made = f.get().map(|(_, n)| RotFrame::new(level, slices(coarse), family, fd, n, offsets));
         out.rots.push(made.map(|r| r.rot));
         if i < edges {
             out.offsets.push(made.and_then(|r| r.offset));

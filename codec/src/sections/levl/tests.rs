@@ -396,7 +396,7 @@ fn body_within(
 ) -> Option<Vec<u8>> {
     let normals = normal_frames(level, coarse, Family::Cc);
     let prep = Prepared {
-        frames: rot_frames(level, coarse, &normals, Family::Cc),
+        frames: rot_frames(level, coarse, &normals, Family::Cc, true),
         normals,
         ..Default::default()
     };
@@ -440,7 +440,7 @@ fn rotated_modes_round_trip() {
             };
         }
     }
-    let frames = rot_frames(&level, &coarse, &normal_frames(&level, &coarse, Family::Cc), Family::Cc);
+    let frames = rot_frames(&level, &coarse, &normal_frames(&level, &coarse, Family::Cc), Family::Cc, true);
     let out_of_range = frames.iter().enumerate().any(|(i, f)| {
         f.as_ref().is_some_and(|f| {
             let d = std::array::from_fn(|k| x[k][level.nv + i]);
@@ -477,7 +477,7 @@ fn follow_faces(level: &Level, coarse: &[Vec<i64>; 3], x: &mut [Vec<i64>; 3]) {
 fn shifted_mode_predicts_edge_points_that_follow_their_faces() {
     let (level, coarse, mut x) = rotated_fixture(4);
     follow_faces(&level, &coarse, &mut x);
-    let frames = rot_frames(&level, &coarse, &normal_frames(&level, &coarse, Family::Cc), Family::Cc);
+    let frames = rot_frames(&level, &coarse, &normal_frames(&level, &coarse, Family::Cc), Family::Cc, true);
     assert_eq!(shift_weights(&level, &x, &frames), (4, 4));
     let plain = code_in_mode(&level, &coarse, &x, Mode::Rotated);
     let shifted = code_in_mode(&level, &coarse, &x, Mode::Shifted(4, 4));

@@ -293,7 +293,7 @@ fn candidates<'t>(
     if rotated {
         modes.push(Mode::Rotated);
         prep.normals = sampled_normal_frames(level, coarse, family, sample);
-        prep.frames = rot_frames(level, coarse, &prep.normals, family);
+        prep.frames = rot_frames(level, coarse, &prep.normals, family, true);
         match shift_weights(level, x, &prep.frames) {
             (0, 0) => {}
             (a, b) => modes.push(Mode::Shifted(a, b)),
@@ -323,7 +323,8 @@ fn whole_prep(
         prep.normals = normal_frames(level, coarse, family);
     }
     if matches!(mode, Mode::Rotated | Mode::Shifted(..)) {
-        prep.frames = rot_frames(level, coarse, &prep.normals, family);
+        let shifted = matches!(mode, Mode::Shifted(..));
+        prep.frames = rot_frames(level, coarse, &prep.normals, family, shifted);
     }
     if let Mode::Corrected(w) | Mode::CorrectedPhased(w, _) = mode {
         prep.corrections = corrections(level, x, &w)?;
