@@ -186,8 +186,8 @@ impl Coding {
             value_map: self.value_map.0,
             threads: match self.threads {
                 // Each thread holds a coding's memory: one per core, at most 4, and on
-                // large meshes (about 150 bytes per vertex each: 602 MB on two
-                // threads against 364 MB on one for the 1.57 M-vertex mesh) one.
+                // large meshes (about 130 bytes per vertex each: 596 MB on two
+                // threads against 394 MB on one for the 1.57 M-vertex mesh) one.
                 0 if vertices > LARGE_MESH => 1,
                 0 => std::thread::available_parallelism().map_or(1, |n| n.get().min(4)),
                 n => n,
