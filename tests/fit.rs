@@ -1174,3 +1174,33 @@ fn uv_charts_with_linear_boundaries_are_found_by_auto() {
     let corners = control.subdivision_surface_with(3, &[], true, Kept::Corners);
     assert_ne!(common::to_mesh(&corners, 1e6).positions, mesh.positions);
 }
+
+/// Edge and vertex creases on one mesh, as a modelling tool's user sets them (a face's
+/// edges and two corners elsewhere; Blender's `cube_mixed_creases` in the rules set):
+/// the creased corners pull the smooth surface off along their own edges too, so the
+/// edge sets found from the smooth surface miss. The fit finds the four edges and the
+/// two corners (from the vertex creases' fit), decodes exactly and codes to near-zero
+/// residuals.
+#[test]
+fn edge_and_vertex_creases_together_are_found() {
+    let control = subwave_corpus::cube();
+    // The top face's edges (z = 0.5: vertices 4 to 7) and two bottom corners.
+    let top: Vec<([u32; 2], f64)> = [[4, 5], [5, 7], [7, 6], [6, 4]]
+        .iter()
+        .map(|&e| (e, 3.0))
+        .collect();
+    let corners = [(0, 3.0), (2, 3.0)];
+    let surface = control.subdivision_surface_sharp(4, &top, &corners, true, Kept::Nothing);
+    let mesh = common::to_mesh(&surface, 1e5);
+    let q = subwave::Quantization::Decimal { decimals: 0 };
+    let enc = encode(&mesh, &q, TransformChoice::Fit);
+    let what = "cube with creased top edges and two creased corners";
+    assert!(
+        matches!(enc.header.transform, Transform::Fit { limit: true, .. }),
+        "{what}: {:?}",
+        enc.header.transform
+    );
+    assert_eq!(enc.header.creases.len(), 4, "{what}");
+    assert_eq!(enc.header.vertex_creases.len(), 2, "{what}");
+    exact_with_near_zero_residuals(&enc, &mesh, what);
+}

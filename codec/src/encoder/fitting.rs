@@ -966,8 +966,11 @@ fn crease_sharpness(c: f64) -> u32 {
 /// each is screened at a few sharpnesses, and the best, if it fits far better than the
 /// smooth surface, gets the sharpness that fits best by least squares. Then base
 /// vertices still far off are tried as vertex creases the same way (on the creases
-/// found, and alone). The rules found that fit better than the smooth surface (none
-/// where nothing does), within `budget` (what it has found when that is spent).
+/// found, and alone); where vertex creases alone fit, edge sets are found again from
+/// their fit and searched with them, and vertex creases once more on those edges (a
+/// user's creased edges and creased corners on one mesh). The rules found that fit
+/// better than the smooth surface (none where nothing does), within `budget` (what it
+/// has found when that is spent).
 #[allow(clippy::too_many_arguments)]
 fn semi_sharp(
     canon: &Canonical,
@@ -993,31 +996,37 @@ fn semi_sharp(
     // Per base edge, the median distance of the finest vertices on its descendants
     // (a median: one vertex beside an extraordinary vertex does not make a crease).
     let owner = owners(canon, finest);
-    let mut along: Vec<Vec<f64>> = vec![Vec::new(); base.ne()];
-    for (h, &o) in owner.iter().enumerate().filter(|&(_, &o)| o != u32::MAX) {
-        along[o as usize].extend(finest.edges[h].iter().map(|&v| distances[v as usize]));
-    }
-    let score: Vec<f64> = along
-        .iter_mut()
-        .map(|d| {
-            let m = d.len() / 2;
-            if d.is_empty() {
-                0.0
-            } else {
-                *d.select_nth_unstable_by(m, f64::total_cmp).1
-            }
-        })
-        .collect();
-    // Candidate sets: the edges scoring above each factor of the median, each set once.
-    let mut sets: Vec<Vec<usize>> = Vec::new();
-    for f in CREASE_FACTORS {
-        let set: Vec<usize> = (0..base.ne())
-            .filter(|&e| score[e] > (f * median).max(OUTLIER_FLOOR))
-            .collect();
-        if !set.is_empty() && !sets.contains(&set) {
-            sets.push(set);
+    // Candidate sets from finest distances `d`: the edges scoring above each factor of
+    // their median, each set once.
+    let scored_sets = |d: &[f64]| -> Vec<Vec<usize>> {
+        let median = median_of(d);
+        let mut along: Vec<Vec<f64>> = vec![Vec::new(); base.ne()];
+        for (h, &o) in owner.iter().enumerate().filter(|&(_, &o)| o != u32::MAX) {
+            along[o as usize].extend(finest.edges[h].iter().map(|&v| d[v as usize]));
         }
-    }
+        let score: Vec<f64> = along
+            .iter_mut()
+            .map(|d| {
+                let m = d.len() / 2;
+                if d.is_empty() {
+                    0.0
+                } else {
+                    *d.select_nth_unstable_by(m, f64::total_cmp).1
+                }
+            })
+            .collect();
+        let mut sets: Vec<Vec<usize>> = Vec::new();
+        for f in CREASE_FACTORS {
+            let set: Vec<usize> = (0..base.ne())
+                .filter(|&e| score[e] > (f * median).max(OUTLIER_FLOOR))
+                .collect();
+            if !set.is_empty() && !sets.contains(&set) {
+                sets.push(set);
+            }
+        }
+        sets
+    };
+    let mut sets = scored_sets(distances);
     // And the edges folding most, cut where the fold angles drop by a gap (a crease
     // concentrates its edge's fold): the largest gaps' sets.
     let angles = fold_angles(canon, finest, pos);
@@ -1303,6 +1312,40 @@ fn semi_sharp(
     }
     let alone = vertex_creases(&smooth_rules, distances, smooth);
     let vertices_found = alone.is_some();
+    // Edge creases found from vertex creases' fit (a few creased corners pull the
+    // smooth surface off along their edges too, which then pass for creases beside
+    // the creased edges): its edge sets screened with those vertex creases, the best
+    // searched with them, then the vertex creases searched again on the edges alone.
+    let edges_on = |vertex_rules: &Rules| -> Vec<(Rules, f64)> {
+        if exhausted() {
+            return Vec::new();
+        }
+        let (now, d) = misfit(vertex_rules, SEARCH_ITERATIONS);
+        let with_edges = |set: &[usize], s: u32| Rules {
+            sharpness: with(set, base.ne(), s),
+            ..vertex_rules.clone()
+        };
+        let best_set = scored_sets(&d)
+            .into_iter()
+            .map(|set| (screen(&|s| with_edges(&set, s)).0, set))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .filter(|(m, _)| *m < SCREEN_GAIN * now);
+        let Some((_, set)) = best_set else {
+            return Vec::new();
+        };
+        let (s, _) = search(&|s| with_edges(&set, s));
+        let edges_alone = Rules {
+            vertex_sharpness: Vec::new(),
+            ..with_edges(&set, s)
+        };
+        let (m, d) = misfit(&edges_alone, SEARCH_ITERATIONS);
+        let mut out: Vec<(Rules, f64)> = vertex_creases(&edges_alone, &d, m).into_iter().collect();
+        out.push((edges_alone, m));
+        out
+    };
+    if let Some((vertex_rules, _)) = &alone {
+        found.extend(edges_on(vertex_rules));
+    }
     found.extend(alone);
     // (Where the plain smooth surface coded smaller, the vertex creases on the limit
     // too: an infinitely sharp corner pulls the smooth limit fit further off.)
@@ -1321,7 +1364,11 @@ fn semi_sharp(
             extra_levels: isolated,
             ..Rules::default()
         };
-        found.extend(vertex_creases(&past, distances, smooth));
+        let past = vertex_creases(&past, distances, smooth);
+        if let Some((vertex_rules, _)) = &past {
+            found.extend(edges_on(vertex_rules));
+        }
+        found.extend(past);
     }
     // Each that fits better than the smooth surface is coded (the vertex creases'
     // misfits count their own vertices, so coding decides between them).
