@@ -993,8 +993,9 @@ fn warn_dropped(quiet: bool, file: &str, loaded: &subwave::Loaded, why: &str) {
 /// 332 MB in use). Handing the heap's free pages back to the system as each level's
 /// coding starts (the encoder's progress reports are the hook) keeps the peak near what
 /// is in use, for little time (benches/RESULTS.md: 394 MB there at the default effort,
-/// 402 MB at effort 9, for a heap peak of 393 and 383 MB). (A fixed 4 MiB mmap threshold gave 331 MB but doubled the page
-/// faults and made allocations fail under valgrind, whose profiles this project uses.)
+/// 402 MB at effort 9, for a heap peak of 393 and 383 MB). (A fixed 4 MiB mmap
+/// threshold gave 331 MB but doubled the page faults and made allocations fail under
+/// valgrind, whose profiles this project uses.)
 fn trim_heap() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: malloc_trim only returns free memory of the allocator's own heap to the

@@ -218,7 +218,7 @@ impl DecoderModel<PRECISION> for AdaptiveModel {
         // (A stale search table, which [`Decoder::symbol`] never leaves, means the whole
         // table.)
         let n = self.n();
-        let cum = &self.table[n..];
+        let cum = self.cum();
         let (lo, hi) = if self.stale {
             (0, n - 1)
         } else {
