@@ -1,9 +1,11 @@
 //! How far a Blender export is from the project's integer subdivision rules (SPEC.md
 //! 9.10) applied to Blender's own control mesh: no fit, so a miss is a rule's.
-//! `cargo run --release --example rules_probe -- FINE.obj CONTROL.txt [plain] [extra=N]`
+//! `cargo run --release --example rules_probe -- FINE.obj CONTROL.txt [plain] [extra=N]
+//! [caps=Q]`
 //! (`extra=N`: the rules' extra levels, `Rules::extra_levels`: N more levels refined
 //! before the limit, where a finite sharpness left is smooth, as OpenSubdiv's patches
-//! are past their isolation level, Blender's Quality.)
+//! are past their isolation level, Blender's Quality; `caps=Q`: OpenSubdiv's end-cap
+//! patches from level Q, `Rules::end_caps`.)
 //! CONTROL.txt (written by `benches/blender/make_rules_set.py --control`): lines
 //! `v x y z` (the control mesh in the exported file's frame, its vertices first in the
 //! export), `e a b crease` and `c a crease` (edge and vertex creases, Blender's 0..1).
@@ -97,6 +99,10 @@ fn main() {
             .iter()
             .find_map(|a| a.strip_prefix("extra="))
             .map(|n| n.parse().expect("extra=N"));
+        rules.end_caps = args
+            .iter()
+            .find_map(|a| a.strip_prefix("caps="))
+            .map(|n| n.parse().expect("caps=Q"));
         refine(&canon.levels, &finest, &rules, &mut x).expect("extra levels within bounds");
         // Kinds: the level a vertex first appears at, and whether it is a vertex, edge
         // or face point there.

@@ -73,6 +73,10 @@ pub fn info(info: &Info) -> Value {
             Transform::Fit { extra_levels, .. } => extra_levels,
             _ => None,
         },
+        "fit_end_caps": match h.transform {
+            Transform::Fit { end_caps, .. } => end_caps,
+            _ => None,
+        },
         "creases": h.creases,
         "crease_sharpness": h.crease_sharpness,
         "vertex_creases": h.vertex_creases,

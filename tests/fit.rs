@@ -175,6 +175,7 @@ fn hostile_fit_containers_are_refused() {
         bilinear,
         limit_corners,
         extra_levels,
+        end_caps,
     } = enc.header.transform
     else {
         panic!("not a fit")
@@ -189,6 +190,7 @@ fn hostile_fit_containers_are_refused() {
         bilinear,
         limit_corners,
         extra_levels,
+        end_caps,
     };
     let at = head
         .iter()
@@ -269,6 +271,8 @@ fn hostile_fit_containers_are_refused() {
         ("corners kept at the limit without the limit", 256),
         ("vertex sharpnesses without creased vertices", 512),
         ("extra levels without the limit", 1024),
+        ("end caps without the limit", 2048),
+        ("end caps with extra levels", 1 | 1024 | 2048),
     ] {
         match subwave::decode_slice(&rewritten(rules_as(rules), |_, _| {})) {
             Err(Error::Container(e)) => {
@@ -298,8 +302,24 @@ fn hostile_fit_containers_are_refused() {
         Ok(_) | Err(Error::CorruptLevel { .. }) => {}
         other => panic!("one extra level: {other:?}"),
     }
+    // End caps at level 0, or more than 12 levels below the finest, are malformed;
+    // at level 1 the header is read (the residuals meet another prediction).
+    let caps_as = |q: u8| {
+        move |h: &mut Vec<u8>| {
+            rules_as(u64::from(h[at + 1]) | 1 | 2048)(h);
+            h.insert(at + 3, q);
+        }
+    };
+    match subwave::decode_slice(&rewritten(caps_as(0), |_, _| {})) {
+        Err(Error::Container(e)) => assert!(e.to_string().contains("end caps"), "{e}"),
+        other => panic!("end caps at level 0: expected a malformed header, got {other:?}"),
+    }
+    match subwave::decode_slice(&rewritten(caps_as(1), |_, _| {})) {
+        Ok(_) | Err(Error::CorruptLevel { .. }) => {}
+        other => panic!("end caps at level 1: {other:?}"),
+    }
     // Fit rules the format does not define are unsupported, not guessed at.
-    match subwave::decode_slice(&rewritten(rules_as(2048), |_, _| {})) {
+    match subwave::decode_slice(&rewritten(rules_as(4096), |_, _| {})) {
         Err(Error::Unsupported(what)) => assert!(what.contains("fit rules"), "{what}"),
         other => panic!("unknown fit rules: {other:?}"),
     }
@@ -913,15 +933,16 @@ fn blender_subdivision_exports_are_fitted_also_cut_at_seams() {
     // Blender's undisplaced subdivision exports (the dev set): the OBJs' geometry is a
     // fit on the limit surface, and so is the binary PLY's, which Blender cut at its UV
     // seam, glued there; each decodes to its own values, and its geometry sections
-    // (base mesh and levels) stay under 4 bits per vertex.
+    // (base mesh and levels) stay under 4 bits per vertex. The cylinder (four levels,
+    // Blender's default quality 3) takes OpenSubdiv's end caps from level 3.
     let Some(dir) = common::shared_corpus().map(|d| d.join("blender")) else {
         eprintln!("../shared/corpus not found; skipping");
         return;
     };
-    for (name, cut) in [
-        ("cylinder8_crease_cc4.obj", false),
-        ("vase_lathe_cc3_vcol.obj", false),
-        ("vase_lathe_cc3_vcol.ply", true),
+    for (name, cut, caps) in [
+        ("cylinder8_crease_cc4.obj", false, Some(3)),
+        ("vase_lathe_cc3_vcol.obj", false, None),
+        ("vase_lathe_cc3_vcol.ply", true, None),
     ] {
         let bytes = std::fs::read(dir.join(name)).unwrap();
         let m = subwave::load(&bytes, None).unwrap();
@@ -935,6 +956,11 @@ fn blender_subdivision_exports_are_fitted_also_cut_at_seams() {
             h.transform.name()
         );
         assert_eq!(!h.seams.is_empty(), cut, "{name}: {:?}", h.seams);
+        assert!(
+            matches!(h.transform, Transform::Fit { end_caps, .. } if end_caps == caps),
+            "{name}: {:?}",
+            h.transform
+        );
         assert_exact(&enc.bytes, &mesh, name);
         let info = subwave::inspect(&enc.bytes, &Default::default()).unwrap();
         let geometry: usize = info
@@ -1203,4 +1229,57 @@ fn edge_and_vertex_creases_together_are_found() {
     assert_eq!(enc.header.creases.len(), 4, "{what}");
     assert_eq!(enc.header.vertex_creases.len(), 2, "{what}");
     exact_with_near_zero_residuals(&enc, &mesh, what);
+}
+
+#[test]
+fn end_cap_patches_are_found_at_each_quality() {
+    // Surfaces made by the codec's own integer rules with OpenSubdiv's end caps
+    // (Gregory patches beside extraordinary vertices, Blender's Quality) from level 1
+    // and from level 3, four levels: `auto` finds the end caps' level, the container
+    // decodes exactly and its residuals are near zero.
+    use subwave_codec::topology::{Level, Topo};
+    use subwave_codec::transform::fit::{refine, Rules};
+    let (control, _) = prism_and_rims();
+    let mut t = Topo::new(control.positions.len());
+    for f in &control.faces {
+        t.push(f);
+    }
+    let mut levels = Vec::new();
+    for _ in 0..4 {
+        let l = Level::new(&t).unwrap();
+        t = l.fine();
+        levels.push(l);
+    }
+    let finest = levels.last().unwrap().next();
+    for q in [1u8, 3] {
+        let rules = Rules {
+            limit: true,
+            end_caps: Some(q),
+            ..Rules::default()
+        };
+        let mut x: [Vec<i64>; 3] = std::array::from_fn(|k| {
+            control
+                .positions
+                .iter()
+                .map(|p| (p[k] * 1e5 * 256.0).round() as i64)
+                .collect()
+        });
+        // (Refined at 8 extra bits and rounded, as a fit at 8 bits predicts.)
+        refine(&levels, &finest, &rules, &mut x).unwrap();
+        let mut mesh = Mesh::new();
+        mesh.positions = (0..finest.nv)
+            .map(|v| std::array::from_fn(|k| (x[k][v] + 128) >> 8))
+            .collect();
+        for f in 0..t.nf() {
+            mesh.push_face(t.face(f));
+        }
+        let q0 = subwave::Quantization::Decimal { decimals: 0 };
+        let enc = encode(&mesh, &q0, TransformChoice::Auto);
+        assert!(
+            matches!(enc.header.transform, Transform::Fit { limit: true, end_caps: Some(e), .. } if e == q),
+            "quality {q}: {:?}",
+            enc.header.transform
+        );
+        exact_with_near_zero_residuals(&enc, &mesh, &format!("end caps from level {q}"));
+    }
 }

@@ -252,6 +252,7 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
             bilinear,
             limit_corners,
             extra_levels,
+            end_caps,
         } => {
             let rules = fit::Rules {
                 limit,
@@ -260,6 +261,7 @@ fn decode_inner(bytes: &[u8], opts: &DecodeOptions, nested: bool) -> Result<Deco
                 bilinear,
                 limit_corners,
                 extra_levels,
+                end_caps,
                 ..fit::Rules::default()
             };
             synthesise_fit(&c, &h, base, bits, &rules, level)?
@@ -930,6 +932,8 @@ fn synthesise_fit(
     }
     // With seams, the cut mesh's finest faces (made without a level).
     let mut finest = None;
+    // The end caps, from their isolation level on (SPEC.md 9.10).
+    let mut caps = None;
     for l in 0..upto as usize {
         check_refinement_size(h, level.fine_nv(), level.fine_faces_with(&[]))?;
         if l + 1 < h.levels as usize && !c.sections[2 + l].payload.is_empty() {
@@ -939,8 +943,12 @@ fn synthesise_fit(
             );
         }
         let rl = glued.as_ref().map_or(&level, |g| &g.0);
+        caps = caps.or_else(|| fit::end_caps_at(rules, l, rl, &sharp, &x));
         for xs in x.iter_mut() {
             fit::subdivide(rl, rules.hard(&sharp), xs);
+        }
+        if let Some(c) = &mut caps {
+            c.below(rl);
         }
         glued = match glued {
             None => {
@@ -967,6 +975,9 @@ fn synthesise_fit(
     let rl = glued.as_ref().map_or(&level, |g| &g.0);
     fit::place_finest(rl, rules, sharp, &mut x)
         .map_err(|e| Error::corrupt("HEAD", e.to_string()))?;
+    if let Some(c) = caps {
+        c.place(&rl.coarse, &mut x);
+    }
     if let Some((_, map)) = &glued {
         for xs in x.iter_mut() {
             *xs = fit::spread(map, xs);

@@ -164,6 +164,7 @@ pub fn fit_rules(h: &Header) -> String {
         bilinear,
         limit_corners,
         extra_levels,
+        end_caps,
         ..
     } = h.transform
     else {
@@ -226,6 +227,9 @@ pub fn fit_rules(h: &Header) -> String {
             "the limit {e} level{} further, finite sharpness smooth there",
             if e == 1 { "" } else { "s" }
         ));
+    }
+    if let Some(q) = end_caps {
+        rules.push(format!("end-cap patches from level {q}"));
     }
     rules.join(", ")
 }

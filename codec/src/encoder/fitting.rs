@@ -102,22 +102,44 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
     }
     let fine = floats(pos, pos[0].len());
     let nb = canon.base.nv;
-    let mut best: Option<Payloads> = None;
-    let keep = |best: &mut Option<Payloads>, p: Payloads| {
-        if best.as_ref().is_none_or(|q| p.size() < q.size()) {
-            *best = Some(p);
+    // The smallest coding, its rules and control values.
+    let mut best: Option<(Payloads, Rules, Vec<[f64; 3]>)> = None;
+    let keep = |best: &mut Option<(Payloads, Rules, Vec<[f64; 3]>)>,
+                p: (Payloads, Rules),
+                control: &[[f64; 3]]| {
+        if best.as_ref().is_none_or(|q| p.0.size() < q.0.size()) {
+            *best = Some((p.0, p.1, control.to_vec()));
         }
     };
     let sets = sets.unwrap_or_else(|| rule_sets(canon, finest, pos));
     // Every vertex counts; then, where the hierarchy has them, without the points of
     // Blender's end-cap patches (the smaller coding is kept: on a surface that is the
     // limit everywhere they carry its creases' sharpness).
-    let caps = end_caps(canon, finest);
+    let caps = end_caps(canon, finest, END_CAP_LEVEL);
     let mut counts = vec![vec![false; finest.nv]];
     if caps.contains(&true) {
         counts.push(caps);
     }
     for caps in &counts {
+        // Without the end-cap points, each limit rule set is coded also with the end
+        // caps at Blender's default quality (the fit leaves their points out either
+        // way); the smaller coding is kept.
+        let capped = caps.contains(&true);
+        let code = |rules: &Rules, control: &[[f64; 3]]| -> Option<(Payloads, Rules)> {
+            let p = code_rules(target, header, bits, rules, control).map(|p| (p, rules.clone()));
+            if !capped || !rules.limit || rules.extra_levels.is_some() {
+                return p;
+            }
+            let gregory = Rules {
+                end_caps: Some(END_CAP_LEVEL as u8),
+                ..rules.clone()
+            };
+            let g = code_rules(target, header, bits, &gregory, control).map(|g| (g, gregory));
+            match (p, g) {
+                (Some(p), Some(g)) => Some(if g.0.size() < p.0.size() { g } else { p }),
+                (p, g) => p.or(g),
+            }
+        };
         // The smooth rule sets' sizes and the limit surface's distances, for the
         // search for semi-sharp creases.
         let mut smooth: Vec<(usize, bool)> = Vec::new();
@@ -137,8 +159,8 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
                     ..Rules::default()
                 };
             let d = (plain && rules.limit).then(|| distances_from(&op, &control, &fine));
+            let p = code(rules, &control);
             drop(op);
-            let p = code_rules(target, header, bits, rules, &control);
             (plain, control, d, p)
         });
         for (rules, (plain, control, d, p)) in sets.iter().zip(fitted) {
@@ -147,22 +169,22 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
             }
             if let Some(p) = p {
                 if plain {
-                    smooth.push((p.size(), rules.limit));
+                    smooth.push((p.0.size(), rules.limit));
                 }
                 if rules.corners
                     && kept_corners
                         .as_ref()
-                        .is_none_or(|k: &(usize, Rules, Vec<[f64; 3]>)| p.size() < k.0)
+                        .is_none_or(|k: &(usize, Rules, Vec<[f64; 3]>)| p.0.size() < k.0)
                 {
-                    kept_corners = Some((p.size(), rules.clone(), control.clone()));
+                    kept_corners = Some((p.0.size(), rules.clone(), control.clone()));
                 }
-                keep(&mut best, p);
+                keep(&mut best, p, &control);
             }
         }
         // Kept boundary vertices (Blender's UV junctions and concave corners) on the
         // best coding with kept corners, where it codes near the smallest (junctions
         // are kept corners too, and a few of them miss little).
-        let smallest = best.as_ref().map_or(0, |b| b.size()) as f64;
+        let smallest = best.as_ref().map_or(0, |b| b.0.size()) as f64;
         let kept = kept_corners
             .take()
             .filter(|k| k.0 as f64 <= JUNCTION_GATE * smallest);
@@ -170,9 +192,10 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
         {
             let op = fit::Operator::new(&canon.levels, finest, &rules);
             let control = robust_fit(&op, &fine, nb, caps);
+            let p = code(&rules, &control);
             drop(op);
-            if let Some(p) = code_rules(target, header, bits, &rules, &control) {
-                keep(&mut best, p);
+            if let Some(p) = p {
+                keep(&mut best, p, &control);
             }
         }
         let limit = smooth.iter().min().is_none_or(|&(_, l)| l);
@@ -182,13 +205,49 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
         for rules in found.iter().filter(|r| !sets.contains(r)) {
             let op = fit::Operator::new(&canon.levels, finest, rules);
             let control = robust_fit(&op, &fine, nb, caps);
+            let p = code(rules, &control);
             drop(op);
-            if let Some(p) = code_rules(target, header, bits, rules, &control) {
-                keep(&mut best, p);
+            if let Some(p) = p {
+                keep(&mut best, p, &control);
             }
         }
     }
-    best
+    // Blender's lower qualities: the best rules with end caps from an earlier level,
+    // fitted with them (most points may lie in them): a short fit first, and where its
+    // coding is the smallest, the whole fit.
+    if let Some((_, rules, control)) = best.as_ref().filter(|b| !b.1.bilinear) {
+        let tries: Vec<Rules> = (1..END_CAP_LEVEL as u8)
+            .filter(|&q| (q as usize) < canon.levels.len())
+            .map(|q| Rules {
+                limit: true,
+                extra_levels: None,
+                end_caps: Some(q),
+                ..rules.clone()
+            })
+            .collect();
+        let start = control.clone();
+        let size = best.as_ref().map_or(usize::MAX, |b| b.0.size());
+        let coded = super::search::par_map(&tries, target.threads, |rules| {
+            let op = fit::Operator::new(&canon.levels, finest, rules);
+            let short = op.fit(&fine, &start, &[], SHORT_FIT, FIT_TOLERANCE);
+            let p = code_rules(target, header, bits, rules, &short)?;
+            if p.size() >= size {
+                return None;
+            }
+            let control = op.fit(&fine, &short, &[], 400, FIT_TOLERANCE);
+            drop(op);
+            let q =
+                code_rules(target, header, bits, rules, &control).filter(|q| q.size() < p.size());
+            Some(match q {
+                Some(q) => (q, rules.clone(), control),
+                None => (p, rules.clone(), short),
+            })
+        });
+        for (p, rules, control) in coded.into_iter().flatten() {
+            keep(&mut best, (p, rules), &control);
+        }
+    }
+    best.map(|b| b.0)
 }
 
 /// What the fit's screen makes of a hierarchy's finest values.
@@ -358,15 +417,16 @@ pub(crate) fn near_subdivision(canon: &Canonical, pos: &[Vec<i64>; 3]) -> bool {
 const END_CAP_LEVEL: usize = 3;
 
 /// Per finest vertex of `canon` (`finest` the level after its last), whether it lies
-/// where Blender's default quality evaluates an end-cap patch rather than the limit
-/// surface: made after level [`END_CAP_LEVEL`] inside a face of that level beside an
+/// where Blender's quality `level` (3 by default, [`END_CAP_LEVEL`]) evaluates an
+/// end-cap patch rather than the limit surface: made after `level` inside a face of
+/// that level beside an
 /// extraordinary vertex (inside the mesh, not four edges; a boundary, sharp in
 /// OpenSubdiv, takes patches of its own that are on the limit). The fits
 /// leave them out (they are coded as residuals like every vertex); all false for
 /// hierarchies of that many levels or fewer.
-fn end_caps(canon: &Canonical, finest: &Level) -> Vec<bool> {
+fn end_caps(canon: &Canonical, finest: &Level, level: usize) -> Vec<bool> {
     let mut caps = vec![false; finest.nv];
-    let Some(at) = canon.levels.get(END_CAP_LEVEL) else {
+    let Some(at) = canon.levels.get(level) else {
         return caps;
     };
     let irregular: Vec<bool> = (0..at.nv)
@@ -383,7 +443,7 @@ fn end_caps(canon: &Canonical, finest: &Level) -> Vec<bool> {
     let mut marked: Vec<bool> = (0..at.coarse.nf())
         .map(|f| at.coarse.face(f).iter().any(|&v| irregular[v as usize]))
         .collect();
-    for l in &canon.levels[END_CAP_LEVEL..] {
+    for l in &canon.levels[level..] {
         let mut next = vec![false; l.coarse.idx.len()];
         for (f, &m) in marked.iter().enumerate().filter(|&(_, &m)| m) {
             let (a, b) = (l.coarse.starts[f] as usize, l.coarse.starts[f + 1] as usize);
@@ -398,6 +458,10 @@ fn end_caps(canon: &Canonical, finest: &Level) -> Vec<bool> {
     }
     caps
 }
+
+/// Iterations of the short fit that tells whether end caps from a lower level are
+/// worth the whole fit.
+const SHORT_FIT: usize = 30;
 
 /// The first `n` values per axis as points of floats.
 fn floats(pos: &[Vec<i64>; 3], n: usize) -> Vec<[f64; 3]> {
@@ -554,6 +618,7 @@ fn code_rules(
             bilinear: rules.bilinear,
             limit_corners: rules.limit_corners,
             extra_levels: rules.extra_levels,
+            end_caps: rules.end_caps,
         };
         let listed = |sharpness: &[u32]| -> (Vec<u32>, Vec<u32>) {
             sharpness
@@ -839,6 +904,7 @@ const BILINEAR: Rules = Rules {
     bilinear: true,
     limit_corners: false,
     extra_levels: None,
+    end_caps: None,
 };
 
 /// The mean angle (radians) between the finest faces beside a base edge's descendants

@@ -48,6 +48,9 @@ pub enum Transform {
         /// With the limit, `Some(e)`: `e` more levels refined before it, where a
         /// finite sharpness left is smooth (SPEC.md 9.10), `0..=3`.
         extra_levels: Option<u8>,
+        /// With the limit, `Some(q)`: the faces of level `q` beside an extraordinary
+        /// vertex are OpenSubdiv's end-cap patches (SPEC.md 9.10), `q >= 1`.
+        end_caps: Option<u8>,
     },
 }
 
@@ -210,6 +213,9 @@ const FIT_LIMIT_CORNERS: u64 = 256;
 const FIT_VERTEX_SEMI_SHARP: u64 = 512;
 /// Fit rules: a byte of extra levels refined before the limit follows the rules.
 const FIT_EXTRA_LEVELS: u64 = 1024;
+/// Fit rules: a byte, the end caps' isolation level, follows the rules (and the extra
+/// levels' byte).
+const FIT_END_CAPS: u64 = 2048;
 /// The largest crease sharpness a header holds: infinitely sharp (SPEC.md 9.10).
 const MAX_SHARPNESS: u64 = crate::transform::fit::SHARP_INFINITE as u64;
 
@@ -238,6 +244,7 @@ impl Header {
             bilinear,
             limit_corners,
             extra_levels,
+            end_caps,
         } = self.transform
         {
             w.u8(bits);
@@ -253,10 +260,14 @@ impl Header {
                     | flag(bilinear, FIT_BILINEAR)
                     | flag(limit_corners, FIT_LIMIT_CORNERS)
                     | flag(!self.vertex_sharpness.is_empty(), FIT_VERTEX_SEMI_SHARP)
-                    | flag(extra_levels.is_some(), FIT_EXTRA_LEVELS),
+                    | flag(extra_levels.is_some(), FIT_EXTRA_LEVELS)
+                    | flag(end_caps.is_some(), FIT_END_CAPS),
             );
             if let Some(e) = extra_levels {
                 w.u8(e);
+            }
+            if let Some(q) = end_caps {
+                w.u8(q);
             }
         }
         match self.quantization {
@@ -361,7 +372,7 @@ impl Header {
                 )))
             }
         };
-        let (transform, rules) = read_transform(&mut r)?;
+        let (transform, rules) = read_transform(&mut r, levels)?;
         let quantization = read_quantization(&mut r)?;
         let source = Source::from_code(r.u8("source format")?);
         let at = r.offset();
@@ -630,7 +641,7 @@ fn read_sharpness(r: &mut ByteReader<'_>, n: usize) -> Result<Vec<u32>> {
 }
 
 /// The header's transform (SPEC.md 5), and for a fit its rules (0 otherwise).
-fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, u64)> {
+fn read_transform(r: &mut ByteReader<'_>, levels: u8) -> Result<(Transform, u64)> {
     let at = r.offset();
     Ok(match r.u8("transform")? {
         0 => (Transform::None, 0),
@@ -655,7 +666,8 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, u64)> {
                 | FIT_BILINEAR
                 | FIT_LIMIT_CORNERS
                 | FIT_VERTEX_SEMI_SHARP
-                | FIT_EXTRA_LEVELS;
+                | FIT_EXTRA_LEVELS
+                | FIT_END_CAPS;
             if rules & !known != 0 {
                 return Err(Error::Unsupported(format!(
                     "fit rules {rules:#x} (byte {at})"
@@ -694,6 +706,28 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, u64)> {
             } else {
                 None
             };
+            if rules & FIT_END_CAPS != 0 && (rules & FIT_LIMIT == 0 || extra_levels.is_some()) {
+                return Err(malformed(
+                    at,
+                    "end caps without the limit or with extra levels",
+                ));
+            }
+            let end_caps = if rules & FIT_END_CAPS != 0 {
+                let at = r.offset();
+                let q = r.u8("fit end caps")?;
+                let depth = crate::transform::gregory::MAX_DEPTH;
+                if q == 0 || u32::from(levels) > u32::from(q) + depth {
+                    return Err(malformed(
+                        at,
+                        format!(
+                            "end caps at level {q} of {levels}: not 1 or more, or more than {depth} levels above"
+                        ),
+                    ));
+                }
+                Some(q)
+            } else {
+                None
+            };
             let fit = Transform::Fit {
                 bits,
                 limit: rules & FIT_LIMIT != 0,
@@ -702,6 +736,7 @@ fn read_transform(r: &mut ByteReader<'_>) -> Result<(Transform, u64)> {
                 bilinear: rules & FIT_BILINEAR != 0,
                 limit_corners: rules & FIT_LIMIT_CORNERS != 0,
                 extra_levels,
+                end_caps,
             };
             (fit, rules)
         }

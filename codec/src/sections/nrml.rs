@@ -8,6 +8,7 @@ use crate::entropy::{AdaptiveModel, Decoder, Encoder, IntModel};
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
 use crate::sections::cidx::CornerIndices;
+use crate::transform::isqrt;
 
 const SECTION: &str = "NRML";
 
@@ -71,22 +72,6 @@ impl Component {
                 format!("{sign}{}.{:0w$}", a / p, a % p, w = d as usize)
             }
         }
-    }
-}
-
-/// `floor(sqrt(v))`.
-fn isqrt(v: u128) -> u128 {
-    if v < 2 {
-        return v;
-    }
-    let mut r = 1u128 << (64 - (v.leading_zeros() / 2) as u128).min(127) as u32;
-    // Newton's iteration from above: decreasing to the floor.
-    loop {
-        let next = (r + v / r) / 2;
-        if next >= r {
-            return r;
-        }
-        r = next;
     }
 }
 

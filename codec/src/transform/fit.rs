@@ -13,6 +13,7 @@
 
 use crate::error::{Error, Result};
 use crate::topology::{Level, Topo, NONE};
+use crate::transform::gregory::EndCaps;
 use crate::transform::round_div;
 
 /// Most extra bits of precision the control values may carry (SPEC.md 9.10).
@@ -68,6 +69,12 @@ pub struct Rules {
     /// `e` past the levels written (Blender's Quality, 3 by default, over 1 or 2
     /// levels): the limit of semi-sharp creases as Blender writes it.
     pub extra_levels: Option<u8>,
+    /// With the limit, `Some(q)`: the faces of level `q` beside an extraordinary
+    /// vertex are OpenSubdiv's end-cap patches, not the limit surface (Gregory
+    /// patches, [`crate::transform::gregory`]): the finest vertices inside them take
+    /// the patches' values. OpenSubdiv's evaluation at isolation level `q` (Blender's
+    /// Quality, 3 by default) over more levels than `q`.
+    pub end_caps: Option<u8>,
 }
 
 /// Most extra levels [`Rules::extra_levels`] may refine (SPEC.md 9.10).
@@ -433,13 +440,38 @@ pub fn refine(
     x: &mut [Vec<i64>; 3],
 ) -> Result<()> {
     let mut sharp = rules.base_sharpness();
+    let mut caps = None;
     for (i, l) in levels.iter().enumerate() {
+        caps = caps.or_else(|| end_caps_at(rules, i, l, &sharp, x));
         for xs in x.iter_mut() {
             subdivide(l, rules.hard(&sharp), xs);
         }
+        if let Some(c) = &mut caps {
+            c.below(l);
+        }
         sharp = sharp.below(l, levels.get(i + 1).unwrap_or(finest));
     }
-    place_finest(finest, rules, sharp, x)
+    place_finest(finest, rules, sharp, x)?;
+    if let Some(c) = caps {
+        c.place(&finest.coarse, x);
+    }
+    Ok(())
+}
+
+/// The end caps of `rules` (SPEC.md 9.10) where level `i` (`level`'s coarse mesh,
+/// sharpnesses `sharp`, values `x`) is their isolation level.
+pub fn end_caps_at(
+    rules: &Rules,
+    i: usize,
+    level: &Level,
+    sharp: &Sharpness,
+    x: &[Vec<i64>; 3],
+) -> Option<EndCaps> {
+    let mut caps = (rules.limit && rules.end_caps == Some(i as u8) && i > 0)
+        .then(|| EndCaps::new(level, rules.hard(sharp)))
+        .flatten()?;
+    caps.values(x);
+    Some(caps)
 }
 
 /// The levels [`Rules::extra_levels`] refines past `finest` (the level whose coarse
@@ -702,10 +734,32 @@ impl Operator {
             }
             m
         };
-        let mut out = Vec::with_capacity(levels.len() + 1);
+        let mut out = Vec::with_capacity(levels.len() + 2);
         let mut sharp = rules.base_sharpness();
+        // The end caps and the vertices of their level, whose values every level after
+        // it carries past its own (`from` the first carried one's column).
+        let mut caps: Option<(EndCaps, usize)> = None;
+        let carry = |rows: &mut Vec<Vec<(u32, f64)>>, from: usize, n: usize| {
+            rows.extend((0..n).map(|j| vec![((from + j) as u32, 1.0)]));
+        };
         for (i, l) in levels.iter().enumerate() {
-            out.push(csr(rows(l, rules.hard(&sharp)), l.nv));
+            let mut r = rows(l, rules.hard(&sharp));
+            let mut coarse = l.nv;
+            if caps.is_none() && rules.limit && rules.extra_levels.is_none() {
+                if rules.end_caps == Some(i as u8) && i > 0 {
+                    caps = EndCaps::new(l, rules.hard(&sharp)).map(|c| (c, l.nv));
+                    if let Some((_, nq)) = caps {
+                        carry(&mut r, 0, nq);
+                    }
+                }
+            } else if let Some((_, nq)) = caps {
+                carry(&mut r, l.nv, nq);
+                coarse += nq;
+            }
+            if let Some((c, _)) = &mut caps {
+                c.below(l);
+            }
+            out.push(csr(r, coarse));
             sharp = sharp.below(l, levels.get(i + 1).unwrap_or(finest));
         }
         if rules.limit {
@@ -720,7 +774,32 @@ impl Operator {
                     .collect()
             };
             match rules.extra_levels {
-                None => out.push(csr(limit_rows(finest, rules.hard(&sharp)), finest.nv)),
+                None => match caps {
+                    None => out.push(csr(limit_rows(finest, rules.hard(&sharp)), finest.nv)),
+                    Some((c, nq)) => {
+                        let n = finest.nv;
+                        let mut r = limit_rows(finest, rules.hard(&sharp));
+                        carry(&mut r, n, nq);
+                        out.push(csr(r, n + nq));
+                        // The finest values and the end caps' points from the values
+                        // carried; then the finest values: the limit's, or the end
+                        // caps' from their points.
+                        let (points, vertices) = c.rows(&finest.coarse);
+                        let np = points.len();
+                        let mut r: Vec<Vec<(u32, f64)>> =
+                            (0..n as u32).map(|v| vec![(v, 1.0)]).collect();
+                        r.extend(points.into_iter().map(|row| {
+                            row.into_iter().map(|(u, w)| (n as u32 + u, w)).collect()
+                        }));
+                        out.push(csr(r, n + nq));
+                        let mut r: Vec<Vec<(u32, f64)>> =
+                            (0..n as u32).map(|v| vec![(v, 1.0)]).collect();
+                        for (v, row) in vertices {
+                            r[v] = row.into_iter().map(|(u, w)| (n as u32 + u, w)).collect();
+                        }
+                        out.push(csr(r, n + np));
+                    }
+                },
                 Some(e) => {
                     // (Callers keep extra levels within the bound: `extra_vertices`.)
                     let extra = extra_levels(finest, e).expect("extra levels within the bound");
@@ -1073,8 +1152,9 @@ mod tests {
     /// Every rule set of a hierarchy: plain, limit, creases (the base mesh's first
     /// face's edges) infinitely sharp, semi-sharp (1.7 and 0.4 levels, and a vertex
     /// crease of 0.6 at the first face's first corner), each with and without the limit;
-    /// and linear everywhere, the limit with corners kept at it, and the limit one
-    /// extra level down (creases of 2.7 levels, the vertex crease).
+    /// and linear everywhere, the limit with corners kept at it, the limit one
+    /// extra level down (creases of 2.7 levels, the vertex crease), and the limit with
+    /// end caps from level 1, smooth and with the infinitely sharp creases.
     fn rule_sets(levels: &[Level]) -> Vec<Rules> {
         let first = levels[0].f_edges(0).to_vec();
         let crease = |s: u32| -> Vec<u32> {
@@ -1115,6 +1195,17 @@ mod tests {
                     sharpness: crease(SHARP_ONE * 27 / 10),
                     vertex_sharpness: corner.clone(),
                     extra_levels: Some(1),
+                    ..Rules::default()
+                },
+                Rules {
+                    limit: true,
+                    end_caps: Some(1),
+                    ..Rules::default()
+                },
+                Rules {
+                    limit: true,
+                    sharpness: crease(SHARP_INFINITE),
+                    end_caps: Some(1),
                     ..Rules::default()
                 },
             ])
@@ -1174,6 +1265,11 @@ mod tests {
             for i in 0..outputs.len() {
                 for j in 0..i {
                     if closed && (sets[i].limit_corners || sets[j].limit_corners) {
+                        continue;
+                    }
+                    // (End caps change only faces beside extraordinary vertices inside,
+                    // which the open grid does not have.)
+                    if !closed && (sets[i].end_caps.is_some() || sets[j].end_caps.is_some()) {
                         continue;
                     }
                     assert_ne!(outputs[i], outputs[j], "rule sets {j} and {i}");

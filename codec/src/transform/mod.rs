@@ -8,6 +8,7 @@
 
 pub mod cc;
 pub mod fit;
+pub mod gregory;
 pub(crate) mod level;
 pub mod phase;
 pub mod polar;
@@ -244,6 +245,22 @@ pub trait Sample: Copy {
             s += x[i].weighted(w as i128);
         }
         s
+    }
+}
+
+/// `floor(sqrt(v))`.
+pub fn isqrt(v: u128) -> u128 {
+    if v < 2 {
+        return v;
+    }
+    let mut r = 1u128 << (64 - (v.leading_zeros() / 2) as u128).min(127) as u32;
+    // Newton's iteration from above: decreasing to the floor.
+    loop {
+        let next = (r + v / r) / 2;
+        if next >= r {
+            return r;
+        }
+        r = next;
     }
 }
 
