@@ -1235,8 +1235,8 @@ fn edge_and_vertex_creases_together_are_found() {
 fn end_cap_patches_are_found_at_each_quality() {
     // Surfaces made by the codec's own integer rules with OpenSubdiv's end caps
     // (Gregory patches beside extraordinary vertices, Blender's Quality) from level 1
-    // and from level 3, four levels: `auto` finds the end caps' level, the container
-    // decodes exactly and its residuals are near zero.
+    // and from level 3, four levels: `auto` finds the end caps' level (and a sharp
+    // corner), the container decodes exactly and its residuals are near zero.
     use subwave_codec::topology::{Level, Topo};
     use subwave_codec::transform::fit::{refine, Rules};
     let (control, _) = prism_and_rims();
@@ -1251,10 +1251,15 @@ fn end_cap_patches_are_found_at_each_quality() {
         levels.push(l);
     }
     let finest = levels.last().unwrap().next();
-    for q in [1u8, 3] {
+    // (And from level 3 with an infinitely sharp vertex: OpenSubdiv's sharp corner.)
+    let mut corner = vec![0; control.positions.len()];
+    corner[0] = subwave_codec::transform::fit::SHARP_INFINITE;
+    for (q, vertex_sharpness) in [(1u8, Vec::new()), (3, Vec::new()), (3, corner)] {
+        let corners = vertex_sharpness.len().min(1);
         let rules = Rules {
             limit: true,
             end_caps: Some(q),
+            vertex_sharpness,
             ..Rules::default()
         };
         let mut x: [Vec<i64>; 3] = std::array::from_fn(|k| {
@@ -1280,6 +1285,7 @@ fn end_cap_patches_are_found_at_each_quality() {
             "quality {q}: {:?}",
             enc.header.transform
         );
+        assert_eq!(enc.header.vertex_creases.len(), corners, "quality {q}");
         exact_with_near_zero_residuals(&enc, &mesh, &format!("end caps from level {q}"));
     }
 }

@@ -8,7 +8,7 @@
 //! cosines and eigenvalue terms at 2^-40) and evaluates them at the finest vertices
 //! inside the faces.
 
-use super::fit::Hard;
+use super::fit::{Hard, SHARP_INFINITE};
 use crate::topology::{Level, Topo, NONE};
 
 /// Fixed point of the patch masks' weights: 2^40.
@@ -82,6 +82,9 @@ struct Corner {
     v: u32,
     edges: Vec<u32>,
     opp: Vec<u32>,
+    /// Infinitely sharp (OpenSubdiv's sharp corner: kept, its edge points a third of
+    /// the way to the patch's next and previous corners).
+    sharp: bool,
 }
 
 impl Corner {
@@ -91,10 +94,13 @@ impl Corner {
     fn new(level: &Level, f: usize, slot: usize, hard: Hard<'_>) -> Option<Corner> {
         let v = level.coarse.face(f)[slot];
         let n = level.v_edges(v as usize).len();
-        if !(3..=MAX_VALENCE).contains(&n)
-            || level.v_faces(v as usize).len() != n
-            || hard.vertices.get(v as usize).is_some_and(|&s| s > 0)
-            || hard.bilinear
+        // An infinitely sharp vertex is a sharp corner; any other sharpness, none.
+        let sharp = match hard.vertices.get(v as usize).copied().unwrap_or(0) {
+            0 => false,
+            s if s >= SHARP_INFINITE => true,
+            _ => return None,
+        };
+        if !(3..=MAX_VALENCE).contains(&n) || level.v_faces(v as usize).len() != n || hard.bilinear
         {
             return None;
         }
@@ -127,7 +133,12 @@ impl Corner {
             }
             (g, i) = (h, j);
         }
-        (g == f && i == slot).then_some(Corner { v, edges, opp })
+        (g == f && i == slot).then_some(Corner {
+            v,
+            edges,
+            opp,
+            sharp,
+        })
     }
 
     fn n(&self) -> usize {
@@ -136,6 +147,9 @@ impl Corner {
 
     /// The limit mask (P) at 2^-40.
     fn position(&self) -> Vec<(u32, i128)> {
+        if self.sharp {
+            return vec![(self.v, W)];
+        }
         let n = self.n() as i128;
         let mut row = vec![(self.v, round128(n * W, n + 5))];
         let (e, o) = (round128(4 * W, n * (n + 5)), round128(W, n * (n + 5)));
@@ -149,6 +163,9 @@ impl Corner {
     /// The edge point along edge `r` (0: Ep, toward the next corner; 1: Em, toward
     /// the previous) at 2^-40: the limit mask plus the scaled limit tangent.
     fn edge_point(&self, r: usize) -> Vec<(u32, i128)> {
+        if self.sharp {
+            return vec![(self.v, round128(2 * W, 3)), (self.edges[r], round128(W, 3))];
+        }
         let n = self.n();
         let scale = tangent_scale_q40(n);
         let cos = |k: usize| cos_q40((k + n * 2 - r) % n, n);
@@ -279,8 +296,9 @@ fn evaluate(pts: &[i128; 20], weights: &[i128; 20]) -> i64 {
 pub struct EndCaps {
     /// Vertices of level Q (their values are the limit's: never replaced).
     nv: usize,
-    /// Per patch, its points' masks on level Q's vertices.
-    masks: Vec<[Vec<(u32, i128)>; 20]>,
+    /// Per patch, its corners (their rings; the points' masks are made from them
+    /// when needed, and the corners dropped once the points have values).
+    corners: Vec<[Corner; 4]>,
     /// Per patch, its points' values per axis (empty until [`EndCaps::values`]).
     points: Vec<[[i128; 20]; 3]>,
     /// Faces of the current level inside a patch: the face, its patch and its corners'
@@ -296,14 +314,19 @@ impl EndCaps {
     pub fn new(level: &Level, hard: Hard<'_>) -> Option<EndCaps> {
         let mut caps = EndCaps {
             nv: level.nv,
-            masks: Vec::new(),
+            corners: Vec::new(),
             points: Vec::new(),
             faces: Vec::new(),
             depth: 0,
         };
         for f in 0..level.nf() {
             let face = level.coarse.face(f);
-            if face.len() != 4 || face.iter().all(|&v| level.v_edges(v as usize).len() == 4) {
+            let sharp = |v: u32| hard.vertices.get(v as usize).is_some_and(|&s| s > 0);
+            if face.len() != 4
+                || face
+                    .iter()
+                    .all(|&v| level.v_edges(v as usize).len() == 4 && !sharp(v))
+            {
                 continue;
             }
             let corners: Option<Vec<Corner>> =
@@ -313,21 +336,26 @@ impl EndCaps {
             };
             caps.faces.push((
                 f as u32,
-                caps.masks.len() as u32,
+                caps.corners.len() as u32,
                 [[0, 0], [1, 0], [1, 1], [0, 1]],
             ));
-            caps.masks.push(masks(&corners));
+            caps.corners.push(corners);
         }
-        (!caps.masks.is_empty()).then_some(caps)
+        (!caps.corners.is_empty()).then_some(caps)
     }
 
-    /// The patches' points from the values `x` of level Q.
+    /// The patches' points from the values `x` of level Q (the corners are dropped:
+    /// [`EndCaps::rows`] needs them, and is not for caps with values).
     pub fn values(&mut self, x: &[Vec<i64>; 3]) {
         self.points = self
-            .masks
+            .corners
             .iter()
-            .map(|m| std::array::from_fn(|axis| std::array::from_fn(|i| value(&m[i], &x[axis]))))
+            .map(|c| {
+                let m = masks(c);
+                std::array::from_fn(|axis| std::array::from_fn(|i| value(&m[i], &x[axis])))
+            })
             .collect();
+        self.corners = Vec::new();
     }
 
     /// Follows the faces one level down, `level` the refinement just made (whose
@@ -398,9 +426,9 @@ impl EndCaps {
     #[allow(clippy::type_complexity)]
     pub fn rows(&self, topo: &Topo) -> (Vec<Vec<(u32, f64)>>, Vec<(usize, Vec<(u32, f64)>)>) {
         let points = self
-            .masks
+            .corners
             .iter()
-            .flatten()
+            .flat_map(masks)
             .map(|m| m.iter().map(|&(u, w)| (u, w as f64 / W as f64)).collect())
             .collect();
         let scale = 1.0 / (1u64 << EVAL_BITS) as f64;
@@ -482,7 +510,7 @@ mod tests {
         let corners: [Corner; 4] = corners.try_into().ok().unwrap();
         let mut caps = EndCaps {
             nv: level.nv,
-            masks: vec![masks(&corners)],
+            corners: vec![corners],
             points: Vec::new(),
             faces: vec![(f as u32, 0, [[0, 0], [1, 0], [1, 1], [0, 1]])],
             depth: 0,
@@ -540,7 +568,7 @@ mod tests {
         let sharp = Sharpness::default();
         let rules = Rules::default();
         let caps = EndCaps::new(&one, rules.hard(&sharp)).unwrap();
-        assert_eq!(caps.masks.len(), 24);
+        assert_eq!(caps.corners.len(), 24);
         // A sharp edge at a corner's ring takes its faces out.
         let mut edges = vec![0; one.ne()];
         edges[one.v_edges(0)[0] as usize] = crate::transform::fit::SHARP_ONE;
@@ -549,8 +577,21 @@ mod tests {
             vertices: Vec::new(),
         };
         let fewer = EndCaps::new(&one, rules.hard(&creased)).unwrap();
-        assert!(fewer.masks.len() < 24 - 2, "{}", fewer.masks.len());
+        assert!(fewer.corners.len() < 24 - 2, "{}", fewer.corners.len());
         let (g, _) = grid();
         assert!(EndCaps::new(&g, rules.hard(&sharp)).is_none());
+        // An infinitely sharp vertex of four edges inside the grid is a sharp corner:
+        // its four faces are end caps; with a finite sharpness, none is.
+        let v = 4 * 9 + 4;
+        for (s, caps) in [(crate::transform::fit::SHARP_INFINITE, 4), (3 << 16, 0)] {
+            let mut vertices = vec![0; g.nv];
+            vertices[v] = s;
+            let corner = Sharpness {
+                edges: Vec::new(),
+                vertices,
+            };
+            let found = EndCaps::new(&g, rules.hard(&corner)).map_or(0, |c| c.corners.len());
+            assert_eq!(found, caps, "sharpness {s}");
+        }
     }
 }
