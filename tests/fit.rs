@@ -1236,7 +1236,8 @@ fn end_cap_patches_are_found_at_each_quality() {
     // Surfaces made by the codec's own integer rules with OpenSubdiv's end caps
     // (Gregory patches beside extraordinary vertices, Blender's Quality) from level 1
     // and from level 3, four levels: `auto` finds the end caps' level (and a sharp
-    // corner), the container decodes exactly and its residuals are near zero.
+    // corner, and creases that outlast the level), the container decodes exactly and
+    // its residuals are near zero.
     use subwave_codec::topology::{Level, Topo};
     use subwave_codec::transform::fit::{refine, Rules};
     let (control, _) = prism_and_rims();
@@ -1254,12 +1255,37 @@ fn end_cap_patches_are_found_at_each_quality() {
     // (And from level 3 with an infinitely sharp vertex: OpenSubdiv's sharp corner.)
     let mut corner = vec![0; control.positions.len()];
     corner[0] = subwave_codec::transform::fit::SHARP_INFINITE;
-    for (q, vertex_sharpness) in [(1u8, Vec::new()), (3, Vec::new()), (3, corner)] {
+    // (And from level 3 with the rims creased at 4.5 levels, past it: OpenSubdiv drops
+    // what is left there and makes their faces end caps.)
+    let (_, rims) = prism_and_rims();
+    let base = &levels[0];
+    let rim_sharpness: Vec<u32> = base
+        .edges
+        .iter()
+        .map(|&[a, b]| {
+            let rim = rims
+                .iter()
+                .any(|&[c, d]| (a, b) == (c, d) || (a, b) == (d, c));
+            if rim {
+                subwave_codec::transform::fit::SHARP_ONE * 9 / 2
+            } else {
+                0
+            }
+        })
+        .collect();
+    for (q, vertex_sharpness, sharpness) in [
+        (1u8, Vec::new(), Vec::new()),
+        (3, Vec::new(), Vec::new()),
+        (3, corner, Vec::new()),
+        (3, Vec::new(), rim_sharpness),
+    ] {
         let corners = vertex_sharpness.len().min(1);
+        let creases = sharpness.iter().filter(|&&s| s > 0).count();
         let rules = Rules {
             limit: true,
             end_caps: Some(q),
             vertex_sharpness,
+            sharpness,
             ..Rules::default()
         };
         let mut x: [Vec<i64>; 3] = std::array::from_fn(|k| {
@@ -1286,6 +1312,7 @@ fn end_cap_patches_are_found_at_each_quality() {
             enc.header.transform
         );
         assert_eq!(enc.header.vertex_creases.len(), corners, "quality {q}");
+        assert_eq!(enc.header.creases.len(), creases, "quality {q}");
         exact_with_near_zero_residuals(&enc, &mesh, &format!("end caps from level {q}"));
     }
 }

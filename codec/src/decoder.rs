@@ -943,7 +943,9 @@ fn synthesise_fit(
             );
         }
         let rl = glued.as_ref().map_or(&level, |g| &g.0);
-        caps = caps.or_else(|| fit::end_caps_at(rules, l, rl, &sharp, &x));
+        if caps.is_none() {
+            caps = fit::end_caps_at(rules, l, rl, &mut sharp, &x);
+        }
         for xs in x.iter_mut() {
             fit::subdivide(rl, rules.hard(&sharp), xs);
         }

@@ -31,7 +31,7 @@ pub const MAGIC: [u8; 8] = [0x89, b'S', b'W', b'V', b'\r', b'\n', 0x1a, b'\n'];
 /// The format version this crate writes and the only one it reads: before the first
 /// release the format has one version at a time (SPEC.md 1), and a container of any other
 /// version is refused with an error that names it.
-pub const FORMAT_VERSION: u16 = 61;
+pub const FORMAT_VERSION: u16 = 62;
 
 /// Bytes before the first section: magic, version, reserved.
 pub const PREAMBLE_LEN: usize = 12;

@@ -117,7 +117,8 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
     // limit everywhere they carry its creases' sharpness).
     let caps = end_caps(canon, finest, END_CAP_LEVEL);
     let mut counts = vec![vec![false; finest.nv]];
-    if caps.contains(&true) {
+    let has_caps = caps.contains(&true);
+    if has_caps {
         counts.push(caps);
     }
     for caps in &counts {
@@ -127,18 +128,47 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
         let capped = caps.contains(&true);
         let code = |rules: &Rules, control: &[[f64; 3]]| -> Option<(Payloads, Rules)> {
             let p = code_rules(target, header, bits, rules, control).map(|p| (p, rules.clone()));
-            if !capped || !rules.limit || rules.extra_levels.is_some() {
+            // (Also with every point counted where a finite sharpness may outlast the
+            // level.)
+            let finite = |s: &[u32]| s.iter().any(|&s| s > 0 && s < fit::SHARP_INFINITE);
+            let semi = has_caps && (finite(&rules.sharpness) || finite(&rules.vertex_sharpness));
+            if !(capped || semi) || !rules.limit || rules.extra_levels.is_some() {
                 return p;
             }
             let gregory = Rules {
                 end_caps: Some(END_CAP_LEVEL as u8),
                 ..rules.clone()
             };
-            let g = code_rules(target, header, bits, &gregory, control).map(|g| (g, gregory));
-            match (p, g) {
-                (Some(p), Some(g)) => Some(if g.0.size() < p.0.size() { g } else { p }),
-                (p, g) => p.or(g),
-            }
+            let g =
+                code_rules(target, header, bits, &gregory, control).map(|g| (g, gregory.clone()));
+            let smaller = |a: Option<(Payloads, Rules)>, b: Option<(Payloads, Rules)>| match (a, b)
+            {
+                (Some(a), Some(b)) => Some(if b.0.size() < a.0.size() { b } else { a }),
+                (a, b) => a.or(b),
+            };
+            let best = smaller(p, g);
+            // Sharpnesses found near the isolation level: OpenSubdiv drops what is left
+            // of a sharpness there and makes its faces end caps, so any value past the
+            // level is one rule, which the fit without the end-cap points cannot tell
+            // from one just short of it; such sharpnesses also past it, fitted again
+            // with the patches.
+            let lifted = outlasting(&gregory.sharpness).or_else(|| {
+                outlasting(&gregory.vertex_sharpness).map(|_| gregory.sharpness.clone())
+            });
+            let Some(sharpness) = lifted else {
+                return best;
+            };
+            let lifted = Rules {
+                vertex_sharpness: outlasting(&gregory.vertex_sharpness)
+                    .unwrap_or_else(|| gregory.vertex_sharpness.clone()),
+                sharpness,
+                ..gregory
+            };
+            let op = fit::Operator::new(&canon.levels, finest, &lifted);
+            let control = op.fit(&fine, control, &[], 400, FIT_TOLERANCE);
+            drop(op);
+            let l = code_rules(target, header, bits, &lifted, &control).map(|l| (l, lifted));
+            smaller(best, l)
         };
         // The smooth rule sets' sizes and the limit surface's distances, for the
         // search for semi-sharp creases.
@@ -462,6 +492,19 @@ fn end_caps(canon: &Canonical, finest: &Level, level: usize) -> Vec<bool> {
 /// Iterations of the short fit that tells whether end caps from a lower level are
 /// worth the whole fit.
 const SHORT_FIT: usize = 30;
+
+/// `sharpness` with the finite sharpnesses from half a level below the end caps' level
+/// ([`END_CAP_LEVEL`]) up to it set half a level past it, if there are any.
+fn outlasting(sharpness: &[u32]) -> Option<Vec<u32>> {
+    let q = END_CAP_LEVEL as u32 * fit::SHARP_ONE;
+    let near = |s: u32| (q - fit::SHARP_ONE / 2..=q).contains(&s);
+    sharpness.iter().any(|&s| near(s)).then(|| {
+        sharpness
+            .iter()
+            .map(|&s| if near(s) { q + fit::SHARP_ONE / 2 } else { s })
+            .collect()
+    })
+}
 
 /// The first `n` values per axis as points of floats.
 fn floats(pos: &[Vec<i64>; 3], n: usize) -> Vec<[f64; 3]> {

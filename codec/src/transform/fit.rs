@@ -442,7 +442,9 @@ pub fn refine(
     let mut sharp = rules.base_sharpness();
     let mut caps = None;
     for (i, l) in levels.iter().enumerate() {
-        caps = caps.or_else(|| end_caps_at(rules, i, l, &sharp, x));
+        if caps.is_none() {
+            caps = end_caps_at(rules, i, l, &mut sharp, x);
+        }
         for xs in x.iter_mut() {
             subdivide(l, rules.hard(&sharp), xs);
         }
@@ -459,19 +461,40 @@ pub fn refine(
 }
 
 /// The end caps of `rules` (SPEC.md 9.10) where level `i` (`level`'s coarse mesh,
-/// sharpnesses `sharp`, values `x`) is their isolation level.
+/// values `x`) is their isolation level; there every finite sharpness of `sharp` is
+/// taken as 0 from then on (OpenSubdiv's patches do not refine past it), and the faces
+/// at a vertex with such a sharpness, its own or an edge's, are end caps too.
 pub fn end_caps_at(
     rules: &Rules,
     i: usize,
     level: &Level,
-    sharp: &Sharpness,
+    sharp: &mut Sharpness,
     x: &[Vec<i64>; 3],
 ) -> Option<EndCaps> {
-    let mut caps = (rules.limit && rules.end_caps == Some(i as u8) && i > 0)
-        .then(|| EndCaps::new(level, rules.hard(sharp)))
-        .flatten()?;
+    let mut caps = isolated(rules, i, level, sharp)?;
     caps.values(x);
     Some(caps)
+}
+
+/// [`end_caps_at`] without values.
+fn isolated(rules: &Rules, i: usize, level: &Level, sharp: &mut Sharpness) -> Option<EndCaps> {
+    if !(rules.limit && rules.end_caps == Some(i as u8) && i > 0) {
+        return None;
+    }
+    let finite = |s: u32| s > 0 && s < SHARP_INFINITE;
+    let mut semi = vec![false; level.nv];
+    for (v, &s) in sharp.vertices.iter().enumerate() {
+        semi[v] |= finite(s);
+    }
+    for (e, &s) in sharp.edges.iter().enumerate() {
+        if finite(s) {
+            for v in level.edges[e] {
+                semi[v as usize] = true;
+            }
+        }
+    }
+    *sharp = infinite_only(sharp);
+    EndCaps::new(level, rules.hard(sharp), &semi)
 }
 
 /// The levels [`Rules::extra_levels`] refines past `finest` (the level whose coarse
@@ -743,14 +766,15 @@ impl Operator {
             rows.extend((0..n).map(|j| vec![((from + j) as u32, 1.0)]));
         };
         for (i, l) in levels.iter().enumerate() {
+            let fresh = caps.is_none() && rules.extra_levels.is_none();
+            if fresh {
+                caps = isolated(rules, i, l, &mut sharp).map(|c| (c, l.nv));
+            }
             let mut r = rows(l, rules.hard(&sharp));
             let mut coarse = l.nv;
-            if caps.is_none() && rules.limit && rules.extra_levels.is_none() {
-                if rules.end_caps == Some(i as u8) && i > 0 {
-                    caps = EndCaps::new(l, rules.hard(&sharp)).map(|c| (c, l.nv));
-                    if let Some((_, nq)) = caps {
-                        carry(&mut r, 0, nq);
-                    }
+            if fresh {
+                if let Some((_, nq)) = caps {
+                    carry(&mut r, 0, nq);
                 }
             } else if let Some((_, nq)) = caps {
                 carry(&mut r, l.nv, nq);

@@ -310,8 +310,9 @@ pub struct EndCaps {
 
 impl EndCaps {
     /// The end caps of `level` (whose coarse mesh is level Q, every face a quad) with
-    /// sharp features `hard`: `None` where it has none.
-    pub fn new(level: &Level, hard: Hard<'_>) -> Option<EndCaps> {
+    /// sharp features `hard`, also at the vertices set in `semi` (those with a finite
+    /// sharpness there): `None` where it has none.
+    pub fn new(level: &Level, hard: Hard<'_>, semi: &[bool]) -> Option<EndCaps> {
         let mut caps = EndCaps {
             nv: level.nv,
             corners: Vec::new(),
@@ -323,9 +324,9 @@ impl EndCaps {
             let face = level.coarse.face(f);
             let sharp = |v: u32| hard.vertices.get(v as usize).is_some_and(|&s| s > 0);
             if face.len() != 4
-                || face
-                    .iter()
-                    .all(|&v| level.v_edges(v as usize).len() == 4 && !sharp(v))
+                || face.iter().all(|&v| {
+                    level.v_edges(v as usize).len() == 4 && !sharp(v) && !semi[v as usize]
+                })
             {
                 continue;
             }
@@ -567,7 +568,7 @@ mod tests {
         let one = Level::new(&cube).unwrap().next();
         let sharp = Sharpness::default();
         let rules = Rules::default();
-        let caps = EndCaps::new(&one, rules.hard(&sharp)).unwrap();
+        let caps = EndCaps::new(&one, rules.hard(&sharp), &[false; 26]).unwrap();
         assert_eq!(caps.corners.len(), 24);
         // A sharp edge at a corner's ring takes its faces out.
         let mut edges = vec![0; one.ne()];
@@ -576,22 +577,29 @@ mod tests {
             edges,
             vertices: Vec::new(),
         };
-        let fewer = EndCaps::new(&one, rules.hard(&creased)).unwrap();
+        let fewer = EndCaps::new(&one, rules.hard(&creased), &[false; 26]).unwrap();
         assert!(fewer.corners.len() < 24 - 2, "{}", fewer.corners.len());
         let (g, _) = grid();
-        assert!(EndCaps::new(&g, rules.hard(&sharp)).is_none());
+        assert!(EndCaps::new(&g, rules.hard(&sharp), &[false; 81]).is_none());
         // An infinitely sharp vertex of four edges inside the grid is a sharp corner:
-        // its four faces are end caps; with a finite sharpness, none is.
+        // its four faces are end caps; with a finite sharpness, none is, but a
+        // semi-sharp vertex's faces are (its sharpness taken as 0 there).
         let v = 4 * 9 + 4;
-        for (s, caps) in [(crate::transform::fit::SHARP_INFINITE, 4), (3 << 16, 0)] {
+        let mut semi = [false; 81];
+        for (s, marked, caps) in [
+            (crate::transform::fit::SHARP_INFINITE, false, 4),
+            (3 << 16, false, 0),
+            (0, true, 4),
+        ] {
             let mut vertices = vec![0; g.nv];
             vertices[v] = s;
+            semi[v] = marked;
             let corner = Sharpness {
                 edges: Vec::new(),
                 vertices,
             };
-            let found = EndCaps::new(&g, rules.hard(&corner)).map_or(0, |c| c.corners.len());
-            assert_eq!(found, caps, "sharpness {s}");
+            let found = EndCaps::new(&g, rules.hard(&corner), &semi).map_or(0, |c| c.corners.len());
+            assert_eq!(found, caps, "sharpness {s}, semi-sharp {marked}");
         }
     }
 }
