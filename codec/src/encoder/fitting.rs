@@ -122,14 +122,12 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
         counts.push(caps);
     }
     for caps in &counts {
-        // Without the end-cap points, each limit rule set is coded also with the end
-        // caps at Blender's default quality (the fit leaves their points out either
-        // way); the smaller coding is kept.
+        // Without the end-cap points (and, where the hierarchy has them, with a finite
+        // sharpness, which may outlast their level), each limit rule set is coded also
+        // with the end caps at Blender's default quality; the smallest coding is kept.
         let capped = caps.contains(&true);
         let code = |rules: &Rules, control: &[[f64; 3]]| -> Option<(Payloads, Rules)> {
             let p = code_rules(target, header, bits, rules, control).map(|p| (p, rules.clone()));
-            // (Also with every point counted where a finite sharpness may outlast the
-            // level.)
             let finite = |s: &[u32]| s.iter().any(|&s| s > 0 && s < fit::SHARP_INFINITE);
             let semi = has_caps && (finite(&rules.sharpness) || finite(&rules.vertex_sharpness));
             if !(capped || semi) || !rules.limit || rules.extra_levels.is_some() {
@@ -152,16 +150,16 @@ fn search(target: &Target<'_>, header: &Header, bits: &[u8], screen: bool) -> Op
             // level is one rule, which the fit without the end-cap points cannot tell
             // from one just short of it; such sharpnesses also past it, fitted again
             // with the patches.
-            let lifted = outlasting(&gregory.sharpness).or_else(|| {
-                outlasting(&gregory.vertex_sharpness).map(|_| gregory.sharpness.clone())
-            });
-            let Some(sharpness) = lifted else {
+            let (edges, vertices) = (
+                outlasting(&gregory.sharpness),
+                outlasting(&gregory.vertex_sharpness),
+            );
+            if edges.is_none() && vertices.is_none() {
                 return best;
-            };
+            }
             let lifted = Rules {
-                vertex_sharpness: outlasting(&gregory.vertex_sharpness)
-                    .unwrap_or_else(|| gregory.vertex_sharpness.clone()),
-                sharpness,
+                sharpness: edges.unwrap_or_else(|| gregory.sharpness.clone()),
+                vertex_sharpness: vertices.unwrap_or_else(|| gregory.vertex_sharpness.clone()),
                 ..gregory
             };
             let op = fit::Operator::new(&canon.levels, finest, &lifted);
@@ -449,10 +447,9 @@ const END_CAP_LEVEL: usize = 3;
 /// Per finest vertex of `canon` (`finest` the level after its last), whether it lies
 /// where Blender's quality `level` (3 by default, [`END_CAP_LEVEL`]) evaluates an
 /// end-cap patch rather than the limit surface: made after `level` inside a face of
-/// that level beside an
-/// extraordinary vertex (inside the mesh, not four edges; a boundary, sharp in
-/// OpenSubdiv, takes patches of its own that are on the limit). The fits
-/// leave them out (they are coded as residuals like every vertex); all false for
+/// that level beside an extraordinary vertex (inside the mesh, not four edges; a
+/// boundary, sharp in OpenSubdiv, takes patches of its own that are on the limit). The
+/// fits leave them out (the end caps' rule then predicts them); all false for
 /// hierarchies of that many levels or fewer.
 fn end_caps(canon: &Canonical, finest: &Level, level: usize) -> Vec<bool> {
     let mut caps = vec![false; finest.nv];

@@ -579,20 +579,7 @@ mod tests {
     use super::super::{canonicalise, Level};
     use super::*;
 
-    fn cube() -> Topo {
-        let mut t = Topo::new(8);
-        for f in [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ] {
-            t.push(&f);
-        }
-        t
-    }
+    use crate::topology::fixtures::cube;
 
     fn refine(t: &Topo, n: usize) -> Topo {
         let mut cur = t.clone();

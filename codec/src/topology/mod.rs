@@ -579,6 +579,22 @@ pub(crate) fn csr<T: Copy + Default>(
 pub(crate) mod fixtures {
     use super::Topo;
 
+    /// A cube: eight corners of three edges, six quads.
+    pub(crate) fn cube() -> Topo {
+        let mut t = Topo::new(8);
+        for f in [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ] {
+            t.push(&f);
+        }
+        t
+    }
+
     /// Scrambles vertex numbers, face order and face starts.
     pub(crate) fn shuffle(t: &Topo, seed: u64) -> Topo {
         let mut s = seed | 1;

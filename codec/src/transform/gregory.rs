@@ -554,17 +554,7 @@ mod tests {
         // A cube refined once: every face of level 1 has one corner of 3 edges (a
         // cube's corner), so each is an end cap; the grid (boundaries, four edges
         // inside) has none.
-        let mut cube = Topo::new(8);
-        for f in [
-            [0u32, 1, 3, 2],
-            [4, 6, 7, 5],
-            [0, 4, 5, 1],
-            [2, 3, 7, 6],
-            [0, 2, 6, 4],
-            [1, 5, 7, 3],
-        ] {
-            cube.push(&f);
-        }
+        let cube = crate::topology::fixtures::cube();
         let one = Level::new(&cube).unwrap().next();
         let sharp = Sharpness::default();
         let rules = Rules::default();
