@@ -635,6 +635,26 @@ fn synthesise_levels(
     let mut topo = Topo::new(base.vertex_count());
     topo.idx = base.faces;
     topo.starts = base.face_starts;
+    // The values of every level in buffers sized once for the finest mesh, when its
+    // count is within what the levels' bytes can hold (SPEC.md 2.6's density bound; a
+    // header beyond it fails at a level and gets no room made for it).
+    let levl_bytes: u64 = c.sections[2..]
+        .iter()
+        .take(upto as usize)
+        .map(|s| s.payload.len() as u64 + 8)
+        .sum();
+    let finest = if upto == h.levels && h.vertices <= topo.nv as u64 + 2048 * levl_bytes {
+        h.vertices as usize
+    } else {
+        topo.nv
+    };
+    let values = |k: usize| {
+        let mut v = Vec::with_capacity(finest.max(topo.nv));
+        v.extend(base.positions.iter().map(|p| p[k]));
+        v
+    };
+    let mut models = levl::LevelModels::new();
+    models.reserve(finest);
     let mut s = Synthesis {
         h,
         scheme: Scheme {
@@ -644,8 +664,8 @@ fn synthesise_levels(
             disc: h.disc,
             stencils: None,
         },
-        x: std::array::from_fn(|k| base.positions.iter().map(|p| p[k]).collect()),
-        models: levl::LevelModels::new(),
+        x: std::array::from_fn(values),
+        models,
         pole: pole_flags(h, &topo)?,
         threads,
     };

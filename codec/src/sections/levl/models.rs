@@ -79,6 +79,12 @@ impl LevelModels {
         }
     }
 
+    /// Room for the magnitudes of `n` vertices in all, made once (the levels then grow
+    /// into it without moving it).
+    pub fn reserve(&mut self, n: usize) {
+        self.mags.reserve(n.saturating_sub(self.mags.len()));
+    }
+
     /// A phased level after one that was not starts its phased models afresh, from the
     /// shared models as they are then (SPEC.md 10.6): `start`, the models from
     /// [`Self::start`], made ready for a level in `mode`.
