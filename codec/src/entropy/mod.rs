@@ -136,11 +136,17 @@ impl AdaptiveModel {
     }
 
     /// Makes `lut` follow the table, if it does not yet.
-    #[inline]
+    #[inline(always)]
     fn refresh(&mut self) {
-        if !self.stale {
-            return;
+        if self.stale {
+            self.refill();
         }
+    }
+
+    /// [`AdaptiveModel::refresh`]'s work, after each rebuild (out of the symbol's path).
+    #[cold]
+    #[inline(never)]
+    fn refill(&mut self) {
         let n = self.n();
         let cum = &self.table[n..];
         let mut s = 0;
@@ -178,15 +184,23 @@ impl AdaptiveModel {
     }
 
     /// Records one occurrence of `s`.
-    #[inline]
+    #[inline(always)]
     pub fn update(&mut self, s: usize) {
         self.count(s);
         self.until_rebuild -= 1;
         if self.until_rebuild == 0 {
-            self.rebuild();
-            self.period = (self.period * 2).min(MAX_PERIOD);
-            self.until_rebuild = self.period;
+            self.next_period();
         }
+    }
+
+    /// The table rebuilt and the next rebuild period begun (every 1, 2, 4, ... then
+    /// 512 symbols: out of the symbol's path).
+    #[cold]
+    #[inline(never)]
+    fn next_period(&mut self) {
+        self.rebuild();
+        self.period = (self.period * 2).min(MAX_PERIOD);
+        self.until_rebuild = self.period;
     }
 }
 
@@ -614,16 +628,13 @@ impl Decoder {
 
     /// One symbol with model `m`, unless the stream has run out (SPEC.md 4.1: a state
     /// below 2^16 with no word left).
-    #[inline]
+    #[inline(always)]
     fn next<M>(&mut self, m: M) -> Result<M::Symbol>
     where
         M: DecoderModel<PRECISION, Probability = u32>,
     {
         if self.inner.bulk().is_empty() && self.inner.num_valid_bits() < 16 {
-            return Err(Error::corrupt(
-                self.section,
-                "the stream ends before its symbols do",
-            ));
+            return Err(self.ended());
         }
         match self.inner.decode_symbol(m) {
             Ok(s) => Ok(s),
@@ -631,8 +642,15 @@ impl Decoder {
         }
     }
 
+    /// The error of a stream that ends before its symbols do.
+    #[cold]
+    #[inline(never)]
+    fn ended(&self) -> Error {
+        Error::corrupt(self.section, "the stream ends before its symbols do")
+    }
+
     /// Decodes a symbol with `m` and adapts `m`.
-    #[inline]
+    #[inline(always)]
     pub fn symbol(&mut self, m: &mut AdaptiveModel) -> Result<usize> {
         m.refresh();
         let s = self.next(&*m)?;
@@ -664,10 +682,17 @@ impl Decoder {
     }
 
     /// Decodes `k` raw bits.
+    #[inline(always)]
     pub fn bits(&mut self, k: u32) -> Result<u64> {
         if (1..=16).contains(&k) {
             return self.next(RawBits(k)).map(u64::from);
         }
+        self.long_bits(k)
+    }
+
+    /// [`Decoder::bits`] of none or more than 16, in chunks of 16.
+    #[inline(never)]
+    fn long_bits(&mut self, k: u32) -> Result<u64> {
         let mut v = 0u64;
         let mut k = k;
         while k > 0 {
@@ -687,7 +712,7 @@ impl Decoder {
 
     /// [`Decoder::int`], and `learner` counts the value as [`IntModel::observe`] would
     /// (from the symbols read rather than the value).
-    #[inline]
+    #[inline(always)]
     pub fn int_observed(&mut self, m: &mut IntModel, learner: &mut IntModel) -> Result<i64> {
         let (v, s, c) = self.int_symbol(m)?;
         learner.count_symbol(s, c);
@@ -695,7 +720,7 @@ impl Decoder {
     }
 
     /// [`Decoder::int`]'s value, its joint symbol and its magnitude class.
-    #[inline]
+    #[inline(always)]
     fn int_symbol(&mut self, m: &mut IntModel) -> Result<(i64, usize, usize)> {
         let s = self.symbol(&mut m.sym)?;
         let (c, neg, top) = match s {

@@ -195,7 +195,7 @@ impl Models {
 
     /// [`Models::get`]'s context model and the shared model of `class` and `slot`,
     /// which learns what the context model codes in a binned level.
-    #[inline]
+    #[inline(always)]
     pub(super) fn get_and_shared(
         &mut self,
         class: usize,
@@ -229,7 +229,7 @@ impl Models {
     /// Decodes a value in context `c` with [`Self::model`]'s model, and the model that
     /// [`Self::learn`] names learns it (in a binned level without phases, the shared
     /// model counts the symbols just read).
-    #[inline]
+    #[inline(always)]
     pub(super) fn read(&mut self, dec: &mut Decoder, c: Ctx) -> Result<i64> {
         if !c.unbinned && c.bin.is_none() {
             let (model, shared) = self.get_and_shared(c.class, c.slot, c.prev, c.nbr);
