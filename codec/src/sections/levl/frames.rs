@@ -117,7 +117,7 @@ pub(super) fn face_normals(level: &Level, coarse: &[Vec<i64>; 3]) -> FaceNormals
 /// The coding frame of a detail (SPEC.md 10.2): the axis where the coarse normal is
 /// largest (coded first) and the normal reduced to at most 24 bits, or `None` when the
 /// normal is zero.
-#[inline]
+#[inline(always)]
 pub(super) fn frame(
     level: &Level,
     normals: &FaceNormals,

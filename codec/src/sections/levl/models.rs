@@ -13,11 +13,12 @@ pub(super) fn prev_bin(c: usize) -> usize {
 
 #[derive(Clone)]
 pub(super) struct Models {
-    pub(super) m: Vec<IntModel>,
+    /// The context models, `None` until first used (then made from their shared
+    /// model): a level's start clones and reseeds only those in use.
+    pub(super) m: Vec<Option<IntModel>>,
     /// Per class and slot, a model of every value coded there; a context model starts
     /// from it (reseeded) at its first use.
     pub(super) parents: Vec<IntModel>,
-    pub(super) used: Vec<bool>,
     /// Mode 6's models, [`PHASE_BINS`] per context of `m` (`None` until
     /// first used), and their shared models (per class, slot and phase bin); empty until a
     /// level is coded in mode 6, when the shared ones start from `parents` (SPEC.md
@@ -102,6 +103,7 @@ impl LevelModels {
                 let mut m = m.clone();
                 for im in
                     m.m.iter_mut()
+                        .flatten()
                         .chain(&mut m.parents)
                         .chain(m.ph.iter_mut().flatten())
                         .chain(&mut m.ph_parents)
@@ -125,9 +127,8 @@ impl Models {
     pub(super) fn new() -> Self {
         let n = 2 * 3 * 3 * SLOT_BINS;
         Models {
-            m: (0..n).map(|_| IntModel::new()).collect(),
+            m: vec![None; n],
             parents: (0..6).map(|_| IntModel::new()).collect(),
-            used: vec![false; n],
             ph: Vec::new(),
             ph_parents: Vec::new(),
         }
@@ -186,11 +187,8 @@ impl Models {
         nbr: usize,
     ) -> &mut IntModel {
         let i = self.context(class, axis, prev, nbr);
-        if !self.used[i] {
-            self.used[i] = true;
-            self.m[i] = seeded(&self.parents[class * 3 + axis]);
-        }
-        &mut self.m[i]
+        let shared = &self.parents[class * 3 + axis];
+        self.m[i].get_or_insert_with(|| seeded(shared))
     }
 
     /// [`Models::get`]'s context model and the shared model of `class` and `slot`,
@@ -205,11 +203,8 @@ impl Models {
     ) -> (&mut IntModel, &mut IntModel) {
         let i = self.context(class, slot, prev, nbr);
         let j = class * 3 + slot;
-        if !self.used[i] {
-            self.used[i] = true;
-            self.m[i] = seeded(&self.parents[j]);
-        }
-        (&mut self.m[i], &mut self.parents[j])
+        let shared = &mut self.parents[j];
+        (self.m[i].get_or_insert_with(|| seeded(shared)), shared)
     }
 
     /// The model a value in context `c` is coded with (SPEC.md 10.1, 10.6): its context
