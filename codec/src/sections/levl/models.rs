@@ -312,6 +312,13 @@ pub(super) fn slot_bins(level: &Level, mags: &[[u8; 3]], family: Family, i: usiz
             add(mags[nv + e as usize], 2);
         }
     }
+    bins_of(sum, w)
+}
+
+/// The bins of weighted magnitude sums `sum` of total weight `w`, or the "no
+/// neighbour" bin when `w` is 0.
+#[inline]
+fn bins_of(sum: [u32; 3], w: u32) -> [usize; 3] {
     if w == 0 {
         return [SLOT_BINS - 1; 3];
     }
@@ -323,20 +330,81 @@ pub(super) fn slot_bins(level: &Level, mags: &[[u8; 3]], family: Family, i: usiz
     sum.map(|s| steps.iter().map(|&t| (s + h >= t) as usize).sum())
 }
 
+/// [`slot_bins`] of a level's details read in order (the decoder's): per coarse vertex
+/// the sums of the magnitudes of its edges' details read so far and their count, so
+/// that an edge point's earlier edges at its ends are two entries rather than a walk
+/// of both ends' edges. The same bins.
+pub(super) struct RunningBins {
+    /// Per coarse vertex: the three components' sums, then the count.
+    at: Vec<[u32; 4]>,
+}
+
+impl RunningBins {
+    /// For a level of `family` (none for sqrt(2), whose details are all face points).
+    pub(super) fn new(level: &Level, family: Family) -> Option<RunningBins> {
+        (family != Family::Sqrt2).then(|| RunningBins {
+            at: vec![[0; 4]; level.nv],
+        })
+    }
+
+    /// [`slot_bins`] of detail `i`, every detail before it [`RunningBins::read`].
+    #[inline]
+    pub(super) fn bins(&self, level: &Level, mags: &[[u8; 3]], family: Family, i: usize) -> [usize; 3] {
+        if i >= level.ne() {
+            return slot_bins(level, mags, family, i);
+        }
+        let [a, b] = level.edges[i];
+        let (ra, rb) = (self.at[a as usize], self.at[b as usize]);
+        let mut sum = [0u32; 3];
+        let mut w = ra[3] + rb[3];
+        for k in 0..3 {
+            sum[k] = ra[k] + rb[k];
+        }
+        for m in [mags[a as usize], mags[b as usize]] {
+            if m[0] != UNKNOWN {
+                for k in 0..3 {
+                    sum[k] += 2 * m[k] as u32;
+                }
+                w += 2;
+            }
+        }
+        bins_of(sum, w)
+    }
+
+    /// Detail `i` was read with magnitudes `m`.
+    #[inline]
+    pub(super) fn read(&mut self, level: &Level, i: usize, m: [u8; 3]) {
+        if let Some(&[a, b]) = level.edges.get(i) {
+            for v in [a, b] {
+                let r = &mut self.at[v as usize];
+                for k in 0..3 {
+                    r[k] += m[k] as u32;
+                }
+                r[3] += 1;
+            }
+        }
+    }
+}
+
 /// Detail `i`'s class, the neighbour bins of its three coded values ([`slot_bins`]) and
-/// its detail number for [`frame`].
+/// its detail number for [`frame`]; from `running` where the details are read in order.
 #[inline(always)]
 pub(super) fn contexts(
     level: &Level,
     mags: &[[u8; 3]],
     family: Family,
     i: usize,
+    running: Option<&RunningBins>,
 ) -> (usize, [usize; 3], usize) {
     let class = match family {
         Family::Sqrt2 => 1,
         _ => (i >= level.ne()) as usize,
     };
-    (class, slot_bins(level, mags, family, i), frame_detail(level, family, i))
+    let bins = match running {
+        Some(r) => r.bins(level, mags, family, i),
+        None => slot_bins(level, mags, family, i),
+    };
+    (class, bins, frame_detail(level, family, i))
 }
 
 /// Detail `i`'s number for [`frame`]: itself, or on a sqrt(2) level (every detail a

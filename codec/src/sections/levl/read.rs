@@ -165,6 +165,7 @@ pub fn decode(
         return decode_rotated(&mut dec, &mut m, level, family, x, mags, &normals, mode, (unbinned, zero), threads)
             .map(|()| models.last = Some(m));
     }
+    let mut running = RunningBins::new(level, family);
     for i in 0..nd {
         // What a Catmull-Clark level in mode 6 adds to the detail: its prediction.
         let mut fine = [0i64; 3];
@@ -175,7 +176,7 @@ pub fn decode(
             Some(Phasing::Cc(p)) if i == ne => synthesise_edges(p, level, x),
             _ => {}
         }
-        let (class, bins, fd) = contexts(level, mags, family, i);
+        let (class, bins, fd) = contexts(level, mags, family, i, running.as_ref());
         let fr = if framed {
             frame(level, &normals, fd)
         } else {
@@ -205,6 +206,9 @@ pub fn decode(
             _ => get(&mut dec, &mut m, class, bins, fr, ph, unbinned, zero)?,
         };
         mags[nv + i] = mg;
+        if let Some(r) = &mut running {
+            r.read(level, i, mg);
+        }
         let d = match offset {
             Some(c) => in_range(plus(r, c))?,
             None => r,
@@ -284,12 +288,16 @@ fn decode_rotated(
         let fd = frame_detail(level, family, i);
         rotation_of(level, coarse, family, fd, frame(level, normals, fd), mode)
     };
+    let mut running = RunningBins::new(level, family);
     let mut read = |lo: usize, hi: usize, f: [&mut [i64]; 3]| -> Result<()> {
         let [f0, f1, f2] = f;
         for i in lo..hi {
-            let (class, bins, _) = contexts(level, mags, family, i);
+            let (class, bins, _) = contexts(level, mags, family, i, running.as_ref());
             let (r, mg) = get_plain(dec, m, class, bins, unbinned, zero)?;
             mags[nv + i] = mg;
+            if let Some(r) = &mut running {
+                r.read(level, i, mg);
+            }
             f0[i] = r[0];
             f1[i] = r[1];
             f2[i] = r[2];

@@ -153,6 +153,32 @@ fn slot_bins_weigh_ends_twice_and_earlier_edge_points_once() {
     assert_eq!(slot_bins(&level, &mags, Family::Cc, ne), [2; 3]);
 }
 
+/// The decoder's running neighbour sums give [`slot_bins`]'s bins detail by detail,
+/// with magnitudes up to 53 and some coarse vertices unknown.
+#[test]
+fn running_bins_are_the_slot_bins() {
+    let level = refined(2);
+    let (nv, nd) = (level.nv, level.ne() + level.nf());
+    let m = pseudo(7, 3 * (nv + nd), 6);
+    let mut mags: Vec<[u8; 3]> = (0..nv + nd)
+        .map(|i| std::array::from_fn(|k| (m[3 * i + k].unsigned_abs() % 54) as u8))
+        .collect();
+    for v in mags.iter_mut().take(nv / 3) {
+        *v = [UNKNOWN; 3];
+    }
+    let mut running = RunningBins::new(&level, Family::Cc).unwrap();
+    let mut distinct = std::collections::BTreeSet::new();
+    for i in 0..nd {
+        let bins = running.bins(&level, &mags, Family::Cc, i);
+        assert_eq!(bins, slot_bins(&level, &mags, Family::Cc, i), "detail {i}");
+        distinct.extend(bins);
+        running.read(&level, i, mags[nv + i]);
+    }
+    // The data reaches most bins: the comparison is not of constants.
+    assert!(distinct.len() >= 4, "{distinct:?}");
+    assert!(RunningBins::new(&level, Family::Sqrt2).is_none());
+}
+
 /// A context model's first use starts from what its class and component learnt in
 /// other contexts, which costs a fraction of starting each uniform.
 #[test]

@@ -392,7 +392,7 @@ pub(super) fn encode_mode(
         if !sample.has(i) {
             continue;
         }
-        let (class, bins, _) = contexts(level, mags, family, i);
+        let (class, bins, _) = contexts(level, mags, family, i, None);
         let mut d = [x[0][nv + i], x[1][nv + i], x[2][nv + i]];
         let fr = if framed {
             prep.normals[i].get()
