@@ -233,7 +233,7 @@ impl Topo {
 /// One Catmull-Clark refinement of a coarse topology, with the adjacency the lifting
 /// steps need (SPEC.md 8.1). Fine vertex numbering: coarse vertices `0..nv`, then one
 /// edge point per coarse edge (`nv + e`), then one face point per face (`nv + ne + f`).
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone)]
 pub struct Level {
     /// Coarse vertices.
     pub nv: usize,
@@ -245,15 +245,37 @@ pub struct Level {
     pub coarse: Topo,
     /// `face_edges[coarse.starts[f] + i]` is the edge from corner i to corner i + 1.
     pub face_edges: Vec<u32>,
-    /// Per coarse vertex: its edges (CSR with `vert_starts`).
-    pub vert_edges: Vec<u32>,
-    /// Per coarse vertex: the faces it is a corner of, once per corner (CSR).
-    pub vert_faces: Vec<u32>,
-    /// Starts of the vertex lists (`nv + 1` entries) in `vert_edges`.
-    pub ve_starts: Vec<u32>,
-    /// Starts of the vertex lists in `vert_faces`.
-    pub vf_starts: Vec<u32>,
+    /// The per-vertex lists, made at their first use (a decoder's level that reads
+    /// none never makes them); empty once freed.
+    lists: std::sync::OnceLock<VertexLists>,
 }
+
+/// A level's per-vertex lists (CSR).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+struct VertexLists {
+    /// Per coarse vertex: its edges, in edge order.
+    vert_edges: Vec<u32>,
+    /// Per coarse vertex: the faces it is a corner of, once per corner, in face order.
+    vert_faces: Vec<u32>,
+    /// Starts of the vertex lists (`nv + 1` entries) in `vert_edges`.
+    ve_starts: Vec<u32>,
+    /// Starts of the vertex lists in `vert_faces`.
+    vf_starts: Vec<u32>,
+}
+
+impl PartialEq for Level {
+    /// The same topology and the same per-vertex lists (made for the comparison).
+    fn eq(&self, o: &Level) -> bool {
+        self.nv == o.nv
+            && self.edges == o.edges
+            && self.edge_faces == o.edge_faces
+            && self.coarse == o.coarse
+            && self.face_edges == o.face_edges
+            && self.lists() == o.lists()
+    }
+}
+
+impl Eq for Level {}
 
 impl Level {
     /// Number of coarse edges.
@@ -304,34 +326,71 @@ impl Level {
         }
     }
 
-    /// Coarse vertex `v`'s edges (none once [`Level::free_vertex_adjacency`] ran).
+    /// The per-vertex lists, made now if not yet.
+    #[inline(always)]
+    fn lists(&self) -> &VertexLists {
+        match self.lists.get() {
+            Some(l) => l,
+            None => self.make_lists(),
+        }
+    }
+
+    /// [`Level::lists`]'s making, once per level (out of its callers' loops).
+    #[cold]
+    #[inline(never)]
+    fn make_lists(&self) -> &VertexLists {
+        self.lists.get_or_init(|| {
+            let (ve_starts, vert_edges) = csr(
+                self.nv,
+                self.edges
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(e, &[a, b])| [(a, e as u32), (b, e as u32)]),
+            );
+            let (vf_starts, vert_faces) = vertex_faces(&self.coarse);
+            VertexLists {
+                vert_edges,
+                vert_faces,
+                ve_starts,
+                vf_starts,
+            }
+        })
+    }
+
+    /// Coarse vertex `v`'s edges, in edge order (none once
+    /// [`Level::free_vertex_adjacency`] ran).
     #[inline]
     pub fn v_edges(&self, v: usize) -> &[u32] {
-        match (self.ve_starts.get(v), self.ve_starts.get(v + 1)) {
-            (Some(&a), Some(&b)) => &self.vert_edges[a as usize..b as usize],
+        let l = self.lists();
+        match (l.ve_starts.get(v), l.ve_starts.get(v + 1)) {
+            (Some(&a), Some(&b)) => &l.vert_edges[a as usize..b as usize],
             _ => &[],
         }
     }
 
-    /// Coarse vertex `v`'s faces, one entry per corner (none once
+    /// Coarse vertex `v`'s faces, one entry per corner, in face order (none once
     /// [`Level::free_vertex_adjacency`] ran).
     #[inline]
     pub fn v_faces(&self, v: usize) -> &[u32] {
-        match (self.vf_starts.get(v), self.vf_starts.get(v + 1)) {
-            (Some(&a), Some(&b)) => &self.vert_faces[a as usize..b as usize],
+        let l = self.lists();
+        match (l.vf_starts.get(v), l.vf_starts.get(v + 1)) {
+            (Some(&a), Some(&b)) => &l.vert_faces[a as usize..b as usize],
             _ => &[],
         }
     }
 
-    /// Frees the per-vertex lists, for a decoder step that never reads them (a
-    /// sqrt2-lazy or ir2w level: its predictions, update, details and synthesis read
-    /// faces and edges only), so the level's memory is smaller where the decoder's
-    /// peaks.
+    /// Whether the per-vertex lists were freed ([`Level::free_vertex_adjacency`]):
+    /// [`Level::v_edges`] and [`Level::v_faces`] are then empty.
+    pub fn vertex_lists_freed(&self) -> bool {
+        self.lists.get().is_some_and(|l| l.ve_starts.is_empty())
+    }
+
+    /// Frees the per-vertex lists (or never makes them), for a decoder step that never
+    /// reads them (a sqrt2-lazy or ir2w level: its predictions, update, details and
+    /// synthesis read faces and edges only), so the level's memory is smaller where the
+    /// decoder's peaks.
     pub fn free_vertex_adjacency(&mut self) {
-        self.vert_edges = Vec::new();
-        self.vert_faces = Vec::new();
-        self.ve_starts = Vec::new();
-        self.vf_starts = Vec::new();
+        self.lists = std::sync::OnceLock::from(VertexLists::default());
     }
 
     /// Face `f`'s edges, in corner order.
@@ -398,28 +457,16 @@ impl Level {
         face_edges: Vec<u32>,
         lists: bool,
     ) -> Level {
-        let nv = coarse.nv;
         let mut level = Level {
-            nv,
+            nv: coarse.nv,
             edges,
             edge_faces,
             coarse,
             face_edges,
-            vert_edges: Vec::new(),
-            vert_faces: Vec::new(),
-            ve_starts: Vec::new(),
-            vf_starts: Vec::new(),
+            lists: std::sync::OnceLock::new(),
         };
-        if lists {
-            (level.ve_starts, level.vert_edges) = csr(
-                nv,
-                level
-                    .edges
-                    .iter()
-                    .enumerate()
-                    .flat_map(|(e, &[a, b])| [(a, e as u32), (b, e as u32)]),
-            );
-            (level.vf_starts, level.vert_faces) = vertex_faces(&level.coarse);
+        if !lists {
+            level.free_vertex_adjacency();
         }
         level
     }
@@ -554,6 +601,7 @@ pub(crate) fn vertex_faces(topo: &Topo) -> (Vec<u32>, Vec<u32>) {
 }
 
 /// Compressed lists: for each key in `0..n`, its values in insertion order.
+#[inline(always)]
 pub(crate) fn csr<T: Copy + Default>(
     n: usize,
     pairs: impl Iterator<Item = (u32, T)> + Clone,

@@ -57,7 +57,7 @@ pub(super) fn face_normal_64(level: &Level, coarse: &[Vec<i64>; 3], f: usize) ->
 /// [`face_normal_64`] of a face of at most eight corners whose values are below 2^28
 /// in magnitude: no product or sum can overflow.
 #[inline]
-fn face_normal_small(level: &Level, coarse: &[Vec<i64>; 3], f: usize) -> [i64; 3] {
+fn face_normal_small(level: &Level, coarse: [&[i64]; 3], f: usize) -> [i64; 3] {
     let c = level.coarse.face(f);
     let [x, y, z] = coarse;
     let mut n = [0i64; 3];
@@ -95,9 +95,12 @@ pub(super) fn face_normals(level: &Level, coarse: &[Vec<i64>; 3]) -> FaceNormals
     let small = coarse
         .iter()
         .all(|xk| xk[..level.nv.min(xk.len())].iter().all(|v| v.unsigned_abs() < 1 << 28));
+    // The three axes cut to one length: a corner's three values take one bounds check.
+    let n = coarse.iter().map(Vec::len).min().unwrap_or(0).min(level.nv);
+    let cut = [&coarse[0][..n], &coarse[1][..n], &coarse[2][..n]];
     for f in 0..level.nf() {
         if small && level.coarse.face(f).len() <= 8 {
-            narrow.push(face_normal_small(level, coarse, f));
+            narrow.push(face_normal_small(level, cut, f));
             continue;
         }
         match face_normal_64(level, coarse, f) {

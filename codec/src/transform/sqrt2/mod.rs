@@ -131,7 +131,7 @@ impl<'a> Plan<'a> {
             level,
             vert_faces: None,
         };
-        if w == Wavelet::Sqrt2Sym && level.vf_starts.is_empty() {
+        if w == Wavelet::Sqrt2Sym && level.vertex_lists_freed() {
             plan.vert_faces = Some(crate::topology::vertex_faces(&level.coarse));
         }
         if let Wavelet::Sqrt2Lazy | Wavelet::Ir2w = w {
