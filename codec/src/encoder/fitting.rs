@@ -450,7 +450,13 @@ const END_CAP_LEVEL: usize = 3;
 /// that level beside an extraordinary vertex (inside the mesh, not four edges; a
 /// boundary, sharp in OpenSubdiv, takes patches of its own that are on the limit). The
 /// fits leave them out (the end caps' rule then predicts them); all false for
-/// hierarchies of that many levels or fewer.
+/// hierarchies of that many levels or fewer. This mask is made once, before any rule
+/// set (so without sharpness), and is not [`EndCaps::new`]'s set of the faces a rule
+/// set predicts (SPEC.md 9.10: it leaves out faces at creased corners and adds those
+/// at semi-sharp ones): the mask only keeps the faces most likely off the limit out of
+/// the least squares, and the coding of each rule set measures the rule itself.
+///
+/// [`EndCaps::new`]: crate::transform::gregory::EndCaps::new
 fn end_caps(canon: &Canonical, finest: &Level, level: usize) -> Vec<bool> {
     let mut caps = vec![false; finest.nv];
     let Some(at) = canon.levels.get(level) else {

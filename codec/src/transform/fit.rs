@@ -476,9 +476,10 @@ pub fn end_caps_at(
     Some(caps)
 }
 
-/// [`end_caps_at`] without values.
+/// [`end_caps_at`] without values. (Never with extra levels: a header with both is
+/// refused, and the encoder never makes one; the check keeps every caller to that.)
 fn isolated(rules: &Rules, i: usize, level: &Level, sharp: &mut Sharpness) -> Option<EndCaps> {
-    if !(rules.limit && rules.end_caps == Some(i as u8) && i > 0) {
+    if !(rules.limit && rules.end_caps == Some(i as u8) && i > 0 && rules.extra_levels.is_none()) {
         return None;
     }
     let finite = |s: u32| s > 0 && s < SHARP_INFINITE;
@@ -766,7 +767,8 @@ impl Operator {
             rows.extend((0..n).map(|j| vec![((from + j) as u32, 1.0)]));
         };
         for (i, l) in levels.iter().enumerate() {
-            let fresh = caps.is_none() && rules.extra_levels.is_none();
+            // Until the end caps' level: whether this level makes them.
+            let fresh = caps.is_none();
             if fresh {
                 caps = isolated(rules, i, l, &mut sharp).map(|c| (c, l.nv));
             }
@@ -787,6 +789,11 @@ impl Operator {
             sharp = sharp.below(l, levels.get(i + 1).unwrap_or(finest));
         }
         if rules.limit {
+            // Every one of `n` values kept; a row's columns moved past `n` others.
+            let identity = |n: usize| -> Vec<Vec<(u32, f64)>> { (0..n as u32).map(|v| vec![(v, 1.0)]).collect() };
+            let shifted = |row: Vec<(u32, f64)>, n: usize| -> Vec<(u32, f64)> {
+                row.into_iter().map(|(u, w)| (n as u32 + u, w)).collect()
+            };
             let limit_rows = |level: &Level, hard: Hard<'_>| -> Vec<Vec<(u32, f64)>> {
                 (0..level.nv)
                     .map(|v| match limit_mask(level, v, hard) {
@@ -810,16 +817,12 @@ impl Operator {
                         // caps' from their points.
                         let (points, vertices) = c.rows(&finest.coarse);
                         let np = points.len();
-                        let mut r: Vec<Vec<(u32, f64)>> =
-                            (0..n as u32).map(|v| vec![(v, 1.0)]).collect();
-                        r.extend(points.into_iter().map(|row| {
-                            row.into_iter().map(|(u, w)| (n as u32 + u, w)).collect()
-                        }));
+                        let mut r = identity(n);
+                        r.extend(points.into_iter().map(|row| shifted(row, n)));
                         out.push(csr(r, n + nq));
-                        let mut r: Vec<Vec<(u32, f64)>> =
-                            (0..n as u32).map(|v| vec![(v, 1.0)]).collect();
+                        let mut r = identity(n);
                         for (v, row) in vertices {
-                            r[v] = row.into_iter().map(|(u, w)| (n as u32 + u, w)).collect();
+                            r[v] = shifted(row, n);
                         }
                         out.push(csr(r, n + np));
                     }
@@ -835,8 +838,7 @@ impl Operator {
                     }
                     out.push(csr(limit_rows(now, rules.hard(&infinite_only(&sharp))), now.nv));
                     // The finest vertices' values: the first of the last level's.
-                    let first = (0..finest.nv as u32).map(|v| vec![(v, 1.0)]).collect();
-                    out.push(csr(first, now.nv));
+                    out.push(csr(identity(finest.nv), now.nv));
                 }
             }
         }
