@@ -251,6 +251,9 @@ fn unrotate(r: [i64; 3], (rot, pred): (Rotation, [i64; 3])) -> Result<[i64; 3]> 
     in_range(Some(rot.inverse(in_range(plus(r, pred))?)))
 }
 
+/// A detail's rotation and what its mode subtracted, as [`rotation_of`] gives it.
+type RotationOf = Option<(Rotation, [i64; 3])>;
+
 /// Fewest details for which a level's work beside its reading (a rotated level's
 /// rotations, the decoder's transform) goes to another thread.
 pub const BESIDE_MIN: usize = 4096;
@@ -289,7 +292,8 @@ fn decode_rotated(
         rotation_of(level, coarse, family, fd, frame(level, normals, fd), mode)
     };
     let mut running = RunningBins::new(level, family);
-    let mut read = |lo: usize, hi: usize, f: [&mut [i64]; 3]| -> Result<()> {
+    // Details lo..hi into `f`, whose first entry is detail `base`'s.
+    let mut read = |lo: usize, hi: usize, base: usize, f: [&mut [i64]; 3]| -> Result<()> {
         let [f0, f1, f2] = f;
         for i in lo..hi {
             let (class, bins, _) = contexts(level, mags, family, i, running.as_ref());
@@ -298,40 +302,64 @@ fn decode_rotated(
             if let Some(r) = &mut running {
                 r.read(level, i, mg);
             }
-            f0[i] = r[0];
-            f1[i] = r[1];
-            f2[i] = r[2];
+            (f0[i - base], f1[i - base], f2[i - base]) = (r[0], r[1], r[2]);
         }
         Ok(())
     };
-    let undo = |i: usize, rot: Option<(Rotation, [i64; 3])>, f: [&mut [i64]; 3]| -> Result<()> {
+    // Detail i undone with its rotation, in `f` (from detail 0).
+    let undo_one = |i: usize, rot: RotationOf, f: &mut [&mut [i64]; 3]| -> Result<()> {
         if let Some(rot) = rot {
-            let [f0, f1, f2] = f;
-            let d = unrotate([f0[i], f1[i], f2[i]], rot)?;
-            (f0[i], f1[i], f2[i]) = (d[0], d[1], d[2]);
+            let d = unrotate([f[0][i], f[1][i], f[2][i]], rot)?;
+            (f[0][i], f[1][i], f[2][i]) = (d[0], d[1], d[2]);
         }
         Ok(())
     };
-    let beside = threads > 1 && nd >= BESIDE_MIN;
+    // Details lo.. undone with their rotations `rots`.
+    let undo = |lo: usize, rots: Vec<RotationOf>, mut f: [&mut [i64]; 3]| -> Result<()> {
+        (lo..).zip(rots).try_for_each(|(i, rot)| undo_one(i, rot, &mut f))
+    };
+    if !(threads > 1 && nd >= BESIDE_MIN) {
+        let mut lo = 0;
+        while lo < nd {
+            let hi = (lo + ROT_BLOCK).min(nd);
+            read(lo, hi, 0, [&mut *f0, &mut *f1, &mut *f2])?;
+            let mut f = [&mut *f0, &mut *f1, &mut *f2];
+            (lo..hi).try_for_each(|i| undo_one(i, rotation(i), &mut f))?;
+            lo = hi;
+        }
+        return Ok(());
+    }
+    // On two threads, a pipeline: while a block's values are read, the other thread
+    // makes the block's rotations and undoes the block before (its values read, its
+    // rotations made); the last block is undone after. Errors come in the one-thread
+    // order: a block's undoing before the next block's reading.
+    let mut made: Option<(usize, Vec<RotationOf>)> = None;
     let mut lo = 0;
     while lo < nd {
         let hi = (lo + ROT_BLOCK).min(nd);
-        if beside {
-            let rots = std::thread::scope(|s| -> Result<_> {
-                let made = s.spawn(|| (lo..hi).map(rotation).collect::<Vec<_>>());
-                read(lo, hi, [&mut *f0, &mut *f1, &mut *f2])?;
-                Ok(made.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-            })?;
-            for (i, rot) in (lo..hi).zip(rots) {
-                undo(i, rot, [&mut *f0, &mut *f1, &mut *f2])?;
-            }
-        } else {
-            read(lo, hi, [&mut *f0, &mut *f1, &mut *f2])?;
-            for i in lo..hi {
-                undo(i, rotation(i), [&mut *f0, &mut *f1, &mut *f2])?;
-            }
-        }
+        let (d0, r0) = f0.split_at_mut(lo);
+        let (d1, r1) = f1.split_at_mut(lo);
+        let (d2, r2) = f2.split_at_mut(lo);
+        let before = made.take();
+        let (read_now, (rots, undone)) = std::thread::scope(|s| {
+            let other = s.spawn(|| {
+                let rots: Vec<_> = (lo..hi).map(rotation).collect();
+                let undone = match before {
+                    Some((plo, prev)) => undo(plo, prev, [d0, d1, d2]),
+                    None => Ok(()),
+                };
+                (rots, undone)
+            });
+            let read_now = read(lo, hi, lo, [r0, r1, r2]);
+            (read_now, other.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+        });
+        undone?;
+        read_now?;
+        made = Some((lo, rots));
         lo = hi;
+    }
+    if let Some((plo, prev)) = made {
+        undo(plo, prev, [&mut *f0, &mut *f1, &mut *f2])?;
     }
     Ok(())
 }
