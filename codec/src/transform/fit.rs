@@ -789,8 +789,13 @@ impl Operator {
             sharp = sharp.below(l, levels.get(i + 1).unwrap_or(finest));
         }
         if rules.limit {
-            // Every one of `n` values kept; a row's columns moved past `n` others.
-            let identity = |n: usize| -> Vec<Vec<(u32, f64)>> { (0..n as u32).map(|v| vec![(v, 1.0)]).collect() };
+            // Every one of `n` values kept (`carry`'s rows from column 0); a row's
+            // columns moved past `n` others.
+            let identity = |n: usize| {
+                let mut r = Vec::with_capacity(n);
+                carry(&mut r, 0, n);
+                r
+            };
             let shifted = |row: Vec<(u32, f64)>, n: usize| -> Vec<(u32, f64)> {
                 row.into_iter().map(|(u, w)| (n as u32 + u, w)).collect()
             };
