@@ -695,7 +695,7 @@ fn synthesise_levels(
             let (read, made) = std::thread::scope(|sc| {
                 let made = sc.spawn(|| match family {
                     Family::Sqrt2 => {
-                        topology::sqrt2::next_level_of(&level, lists).map(|n| (n, None))
+                        topology::sqrt2::next_level_of(&level, lists, true).map(|n| (n, None))
                     }
                     _ => Ok(level.next_mapped()).map(|(n, m)| (n, Some(m))),
                 });
@@ -720,7 +720,7 @@ fn synthesise_levels(
             // Only sqrt2-sym reads the per-vertex lists: the others' levels are made
             // without them.
             Family::Sqrt2 if !last => {
-                next = Some(topology::sqrt2::next_level(level, lists)?);
+                next = Some(topology::sqrt2::next_level(level, lists, true)?);
             }
             // The finest topology needs only the level's edges: its other arrays go first.
             Family::Sqrt2 => topo = topology::sqrt2::fine_owned(level),

@@ -131,7 +131,7 @@ pub(crate) fn next_canonical_level(
     pole: &[bool],
 ) -> Result<Level> {
     match prev {
-        Some(prev) if family == Family::Sqrt2 => sqrt2::next_level_of(prev, false),
+        Some(prev) if family == Family::Sqrt2 => sqrt2::next_level_of(prev, false, false),
         Some(prev) => Level::new(&prev.fine_with(pole)),
         None => {
             let mut level = Level::new(base)?;

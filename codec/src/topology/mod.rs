@@ -6,6 +6,7 @@ mod canonical;
 pub mod cc;
 pub mod gates;
 pub mod polar;
+pub(crate) mod rings;
 pub mod sqrt2;
 
 use crate::error::{Error, Result};
@@ -248,6 +249,9 @@ pub struct Level {
     /// The per-vertex lists, made at their first use (a decoder's level that reads
     /// none never makes them); empty once freed.
     lists: std::sync::OnceLock<VertexLists>,
+    /// The vertices' rings, where they came with the level (a decoder's sqrt(2) level,
+    /// derived from its coarser level's: see [`rings::Rings::of_level`]).
+    rings: Option<rings::Rings>,
 }
 
 /// A level's per-vertex lists (CSR).
@@ -464,6 +468,7 @@ impl Level {
             coarse,
             face_edges,
             lists: std::sync::OnceLock::new(),
+            rings: None,
         };
         if !lists {
             level.free_vertex_adjacency();

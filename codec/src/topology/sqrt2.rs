@@ -10,6 +10,7 @@
 //! smallest depth.
 
 use crate::error::{Error, Result};
+use crate::topology::rings::Rings;
 use crate::topology::{
     base_numbering, check_matches, csr, next_canonical_level, push_face_points, Canonical, Level,
     PairMap, Topo, NONE,
@@ -55,25 +56,40 @@ fn fine_of_edges(nv: usize, nf: usize, edges: &[[u32; 2]], edge_faces: &[[u32; 2
 /// before the new level's adjacency is built (the decoder's memory peaks here). Without
 /// `lists` the new level has no per-vertex lists (a decoder's sqrt2-lazy or ir2w level,
 /// which never reads them), as if [`Level::free_vertex_adjacency`] had been called.
-pub fn next_level(level: Level, lists: bool) -> crate::error::Result<Level> {
+/// With `rings` the new level comes with its vertices' rings where they can be derived
+/// from the level's ([`Rings::sqrt2_next`]; a decoder, whose next level's transform
+/// walks them; the encoder keeps its levels without, for their memory).
+pub fn next_level(level: Level, lists: bool, rings: bool) -> crate::error::Result<Level> {
     let fine_topo = fine(&level);
     let parts = next_edges(&level, &fine_topo);
+    let fine_rings = next_rings(&level, parts.is_some() && rings);
     drop(level);
-    finish_next(fine_topo, parts, lists)
+    finish_next(fine_topo, parts, lists, fine_rings)
 }
 
 /// [`next_level`] of a level that stays (the encoder keeps every level of a hierarchy).
-pub fn next_level_of(level: &Level, lists: bool) -> crate::error::Result<Level> {
+pub fn next_level_of(level: &Level, lists: bool, rings: bool) -> crate::error::Result<Level> {
     let fine_topo = fine(level);
     let parts = next_edges(level, &fine_topo);
-    finish_next(fine_topo, parts, lists)
+    let fine_rings = next_rings(level, parts.is_some() && rings);
+    finish_next(fine_topo, parts, lists, fine_rings)
+}
+
+/// The rings of `level`'s fine mesh when `derive` and they can be derived.
+fn next_rings(level: &Level, derive: bool) -> Option<Rings> {
+    derive.then(|| Rings::sqrt2_next(level, &Rings::of_level(level))).flatten()
 }
 
 /// The fine level's edges, their faces and the faces' edges, numbered as
 /// [`Level::new`] numbers them; `None` unless every face of `level` has distinct corners.
 type NextEdges = (Vec<[u32; 2]>, Vec<[u32; 2]>, Vec<u32>);
 
-fn finish_next(fine_topo: Topo, parts: Option<NextEdges>, lists: bool) -> crate::error::Result<Level> {
+fn finish_next(
+    fine_topo: Topo,
+    parts: Option<NextEdges>,
+    lists: bool,
+    rings: Option<Rings>,
+) -> crate::error::Result<Level> {
     let Some((edges, edge_faces, face_edges)) = parts else {
         let mut next = Level::new(&fine_topo)?;
         if !lists {
@@ -81,9 +97,9 @@ fn finish_next(fine_topo: Topo, parts: Option<NextEdges>, lists: bool) -> crate:
         }
         return Ok(next);
     };
-    Ok(Level::from_edges(
-        fine_topo, edges, edge_faces, face_edges, lists,
-    ))
+    let mut next = Level::from_edges(fine_topo, edges, edge_faces, face_edges, lists);
+    next.rings = rings;
+    Ok(next)
 }
 
 /// See [`NextEdges`]: a fine edge joins a corner's vertex to its face's point, so it is

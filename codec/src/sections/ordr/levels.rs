@@ -57,7 +57,7 @@ fn levels(h: Hierarchy<'_>) -> Option<Vec<Level>> {
         let next = match h.family {
             Family::Cc => last.next(),
             Family::Polar => Level::new(&last.fine_with(&pole)).ok()?,
-            Family::Sqrt2 if sqrt2::closed(last) => sqrt2::next_level(last.clone(), true).ok()?,
+            Family::Sqrt2 if sqrt2::closed(last) => sqrt2::next_level(last.clone(), true, false).ok()?,
             _ => return None,
         };
         out.push(next);

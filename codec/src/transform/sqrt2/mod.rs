@@ -11,7 +11,6 @@
 //! other: synthesis undoes analysis exactly for any weights. The exception is
 //! `sqrt2-sym`'s 16/13 scaling, an injective rounding inverted exactly (SPEC.md 9.8).
 
-mod rings;
 #[cfg(any(test, feature = "reference"))]
 pub mod solve;
 pub mod tables;
@@ -19,7 +18,7 @@ pub mod tables;
 use crate::topology::{Level, Topo, NONE};
 use crate::transform::phase::{phase, Phases};
 use crate::transform::{Sample, Wavelet};
-use rings::Rings;
+use crate::topology::rings::Rings;
 
 /// Largest valence with its own weights in the frozen tables.
 pub const TABLE_MAX: usize = 16;
@@ -135,7 +134,7 @@ impl<'a> Plan<'a> {
             plan.vert_faces = Some(crate::topology::vertex_faces(&level.coarse));
         }
         if let Wavelet::Sqrt2Lazy | Wavelet::Ir2w = w {
-            let rings = Rings::from_level(level);
+            let rings = Rings::of_level(level);
             let nb = Neighbours {
                 rings: &rings,
                 topo,
@@ -343,7 +342,7 @@ pub fn predictions_with(
     x: &[Vec<i64>; 3],
     phases: bool,
 ) -> ([Vec<i64>; 3], Option<Phases>) {
-    let rings = Rings::from_level(level);
+    let rings = Rings::of_level(level);
     let nb = Neighbours {
         rings: &rings,
         topo: &level.coarse,
@@ -646,7 +645,7 @@ fn ir2w_update(level: &Level, nb: &Neighbours<'_>) -> Rows {
 /// predictions stored: the update is scattered face by face into one 128-bit sum per
 /// vertex, an axis at a time, and each prediction is added where it is made.
 pub fn ir2w_synthesise(level: &Level, x: &mut [Vec<i64>; 3]) {
-    let rings = Rings::from_level(level);
+    let rings = Rings::of_level(level);
     let nb = Neighbours {
         rings: &rings,
         topo: &level.coarse,
@@ -661,7 +660,7 @@ pub fn ir2w_synthesise(level: &Level, x: &mut [Vec<i64>; 3]) {
 /// `f -= P_f` from the fine vertex values, then every coarse vertex `v -= U_v` from the
 /// details.
 pub fn ir2w_analyse(level: &Level, x: &mut [Vec<i64>; 3]) {
-    let rings = Rings::from_level(level);
+    let rings = Rings::of_level(level);
     let nb = Neighbours {
         rings: &rings,
         topo: &level.coarse,
@@ -817,12 +816,47 @@ mod tests {
         for base in [prism, flipped] {
             let mut level = Level::new(&base).unwrap();
             for _ in 0..5 {
-                let next = next_level(level.clone(), true).unwrap();
+                let next = next_level(level.clone(), true, false).unwrap();
                 let mut lean = next.clone();
                 lean.free_vertex_adjacency();
-                assert_eq!(next_level(level.clone(), false).unwrap(), lean);
+                assert_eq!(next_level(level.clone(), false, false).unwrap(), lean);
                 assert_eq!(next, Level::new(&fine(&level)).unwrap());
                 assert_eq!(fine_owned(level.clone()), fine(&level));
+                level = next;
+            }
+        }
+    }
+
+    /// The rings a decoder's next level comes with, derived from the level's own (those
+    /// derived the step before, from the third level on), are the fine level's rings made
+    /// from its faces; a mesh with a face reversed derives none at first and makes them.
+    #[test]
+    fn derived_rings_are_the_fine_levels_rings() {
+        let prism = prism_with_triangles();
+        let mut flipped = Topo::new(prism.nv);
+        for f in 0..prism.nf() {
+            let mut face = prism.face(f).to_vec();
+            if f == 2 {
+                face.reverse();
+            }
+            flipped.push(&face);
+        }
+        for (base, derives) in [(prism, true), (flipped, false)] {
+            let mut level = Level::new(&base).unwrap();
+            for depth in 0..6 {
+                let next = next_level(level.clone(), false, true).unwrap();
+                let made = Rings::from_level(&next);
+                assert_eq!(Rings::of_level(&next).into_owned(), made, "depth {depth}");
+                // (The reversed face's inconsistency fades with the steps.)
+                let given = matches!(Rings::of_level(&next), std::borrow::Cow::Borrowed(_));
+                if derives || depth == 0 {
+                    assert_eq!(given, derives, "depth {depth}");
+                }
+                if derives {
+                    assert!((0..next.nv).all(|v| !made.of(v).is_empty()));
+                }
+                // The same level as without rings.
+                assert_eq!(next, next_level(level, false, false).unwrap());
                 level = next;
             }
         }
@@ -872,8 +906,8 @@ mod tests {
             ir2w_synthesise(&lean, &mut b);
             assert_eq!(a, b, "ir2w at depth {depth}");
             assert_eq!(
-                next_level(lean.clone(), true).unwrap(),
-                next_level(level.clone(), true).unwrap()
+                next_level(lean.clone(), true, false).unwrap(),
+                next_level(level.clone(), true, false).unwrap()
             );
             assert_eq!(fine_owned(lean), fine(&level));
             t = fine(&level);

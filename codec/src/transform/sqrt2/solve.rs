@@ -6,7 +6,7 @@
 //! [`super::tables`], and a test checks they are exactly what [`alpha_table`] and
 //! [`omega_table`] produce. `cargo run -p subwave-codec --example sqrt2_tables` prints them.
 
-use super::rings::Rings;
+use crate::topology::rings::Rings;
 use crate::topology::Topo;
 
 /// Fixed-point scale of every table weight: 2^16.
