@@ -482,6 +482,19 @@ impl RotFrame {
         offset: bool,
     ) -> Self {
         let rot = Rotation::new(n, tangent_ref(level, coarse, fd));
+        RotFrame::with(level, coarse, family, fd, rot, offset)
+    }
+
+    /// [`RotFrame::new`] with its rotation made.
+    #[inline]
+    pub(super) fn with(
+        level: &Level,
+        coarse: [&[i64]; 3],
+        family: Family,
+        fd: usize,
+        rot: Rotation,
+        offset: bool,
+    ) -> Self {
         let offset = if offset && family != Family::Sqrt2 && fd < level.ne() {
             edge_offset(level, coarse, fd).map(|v| {
                 let [_, a, b] = rot.forward(v);

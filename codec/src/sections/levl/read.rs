@@ -224,34 +224,99 @@ pub fn decode(
     Ok(())
 }
 
-/// Detail `fd`'s rotation into its frame and what its mode subtracts from the rotated
-/// values (SPEC.md 10.5), on a rotated level (modes 4 and 5) where its coarse normal
-/// `fr` is not zero; else `None`.
-fn rotation_of(
-    level: &Level,
-    coarse: [&[i64]; 3],
+/// A detail's rotation as far as [`Rotations::prepare`] makes it: its frame detail,
+/// whether it has a frame, the first two plane rotations, the normal's components that
+/// make the second, and the tangent reference's as the rotations leave it.
+#[derive(Clone, Copy)]
+struct Partial {
+    fd: u32,
+    framed: bool,
+    g0: Givens,
+    g1: Givens,
+    n: [i64; 2],
+    t: [i64; 3],
+}
+
+/// A rotated level's rotations (modes 4 and 5, SPEC.md 10.5), made a block of details
+/// at a time in passes of one plane rotation each, into buffers kept between blocks:
+/// the same rotations as [`RotFrame::new`]'s, whose three steps depend on each other (a
+/// division, then products, then the next), so that a pass holds short, independent
+/// steps of many details at once where one detail's whole chain would leave the
+/// processor waiting.
+struct Rotations<'a, 'l> {
+    level: &'l Level,
+    coarse: [&'a [i64]; 3],
     family: Family,
-    fd: usize,
-    fr: Option<(usize, [i64; 3])>,
-    mode: Mode<'_>,
-) -> Option<(Rotation, [i64; 3])> {
-    match (mode, fr) {
-        (Mode::Rotated | Mode::Shifted(..), Some((_, n))) => {
-            let shifted = matches!(mode, Mode::Shifted(..));
-            let f = RotFrame::new(level, coarse, family, fd, n, shifted);
-            Some((f.rot, f.pred(mode)))
+    normals: &'a FaceNormals,
+    mode: Mode<'a>,
+}
+
+impl Rotations<'_, '_> {
+    /// The first two rotations of details `lo..hi` into `parts` (a scratch kept between
+    /// blocks; a detail without a frame turns a stand-in normal, unused).
+    fn prepare(&self, lo: usize, hi: usize, parts: &mut Vec<Partial>) {
+        let (level, family) = (self.level, self.family);
+        parts.clear();
+        parts.extend((lo..hi).map(|i| {
+            let fd = frame_detail(level, family, i);
+            let f = frame(level, self.normals, fd);
+            let n = f.map_or([1, 0, 0], |(_, n)| n);
+            let t = to_24_bits(tangent_ref(level, self.coarse, fd));
+            let g0 = Givens::towards(n[0], n[1]);
+            let (t0, t1) = g0.apply(t[0], t[1]);
+            Partial {
+                fd: fd as u32,
+                framed: f.is_some(),
+                g0,
+                g1: g0,
+                n: [g0.apply(n[0], n[1]).0, n[2]],
+                t: [t0, t1, t[2]],
+            }
+        }));
+        for p in parts.iter_mut() {
+            p.g1 = Givens::towards(p.n[0], p.n[1]);
+            p.t[2] = p.g1.apply(p.t[0], p.t[2]).1;
         }
-        _ => None,
+    }
+
+    /// The third rotation of a detail that [`Rotations::prepare`] began, and what the
+    /// mode subtracts from its rotated values; `None` without a frame.
+    #[inline]
+    fn finish(&self, p: &Partial) -> Option<(Rotation, [i64; 3])> {
+        p.framed.then(|| {
+            let rot = Rotation([p.g0, p.g1, Givens::towards(p.t[1], p.t[2])]);
+            let shifted = matches!(self.mode, Mode::Shifted(..));
+            let fd = p.fd as usize;
+            let fr = RotFrame::with(self.level, self.coarse, self.family, fd, rot, shifted);
+            (fr.rot, fr.pred(self.mode))
+        })
+    }
+
+    /// Each detail `lo..` in `f` (whose first entry is detail `base`'s) undone with its
+    /// rotation from `rots`: what the mode subtracted added back, then the rotation
+    /// undone (SPEC.md 10.5), each within the bound of 9.3.
+    fn undo<T>(
+        &self,
+        lo: usize,
+        base: usize,
+        rots: &[T],
+        rot: impl Fn(&T) -> Option<(Rotation, [i64; 3])>,
+        f: [&mut [i64]; 3],
+    ) -> Result<()> {
+        let [f0, f1, f2] = f;
+        for (i, t) in (lo..).zip(rots) {
+            if let Some((rot, pred)) = rot(t) {
+                let j = i - base;
+                let r = in_range(plus([f0[j], f1[j], f2[j]], pred))?;
+                let d = in_range(Some(rot.inverse(r)))?;
+                (f0[j], f1[j], f2[j]) = (d[0], d[1], d[2]);
+            }
+        }
+        Ok(())
     }
 }
 
-/// A rotated detail from its coded values `r`: what the mode subtracted added back,
-/// then the rotation undone (SPEC.md 10.5), each within the bound of 9.3.
-fn unrotate(r: [i64; 3], (rot, pred): (Rotation, [i64; 3])) -> Result<[i64; 3]> {
-    in_range(Some(rot.inverse(in_range(plus(r, pred))?)))
-}
-
-/// A detail's rotation and what its mode subtracted, as [`rotation_of`] gives it.
+/// A detail's rotation and what its mode subtracts, as [`Rotations::finish`] gives it.
 type RotationOf = Option<(Rotation, [i64; 3])>;
 
 /// Fewest details for which a level's work beside its reading (a rotated level's
@@ -266,8 +331,8 @@ const ROT_BLOCK: usize = 16384;
 /// read depends on a rotation (their models see the rotated values, and no frame
 /// predicts), so the values are read first, then each detail's rotation is made and
 /// undone, in blocks. With `threads` above 1 and enough details, each block's rotations
-/// are made on another thread beside the reading of its values, and applied after. The
-/// coarse values `x[k][..nv]` are read-only meanwhile.
+/// are made on another thread beside the reading of its values, and undone there beside
+/// the reading of the next. The coarse values `x[k][..nv]` are read-only meanwhile.
 #[allow(clippy::too_many_arguments)]
 fn decode_rotated(
     dec: &mut Decoder,
@@ -286,10 +351,12 @@ fn decode_rotated(
     let (c0, f0) = x0.split_at_mut(nv);
     let (c1, f1) = x1.split_at_mut(nv);
     let (c2, f2) = x2.split_at_mut(nv);
-    let coarse: [&[i64]; 3] = [c0, c1, c2];
-    let rotation = |i: usize| {
-        let fd = frame_detail(level, family, i);
-        rotation_of(level, coarse, family, fd, frame(level, normals, fd), mode)
+    let rots = Rotations {
+        level,
+        coarse: [c0, c1, c2],
+        family,
+        normals,
+        mode,
     };
     let mut running = RunningBins::new(level, family);
     // Details lo..hi into `f`, whose first entry is detail `base`'s.
@@ -306,25 +373,15 @@ fn decode_rotated(
         }
         Ok(())
     };
-    // Detail i undone with its rotation, in `f` (from detail 0).
-    let undo_one = |i: usize, rot: RotationOf, f: &mut [&mut [i64]; 3]| -> Result<()> {
-        if let Some(rot) = rot {
-            let d = unrotate([f[0][i], f[1][i], f[2][i]], rot)?;
-            (f[0][i], f[1][i], f[2][i]) = (d[0], d[1], d[2]);
-        }
-        Ok(())
-    };
-    // Details lo.. undone with their rotations `rots`.
-    let undo = |lo: usize, rots: Vec<RotationOf>, mut f: [&mut [i64]; 3]| -> Result<()> {
-        (lo..).zip(rots).try_for_each(|(i, rot)| undo_one(i, rot, &mut f))
-    };
+    let mut parts = Vec::with_capacity(nd.min(ROT_BLOCK));
     if !(threads > 1 && nd >= BESIDE_MIN) {
         let mut lo = 0;
         while lo < nd {
             let hi = (lo + ROT_BLOCK).min(nd);
             read(lo, hi, 0, [&mut *f0, &mut *f1, &mut *f2])?;
-            let mut f = [&mut *f0, &mut *f1, &mut *f2];
-            (lo..hi).try_for_each(|i| undo_one(i, rotation(i), &mut f))?;
+            rots.prepare(lo, hi, &mut parts);
+            let f = [&mut *f0, &mut *f1, &mut *f2];
+            rots.undo(lo, 0, &parts, |p| rots.finish(p), f)?;
             lo = hi;
         }
         return Ok(());
@@ -333,33 +390,36 @@ fn decode_rotated(
     // makes the block's rotations and undoes the block before (its values read, its
     // rotations made); the last block is undone after. Errors come in the one-thread
     // order: a block's undoing before the next block's reading.
-    let mut made: Option<(usize, Vec<RotationOf>)> = None;
+    let (mut made, mut making): (Vec<RotationOf>, Vec<RotationOf>) = (Vec::new(), Vec::new());
+    let mut before: Option<usize> = None;
     let mut lo = 0;
     while lo < nd {
         let hi = (lo + ROT_BLOCK).min(nd);
         let (d0, r0) = f0.split_at_mut(lo);
         let (d1, r1) = f1.split_at_mut(lo);
         let (d2, r2) = f2.split_at_mut(lo);
-        let before = made.take();
-        let (read_now, (rots, undone)) = std::thread::scope(|s| {
-            let other = s.spawn(|| {
-                let rots: Vec<_> = (lo..hi).map(rotation).collect();
-                let undone = match before {
-                    Some((plo, prev)) => undo(plo, prev, [d0, d1, d2]),
+        let (rots, parts, now, done) = (&rots, &mut parts, &mut making, &made);
+        let (read_now, undone) = std::thread::scope(|s| {
+            let other = s.spawn(move || {
+                rots.prepare(lo, hi, parts);
+                now.clear();
+                now.extend(parts.iter().map(|p| rots.finish(p)));
+                match before {
+                    Some(plo) => rots.undo(plo, 0, done, |&r| r, [d0, d1, d2]),
                     None => Ok(()),
-                };
-                (rots, undone)
+                }
             });
             let read_now = read(lo, hi, lo, [r0, r1, r2]);
             (read_now, other.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
         });
         undone?;
         read_now?;
-        made = Some((lo, rots));
+        std::mem::swap(&mut made, &mut making);
+        before = Some(lo);
         lo = hi;
     }
-    if let Some((plo, prev)) = made {
-        undo(plo, prev, [&mut *f0, &mut *f1, &mut *f2])?;
+    if let Some(plo) = before {
+        rots.undo(plo, 0, &made, |&r| r, [&mut *f0, &mut *f1, &mut *f2])?;
     }
     Ok(())
 }
