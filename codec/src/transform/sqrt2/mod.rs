@@ -489,7 +489,15 @@ fn corner_terms(
         let v = topo.idx[c];
         let ring = nb.rings.of(v as usize);
         let n = ring.len();
-        if table_valence(n) {
+        if let Ok(r) = <&[u32; 4]>::try_from(ring) {
+            // Valence 4, nearly every vertex of a fine level: the same terms, unrolled.
+            add(v as usize, (ONE / 2) as i32);
+            let i = nb.rings.pos[c] as usize;
+            let a = tables::ALPHA[1];
+            for j in 0..4 {
+                add(r[(i + j) & 3] as usize, a[j]);
+            }
+        } else if table_valence(n) {
             add(v as usize, (ONE / 2) as i32);
             // The ring from the corner's place (always below n) to its end, then from
             // its start: no division and no wrap test per term.
