@@ -106,11 +106,12 @@ fn finish_next(
 /// numbered by the corner.
 fn next_edges(level: &Level, fine_topo: &Topo) -> Option<NextEdges> {
     let topo = &level.coarse;
-    let distinct = (0..topo.nf()).all(|f| {
-        let face = topo.face(f);
-        face.iter()
+    let distinct = (0..topo.nf()).all(|f| match *topo.face(f) {
+        [a, b, c, d] => a != b && a != c && a != d && b != c && b != d && c != d,
+        ref face => face
+            .iter()
             .enumerate()
-            .all(|(i, v)| !face[i + 1..].contains(v))
+            .all(|(i, v)| !face[i + 1..].contains(v)),
     });
     if !distinct {
         return None;
@@ -118,13 +119,12 @@ fn next_edges(level: &Level, fine_topo: &Topo) -> Option<NextEdges> {
     // Per coarse edge, its two occurrences as (corner, next corner) slots, in face order.
     let mut occ = vec![[[NONE; 2]; 2]; level.ne()];
     for f in 0..topo.nf() {
-        let s = topo.starts[f] as usize;
-        let k = topo.face(f).len();
-        for i in 0..k {
-            let e = level.face_edges[s + i] as usize;
-            let n = (occ[e][0][0] != NONE) as usize;
-            let next = if i + 1 == k { s } else { s + i + 1 };
-            occ[e][n] = [(s + i) as u32, next as u32];
+        let (s, e) = (topo.starts[f] as usize, topo.starts[f + 1] as usize);
+        for (i, &q) in level.face_edges[s..e].iter().enumerate() {
+            let o = &mut occ[q as usize];
+            let n = (o[0][0] != NONE) as usize;
+            let next = if s + i + 1 == e { s } else { s + i + 1 };
+            o[n] = [(s + i) as u32, next as u32];
         }
     }
     // The corner slot of vertex v in the face occurrence `o`.
@@ -137,26 +137,37 @@ fn next_edges(level: &Level, fine_topo: &Topo) -> Option<NextEdges> {
     };
     let n_edges = topo.idx.len();
     let mut id = vec![NONE; n_edges];
-    let mut edges = Vec::with_capacity(n_edges);
-    let mut edge_faces = Vec::with_capacity(n_edges);
-    let mut face_edges = Vec::with_capacity(fine_topo.idx.len());
-    for (q, &[a, b]) in level.edges.iter().enumerate() {
-        let [o1, o2] = occ[q];
-        let quad = fine_topo.face(q);
-        // Quad (a, F2, b, F1): its edges belong to these corners.
+    let mut edges = vec![[0u32; 2]; n_edges];
+    let mut edge_faces = vec![[NONE; 2]; n_edges];
+    let mut face_edges = vec![0u32; fine_topo.idx.len()];
+    let mut made = 0u32;
+    let f0 = level.nv as u32;
+    for (q, ((&[a, b], &[g1, g2]), o)) in level
+        .edges
+        .iter()
+        .zip(&level.edge_faces)
+        .zip(&occ)
+        .enumerate()
+    {
+        let [o1, o2] = *o;
+        // Quad (a, F2, b, F1) (as [`fine`] makes it): its edges belong to these corners.
+        let quad = [a, f0 + g2, b, f0 + g1];
         let corners = [slot(o2, a), slot(o2, b), slot(o1, b), slot(o1, a)];
         for (i, &c) in corners.iter().enumerate() {
             let c = c as usize;
             if id[c] == NONE {
-                id[c] = edges.len() as u32;
-                edges.push([quad[i], quad[(i + 1) % 4]]);
-                edge_faces.push([q as u32, NONE]);
+                id[c] = made;
+                edges[made as usize] = [quad[i], quad[(i + 1) & 3]];
+                edge_faces[made as usize][0] = q as u32;
+                made += 1;
             } else {
                 edge_faces[id[c] as usize][1] = q as u32;
             }
-            face_edges.push(id[c]);
+            face_edges[4 * q + i] = id[c];
         }
     }
+    edges.truncate(made as usize);
+    edge_faces.truncate(made as usize);
     Some((edges, edge_faces, face_edges))
 }
 
