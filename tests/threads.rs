@@ -105,3 +105,65 @@ fn meshes_are_the_same_for_every_decoder_thread_count() {
         "rotated {rotated}, beside {beside}"
     );
 }
+
+/// A damaged rotated level (its checksum made again, so that its values are read)
+/// decodes the same way on one thread and on two: the same mesh or the same error,
+/// whichever block of the level (its rotations made and undone on the other thread) the
+/// damage reaches first.
+#[test]
+fn damaged_levels_fail_the_same_on_every_decoder_thread_count() {
+    use subwave::{DecodeOptions, TransformChoice, Wavelet};
+    use subwave_container::{Container, ContainerWriter, Limits, SectionKind};
+    let obj = subwave_corpus::large_cube(6).to_obj(6);
+    let input = subwave::load(obj.as_bytes(), Some(16)).unwrap();
+    let opts = EncodeOptions {
+        transform: TransformChoice::Fixed(Wavelet::Interp6),
+        source: input.source(),
+        ..Default::default()
+    };
+    let bytes = subwave::encode_to_vec(&input.mesh, &input.quantization, &opts)
+        .unwrap()
+        .bytes;
+    let info = subwave::inspect(&bytes, &Default::default()).unwrap();
+    let c = Container::parse(&bytes, &Limits::default()).unwrap();
+    // The largest rotated level (mode 4 or 5), by its place among the sections.
+    let (at, _) = info
+        .sections
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.kind == "LEVL" && matches!(s.mode, Some(4 | 5)))
+        .max_by_key(|(_, s)| s.bytes)
+        .expect("a rotated level");
+    let payload = c.sections[at].payload;
+    assert!(payload.len() > 1000, "{} bytes", payload.len());
+    let decode = |b: &[u8], threads: usize| {
+        let opts = DecodeOptions {
+            threads,
+            ..Default::default()
+        };
+        subwave::decode(b, &opts)
+            .map(|d| d.mesh)
+            .map_err(|e| e.to_string())
+    };
+    let mut failed = 0;
+    for k in 0..40usize {
+        // Past the mode byte and its parameters, across the stream.
+        let byte = 8 + k * 7919 % (payload.len() - 8);
+        let mut damaged = payload.to_vec();
+        damaged[byte] ^= 1 << (k % 8);
+        let mut w = ContainerWriter::new();
+        for (i, s) in c.sections.iter().enumerate() {
+            if s.kind != SectionKind::END {
+                w.section(s.kind, if i == at { &damaged } else { s.payload });
+            }
+        }
+        let b = w.finish();
+        let one = decode(&b, 1);
+        failed += one.is_err() as usize;
+        assert!(
+            decode(&b, 2) == one,
+            "byte {byte}: two threads differ from one"
+        );
+    }
+    assert!(failed >= 10, "only {failed} of 40 damaged levels failed");
+}

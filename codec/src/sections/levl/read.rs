@@ -332,7 +332,9 @@ const ROT_BLOCK: usize = 16384;
 /// predicts), so the values are read first, then each detail's rotation is made and
 /// undone, in blocks. With `threads` above 1 and enough details, each block's rotations
 /// are made on another thread beside the reading of its values, and undone there beside
-/// the reading of the next. The coarse values `x[k][..nv]` are read-only meanwhile.
+/// the reading of the next (one thread for the level: a thread started per block waited
+/// up to milliseconds for its start). The coarse values `x[k][..nv]` are read-only
+/// meanwhile.
 #[allow(clippy::too_many_arguments)]
 fn decode_rotated(
     dec: &mut Decoder,
@@ -386,42 +388,53 @@ fn decode_rotated(
         }
         return Ok(());
     }
-    // On two threads, a pipeline: while a block's values are read, the other thread
-    // makes the block's rotations and undoes the block before (its values read, its
-    // rotations made); the last block is undone after. Errors come in the one-thread
-    // order: a block's undoing before the next block's reading.
-    let (mut made, mut making): (Vec<RotationOf>, Vec<RotationOf>) = (Vec::new(), Vec::new());
-    let mut before: Option<usize> = None;
-    let mut lo = 0;
-    while lo < nd {
-        let hi = (lo + ROT_BLOCK).min(nd);
-        let (d0, r0) = f0.split_at_mut(lo);
-        let (d1, r1) = f1.split_at_mut(lo);
-        let (d2, r2) = f2.split_at_mut(lo);
-        let (rots, parts, now, done) = (&rots, &mut parts, &mut making, &made);
-        let (read_now, undone) = std::thread::scope(|s| {
-            let other = s.spawn(move || {
-                rots.prepare(lo, hi, parts);
-                now.clear();
-                now.extend(parts.iter().map(|p| rots.finish(p)));
-                match before {
-                    Some(plo) => rots.undo(plo, 0, done, |&r| r, [d0, d1, d2]),
-                    None => Ok(()),
-                }
-            });
-            let read_now = read(lo, hi, lo, [r0, r1, r2]);
-            (read_now, other.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+    // On two threads, a pipeline with one helper for the level: it makes each block's
+    // rotations (which need no value) while the block is read, then undoes the block
+    // once the reading hands its values over, while the next block is read. Errors come
+    // in the one-thread order: the reading stops at its first error, after the blocks
+    // before it are undone, and an undoing error (always of an earlier block) comes
+    // first.
+    let blocks: Vec<(usize, usize)> = (0..nd)
+        .step_by(ROT_BLOCK)
+        .map(|lo| (lo, (lo + ROT_BLOCK).min(nd)))
+        .collect();
+    let (rots, blocks) = (&rots, &blocks);
+    let (hand, take) = std::sync::mpsc::channel::<[&mut [i64]; 3]>();
+    std::thread::scope(|s| {
+        let helper = s.spawn(move || -> Result<()> {
+            let mut made: Vec<RotationOf> = Vec::with_capacity(nd.min(ROT_BLOCK));
+            for &(lo, hi) in blocks {
+                rots.prepare(lo, hi, &mut parts);
+                made.clear();
+                made.extend(parts.iter().map(|p| rots.finish(p)));
+                // The block's values, once read (none when the reading stopped).
+                let Ok(f) = take.recv() else {
+                    return Ok(());
+                };
+                rots.undo(lo, lo, &made, |&r| r, f)?;
+            }
+            Ok(())
         });
-        undone?;
-        read_now?;
-        std::mem::swap(&mut made, &mut making);
-        before = Some(lo);
-        lo = hi;
-    }
-    if let Some(plo) = before {
-        rots.undo(plo, 0, &made, |&r| r, [&mut *f0, &mut *f1, &mut *f2])?;
-    }
-    Ok(())
+        let mut rest = [f0, f1, f2];
+        let mut reading = Ok(());
+        for &(lo, hi) in blocks {
+            let [a, b, c] = rest;
+            let ((a, a2), (b, b2), (c, c2)) = (
+                a.split_at_mut(hi - lo),
+                b.split_at_mut(hi - lo),
+                c.split_at_mut(hi - lo),
+            );
+            rest = [a2, b2, c2];
+            reading = read(lo, hi, lo, [&mut *a, &mut *b, &mut *c]);
+            // (A helper gone has met an error in an earlier block.)
+            if reading.is_err() || hand.send([a, b, c]).is_err() {
+                break;
+            }
+        }
+        drop(hand);
+        let undone = helper.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+        undone.and(reading)
+    })
 }
 
 /// The level's mode from its mode byte and the mode's parameters, checked against what
