@@ -327,6 +327,9 @@ pub const BESIDE_MIN: usize = 4096;
 /// the values of the one before are read (a bounded store, whatever the level's size).
 const ROT_BLOCK: usize = 16384;
 
+/// Details per [`Rotations`] pass on one thread (about 300 kB of scratch).
+const ROT_PASS: usize = 4096;
+
 /// A rotated level (modes 4 and 5, SPEC.md 10.5) read as [`decode`] reads it: no value
 /// read depends on a rotation (their models see the rotated values, and no frame
 /// predicts), so the values are read first, then each detail's rotation is made and
@@ -375,19 +378,23 @@ fn decode_rotated(
         }
         Ok(())
     };
-    let mut parts = Vec::with_capacity(nd.min(ROT_BLOCK));
     if !(threads > 1 && nd >= BESIDE_MIN) {
+        // (The passes over a part of a block at a time: a smaller scratch.)
+        let mut parts = Vec::with_capacity(nd.min(ROT_PASS));
         let mut lo = 0;
         while lo < nd {
             let hi = (lo + ROT_BLOCK).min(nd);
             read(lo, hi, 0, [&mut *f0, &mut *f1, &mut *f2])?;
-            rots.prepare(lo, hi, &mut parts);
-            let f = [&mut *f0, &mut *f1, &mut *f2];
-            rots.undo(lo, 0, &parts, |p| rots.finish(p), f)?;
+            for lo in (lo..hi).step_by(ROT_PASS) {
+                rots.prepare(lo, (lo + ROT_PASS).min(hi), &mut parts);
+                let f = [&mut *f0, &mut *f1, &mut *f2];
+                rots.undo(lo, 0, &parts, |p| rots.finish(p), f)?;
+            }
             lo = hi;
         }
         return Ok(());
     }
+    let mut parts = Vec::with_capacity(nd.min(ROT_BLOCK));
     // On two threads, a pipeline with one helper for the level: it makes each block's
     // rotations (which need no value) while the block is read, then undoes the block
     // once the reading hands its values over, while the next block is read. Errors come
