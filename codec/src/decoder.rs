@@ -685,11 +685,15 @@ fn synthesise_levels(
         let at = |e: Error| e.in_level(l + 1, section.offset);
         s.prepare(&mut level).map_err(at)?;
         // On more than one thread the successor's topology is made beside the level's
-        // reading (it needs only the level's); small levels are not worth a thread.
+        // reading (it needs only the level's); small levels are not worth a thread. A
+        // large sqrt(2) successor is made after, from the level given up, as on one
+        // thread: made beside, both levels' topologies and rings would be held at once,
+        // past the decoder's memory bound (2 x the mesh + 32 MiB) on large meshes.
         if threads > 1
             && !last
             && (family == Family::Sqrt2 || s.pole.is_empty())
             && family.details(&level) >= levl::BESIDE_MIN
+            && (family != Family::Sqrt2 || family.fine_nv(&level) <= SQRT2_BESIDE_MAX)
         {
             let given = stencils.take();
             let (read, made) = std::thread::scope(|sc| {
@@ -744,6 +748,13 @@ fn synthesise_levels(
     coarse_mesh(h, w, upto, &s.x, topo)
 }
 
+/// Most vertices of a sqrt(2) level whose topology is made beside the reading of the
+/// level before (see [`synthesise_levels`]), and most coarse vertices of a sqrt(2) level
+/// whose transform is made beside its reading (see [`Synthesis::read`]): above them the
+/// decoder works as on one thread, within its memory bound (2 x the mesh + 32 MiB; 2^19
+/// left a 1.57 M-vertex mesh at 184 MB on two threads against 165 MB on one, bound 168).
+const SQRT2_BESIDE_MAX: usize = 1 << 18;
+
 /// The decoder's state between levels.
 struct Synthesis<'h> {
     h: &'h Header,
@@ -797,11 +808,14 @@ impl Synthesis<'_> {
         let threads = self.threads;
         // On more than one thread, a level whose reading needs nothing of its transform
         // (no phases, no tangent targets) has the transform made beside the reading,
-        // from a copy of the coarse values.
+        // from a copy of the coarse values; not a sqrt(2) level of more than
+        // SQRT2_BESIDE_MAX coarse vertices, whose copy would take the decoder past its
+        // memory bound beside the level's rings and predictions.
         let beside = threads > 1
             && !phased
             && !levl::reads_targets(payload)
-            && family.details(level) >= levl::BESIDE_MIN;
+            && family.details(level) >= levl::BESIDE_MIN
+            && (family != Family::Sqrt2 || level.nv <= SQRT2_BESIDE_MAX);
         let t = if beside {
             let coarse = x.clone();
             let scheme = &self.scheme;
