@@ -674,6 +674,9 @@ fn synthesise_levels(
     let mut next: Option<Level> = None;
     let mut stencils: Option<Stencils> = None;
     let family = s.scheme.family;
+    // sqrt2-sym reads the per-vertex lists; the other sqrt(2) transforms walk the
+    // rings, which each level derives from the one before (sqrt2-sym makes them only
+    // for a level in tangent mode, for its memory).
     let lists = w == Wavelet::Sqrt2Sym;
     for l in 0..upto as usize {
         let mut level = match next.take() {
@@ -699,7 +702,7 @@ fn synthesise_levels(
             let (read, made) = std::thread::scope(|sc| {
                 let made = sc.spawn(|| match family {
                     Family::Sqrt2 => {
-                        topology::sqrt2::next_level_of(&level, lists, true).map(|n| (n, None))
+                        topology::sqrt2::next_level_of(&level, lists, !lists).map(|n| (n, None))
                     }
                     _ => Ok(level.next_mapped()).map(|(n, m)| (n, Some(m))),
                 });
@@ -724,7 +727,7 @@ fn synthesise_levels(
             // Only sqrt2-sym reads the per-vertex lists: the others' levels are made
             // without them.
             Family::Sqrt2 if !last => {
-                next = Some(topology::sqrt2::next_level(level, lists, true)?);
+                next = Some(topology::sqrt2::next_level(level, lists, !lists)?);
             }
             // The finest topology needs only the level's edges: its other arrays go first.
             Family::Sqrt2 => topo = topology::sqrt2::fine_owned(level),
