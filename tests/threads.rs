@@ -63,15 +63,7 @@ fn meshes_are_the_same_for_every_decoder_thread_count() {
             TransformChoice::Fixed(Wavelet::Bicubic),
             TransformChoice::Fixed(Wavelet::Sqrt2Sym),
         ] {
-            let opts = EncodeOptions {
-                transform,
-                keep_order: true,
-                source: input.source(),
-                ..Default::default()
-            };
-            let bytes = subwave::encode_to_vec(&input.mesh, &input.quantization, &opts)
-                .unwrap()
-                .bytes;
+            let bytes = encoded(&input, transform, true);
             let info = subwave::inspect(&bytes, &Default::default()).unwrap();
             for s in info.sections.iter().filter(|s| s.kind == "LEVL") {
                 match s.mode {
@@ -116,14 +108,7 @@ fn damaged_levels_fail_the_same_on_every_decoder_thread_count() {
     use subwave_container::{Container, ContainerWriter, Limits, SectionKind};
     let obj = subwave_corpus::large_cube(6).to_obj(6);
     let input = subwave::load(obj.as_bytes(), Some(16)).unwrap();
-    let opts = EncodeOptions {
-        transform: TransformChoice::Fixed(Wavelet::Interp6),
-        source: input.source(),
-        ..Default::default()
-    };
-    let bytes = subwave::encode_to_vec(&input.mesh, &input.quantization, &opts)
-        .unwrap()
-        .bytes;
+    let bytes = encoded(&input, TransformChoice::Fixed(Wavelet::Interp6), false);
     let info = subwave::inspect(&bytes, &Default::default()).unwrap();
     let c = Container::parse(&bytes, &Limits::default()).unwrap();
     // The largest rotated level (mode 4 or 5), by its place among the sections.
@@ -166,4 +151,21 @@ fn damaged_levels_fail_the_same_on_every_decoder_thread_count() {
         );
     }
     assert!(failed >= 10, "only {failed} of 40 damaged levels failed");
+}
+
+/// `input` coded with `transform`, its order kept or not.
+fn encoded(
+    input: &subwave::Loaded,
+    transform: subwave::TransformChoice,
+    keep_order: bool,
+) -> Vec<u8> {
+    let opts = EncodeOptions {
+        transform,
+        keep_order,
+        source: input.source(),
+        ..Default::default()
+    };
+    subwave::encode_to_vec(&input.mesh, &input.quantization, &opts)
+        .unwrap()
+        .bytes
 }

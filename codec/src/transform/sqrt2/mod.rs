@@ -809,19 +809,23 @@ mod tests {
     use crate::topology::fixtures::{prism_with_triangles, pseudo};
     use crate::topology::sqrt2::{closed, fine, fine_nv, fine_owned, next_level};
 
-    #[test]
-    fn next_level_is_the_level_of_the_fine_faces() {
+    /// The closed prism with its face `g` reversed (an inconsistent orientation).
+    fn prism_with_face_reversed(g: usize) -> Topo {
         let prism = prism_with_triangles();
-        // The same closed mesh with one face reversed (inconsistent orientation).
         let mut flipped = Topo::new(prism.nv);
         for f in 0..prism.nf() {
             let mut face = prism.face(f).to_vec();
-            if f == 0 {
+            if f == g {
                 face.reverse();
             }
             flipped.push(&face);
         }
-        for base in [prism, flipped] {
+        flipped
+    }
+
+    #[test]
+    fn next_level_is_the_level_of_the_fine_faces() {
+        for base in [prism_with_triangles(), prism_with_face_reversed(0)] {
             let mut level = Level::new(&base).unwrap();
             for _ in 0..5 {
                 let next = next_level(level.clone(), true, false).unwrap();
@@ -840,16 +844,8 @@ mod tests {
     /// from its faces; a mesh with a face reversed derives none at first and makes them.
     #[test]
     fn derived_rings_are_the_fine_levels_rings() {
-        let prism = prism_with_triangles();
-        let mut flipped = Topo::new(prism.nv);
-        for f in 0..prism.nf() {
-            let mut face = prism.face(f).to_vec();
-            if f == 2 {
-                face.reverse();
-            }
-            flipped.push(&face);
-        }
-        for (base, derives) in [(prism, true), (flipped, false)] {
+        let cases = [(prism_with_triangles(), true), (prism_with_face_reversed(2), false)];
+        for (base, derives) in cases {
             let mut level = Level::new(&base).unwrap();
             for depth in 0..6 {
                 let next = next_level(level.clone(), false, true).unwrap();
