@@ -20,7 +20,7 @@ pub struct Rings {
 }
 
 impl Rings {
-    /// Builds the rings of `t` (for the solver; the codec uses [`Rings::from_level`]).
+    /// Builds the rings of `t` (for the solver; the codec uses [`Rings::of_level`]).
     #[cfg(any(test, feature = "reference"))]
     pub fn new(t: &crate::topology::Topo) -> Rings {
         match crate::topology::Level::new(t) {
@@ -115,10 +115,12 @@ impl Rings {
     /// The rings of the fine mesh of a sqrt(2) step on `level` (SPEC.md 8.4: per coarse
     /// edge q = (a, b) with faces (f1, f2), in edge order, the quad (a, F2, b, F1)),
     /// derived from `rings`, the level's own, without a search: equal to
-    /// [`Rings::from_level`] of the fine level. `None` (make them from the fine level)
-    /// unless every coarse face has distinct corners (at most 64), every edge's first
-    /// face walks it from its first end and its second face back (a closed, consistently
-    /// oriented mesh), and every vertex's ring is a disc.
+    /// [`Rings::from_level`] of the fine level. The coarse faces must have distinct
+    /// corners (the caller, [`crate::topology::sqrt2::next_level`], derives only where
+    /// its fine edges found them so). `None` (make them from the fine level) unless
+    /// every coarse face has at most 64 corners, every edge's first face walks it from
+    /// its first end and its second face back (a closed, consistently oriented mesh),
+    /// and every vertex's ring is a disc.
     ///
     /// In the fine mesh an old vertex v's quads are those of its coarse edges, and a
     /// face point's those of its face's edges. Around v, the coarse ring walks faces
@@ -161,7 +163,8 @@ impl Rings {
                 let next = if i + 1 == k { face[0] } else { face[i + 1] };
                 let first = level.edge_faces[q as usize][0] == f as u32;
                 let ends = if first { [v, next] } else { [next, v] };
-                if level.edges[q as usize] != ends || face[i + 1..].contains(&v) {
+                debug_assert!(!face[i + 1..].contains(&v), "face {f}: corners not distinct");
+                if level.edges[q as usize] != ends {
                     return None;
                 }
                 let slot = rings.starts[v as usize] as usize + p as usize;

@@ -75,7 +75,8 @@ pub fn next_level_of(level: &Level, lists: bool, rings: bool) -> crate::error::R
     finish_next(fine_topo, parts, lists, fine_rings)
 }
 
-/// The rings of `level`'s fine mesh when `derive` and they can be derived.
+/// The rings of `level`'s fine mesh when `derive` (only where [`next_edges`] found
+/// every face's corners distinct, as [`Rings::sqrt2_next`] needs) and they can be derived.
 fn next_rings(level: &Level, derive: bool) -> Option<Rings> {
     derive.then(|| Rings::sqrt2_next(level, &Rings::of_level(level))).flatten()
 }
