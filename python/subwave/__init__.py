@@ -246,11 +246,16 @@ def _flat_faces(faces, face_offsets):
     faces = np.asarray(faces)
     if faces.size and not np.issubdtype(faces.dtype, np.integer):
         raise TypeError(f"faces must be integers, not {faces.dtype}")
-    if faces.size and (faces.min() < 0 or faces.max() > np.iinfo(np.uint32).max):
+    # uint32 arrays (a decoded mesh's) are in range by their type.
+    if faces.size and faces.dtype != np.uint32 and (
+        faces.min() < 0 or faces.max() > np.iinfo(np.uint32).max
+    ):
         raise InvalidMeshError("face indices must be between 0 and 2^32 - 1")
     if face_offsets is not None:
         flat = faces.reshape(-1)
-        offsets = np.asarray(face_offsets, dtype=np.int64)
+        offsets = np.asarray(face_offsets)
+        if offsets.dtype != np.uint32:
+            offsets = np.asarray(offsets, dtype=np.int64)
     elif faces.ndim == 2:
         m, k = faces.shape
         flat = faces.reshape(-1)
@@ -259,7 +264,11 @@ def _flat_faces(faces, face_offsets):
         flat, offsets = faces.reshape(-1), np.zeros(1, dtype=np.int64)
     else:
         raise ValueError("faces must be an (m, k) array, or flat with face_offsets")
-    if offsets.size and (offsets.min() < 0 or offsets.max() > np.iinfo(np.uint32).max):
+    if (
+        offsets.size
+        and offsets.dtype != np.uint32
+        and (offsets.min() < 0 or offsets.max() > np.iinfo(np.uint32).max)
+    ):
         raise InvalidMeshError("face offsets must be between 0 and 2^32 - 1")
     return (
         np.ascontiguousarray(flat, dtype=np.uint32),
