@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 /// 12 (the variance of the rounding noise it sums), fitted detail far more.
 pub(crate) const FIT_SCREEN: f64 = 12.0;
 
-/// Mean [`fit::roughness`] over the axes of the finest level above which `auto` does
+/// Mean `fit::roughness` over the axes of the finest level above which `auto` does
 /// not try the fit, unless [`FIT_SCREEN`] lets it: a rounded subdivision surface
 /// (refined or on the limit) gives about 3 in its regular patches, Blender's limit
 /// surfaces 1 to 3, detail hundreds and more.

@@ -156,7 +156,7 @@ fn lattice_candidates(v: &[i64]) -> Vec<i64> {
 
 impl ValueMap {
     /// The map `auto` tries: every axis whose distinct values are sparse in their span
-    /// and lie apart, as on a lattice ([`SPARSE`], [`LATTICE`]); `None` when no axis is.
+    /// and lie apart, as on a lattice (`SPARSE`, `LATTICE`); `None` when no axis is.
     pub fn candidate(positions: &[[i64; 3]]) -> Option<ValueMap> {
         let axes = std::array::from_fn(|k| {
             let v = distinct(positions, k);

@@ -14,7 +14,7 @@ pub struct Recovered {
     /// Per level (1 = first refinement): coarse edge (input numbers, smaller first) ->
     /// its edge point's input number.
     pub edge_points: Vec<PairMap>,
-    /// Per level: coarse face, named by its [`face_key`] (input numbers) -> its face
+    /// Per level: coarse face, named by its `face_key` (input numbers) -> its face
     /// point's input number.
     pub face_points: Vec<PairMap>,
     /// Polar hierarchies: the poles (input numbers), the same vertices at every level;

@@ -59,7 +59,7 @@ pub fn recover_all(nv: usize, topo: &Topo, max_levels: usize) -> Vec<Recovered> 
     recover_candidates(nv, topo, max_levels, false)
 }
 
-/// Like [`recover_all`]; with `led`, first the candidate where every component takes
+/// Like `recover_all`; with `led`, first the candidate where every component takes
 /// the labeling (of the common depth) whose base vertices include its smallest input
 /// vertex number, when that differs from both: exporters that write a subdivision
 /// surface write its base vertices first, so the input's order then codes as blocks of

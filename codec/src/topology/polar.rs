@@ -23,7 +23,7 @@ pub fn recover(nv: usize, topo: &Topo, max_levels: usize) -> Option<Canonical> {
     recover_all(nv, topo, max_levels, true, KEEP).into_iter().next()
 }
 
-/// Like [`recover`], also returning the equally deep alternatives where every component
+/// Like `recover`, also returning the equally deep alternatives where every component
 /// that ties takes its second, third or fourth coarsening (a regular polar grid coarsens
 /// in several ways; which codes smaller depends on the geometry). At most `keep`
 /// results ([`KEEP`], or [`KEEP_FOR_ORDER`] when the input's order is kept: the one its

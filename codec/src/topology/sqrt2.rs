@@ -57,7 +57,7 @@ fn fine_of_edges(nv: usize, nf: usize, edges: &[[u32; 2]], edge_faces: &[[u32; 2
 /// `lists` the new level has no per-vertex lists (a decoder's sqrt2-lazy or ir2w level,
 /// which never reads them), as if [`Level::free_vertex_adjacency`] had been called.
 /// With `rings` the new level comes with its vertices' rings where they can be derived
-/// from the level's ([`Rings::sqrt2_next`]; a decoder, whose next level's transform
+/// from the level's (`Rings::sqrt2_next`; a decoder, whose next level's transform
 /// walks them; the encoder keeps its levels without, for their memory).
 pub fn next_level(level: Level, lists: bool, rings: bool) -> crate::error::Result<Level> {
     let fine_topo = fine(&level);
@@ -459,7 +459,7 @@ pub fn recover(topo: &Topo, max_levels: usize) -> Option<Recovered> {
     recover_candidates(topo, max_levels, false).into_iter().next()
 }
 
-/// Like [`recover`]; with `alternatives`, also the hierarchy where every component
+/// Like `recover`; with `alternatives`, also the hierarchy where every component
 /// that has an equally deep other chain takes it (a coarse mesh and its dual give the
 /// same sqrt(2) step: which one a file was made from shows in its order only).
 pub fn recover_candidates(topo: &Topo, max_levels: usize, alternatives: bool) -> Vec<Recovered> {

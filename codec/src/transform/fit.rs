@@ -1046,7 +1046,7 @@ pub fn roughness(levels: &[Level], finest: &Level, x: &[i64]) -> Option<f64> {
     Runs::new(levels, finest)?.roughness(x)
 }
 
-/// The runs [`roughness`] measures, found once for every axis.
+/// The runs `roughness` measures, found once for every axis.
 pub struct Runs(Vec<[usize; 5]>);
 
 impl Runs {
@@ -1057,7 +1057,7 @@ impl Runs {
         (!runs.is_empty()).then_some(Runs(runs))
     }
 
-    /// [`roughness`] of the values `x`.
+    /// `roughness` of the values `x`.
     pub fn roughness(&self, x: &[i64]) -> Option<f64> {
         let mut squares: Vec<f64> = self
             .0

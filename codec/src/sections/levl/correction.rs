@@ -183,7 +183,7 @@ pub(super) fn corr_weights(level: &Level, x: &[Vec<i64>; 3]) -> Option<Weights> 
     sampled_corr_weights(level, x, Sample::All)
 }
 
-/// [`corr_weights`] fitted on the details in `sample`.
+/// `corr_weights` fitted on the details in `sample`.
 pub(super) fn sampled_corr_weights(
     level: &Level,
     x: &[Vec<i64>; 3],

@@ -291,7 +291,7 @@ impl Givens {
     /// then the table's rotation for `m = [|b'| 2^10 / a']`, negated when `b' < 0`.
     /// Only the ratio of `a` and `b` matters (|a|, |b| < 2^40). Without a branch on the
     /// quadrant (normals point every way): the same rotation as
-    /// [`Givens::towards_by_cases`], SPEC.md's cases in order.
+    /// `Givens::towards_by_cases` (a test), SPEC.md's cases in order.
     #[inline]
     pub(super) fn towards(a: i64, b: i64) -> Givens {
         // Steep when |b| > |a|: one turn (b > 0) or three; else none (a >= 0) or two.

@@ -1,6 +1,6 @@
 //! The Catmull-Clark transforms (SPEC.md 9.2-9.5, 9.11, 9.12) on one level: Bertram et
 //! al.'s integer lifting (lazy, bilinear, bicubic, biquintic), the 4-fold symmetric
-//! dyadic lifting, and the predict-only interp4 / interp6 ([`interp`]), with their
+//! dyadic lifting, and the predict-only interp4 / interp6 (`interp`), with their
 //! phases ([`Phaser`]).
 
 mod interp;
@@ -280,7 +280,7 @@ impl Stencils {
 
     /// The stencils of wavelet `w` on `fine`, the level that [`Level::next_mapped`]
     /// made of `coarse` with `map`, derived from these (of `w` on `coarse`) where they
-    /// follow by index arithmetic ([`Interp4::derive`]): the tables
+    /// follow by index arithmetic (`Interp4::derive`): the tables
     /// [`Stencils::new`] would make. `None` where they do not follow (the level's
     /// transform then makes them).
     pub fn next(&self, coarse: &Level, fine: &Level, map: &NextMap, w: Wavelet) -> Option<Stencils> {
@@ -372,7 +372,7 @@ impl Clone for StencilCache {
     }
 }
 
-/// [`analyse_except`] with the level's [`Stencils`] made beforehand.
+/// `analyse_except` with the level's [`Stencils`] made beforehand.
 pub fn analyse_with<T: Sample>(
     level: &Level,
     w: Wavelet,
@@ -395,7 +395,7 @@ pub fn synthesise_except<T: Sample>(level: &Level, w: Wavelet, x: &mut [T], skip
     synthesise_with(level, w, &Stencils::new(level, w), x, skip);
 }
 
-/// [`synthesise_except`] with the level's [`Stencils`] made beforehand.
+/// `synthesise_except` with the level's [`Stencils`] made beforehand.
 pub fn synthesise_with<T: Sample>(
     level: &Level,
     w: Wavelet,

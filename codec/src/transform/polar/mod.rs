@@ -2,7 +2,7 @@
 //! refinement rules of polar subdivision (Zhao et al. 2009, eq. 2-6) inverted in
 //! integers (the lazy wavelet), optionally followed by the paper's local lifting (eq.
 //! 11-13, weights from the frozen tables), inside the image of each pole's base fan,
-//! joined to a Catmull-Clark transform outside it. [`crate::transform::polar::reference`] holds the
+//! joined to a Catmull-Clark transform outside it. `transform::polar::reference` holds the
 //! floating-point reference.
 
 #[cfg(any(test, feature = "reference"))]
