@@ -382,6 +382,11 @@ pub(crate) fn format_coord(mesh: &Mesh, v: usize, k: usize, q: &Quantization, ou
     text_at(&mesh.positions, &mesh.floats, v, k, q, out)
 }
 
+/// Appends integer `v`'s decimal text (as `{}` writes it, without a formatter).
+pub(crate) fn push_int(out: &mut String, v: impl itoa::Integer) {
+    out.push_str(itoa::Buffer::new().format(v));
+}
+
 /// Vertex `v`'s coordinate `k` as `f64` (its float when the mesh keeps one).
 pub(crate) fn value_f64(mesh: &Mesh, v: usize, k: usize, q: &Quantization) -> f64 {
     f64_at(&mesh.positions, &mesh.floats, v, k, q)
@@ -485,11 +490,11 @@ pub(crate) fn write_counted_text<W: Write>(
         out.write_all(line.as_bytes())?;
     }
     for face in mesh.iter_faces() {
-        use std::fmt::Write as _;
         line.clear();
-        let _ = write!(line, "{}", face.len());
+        push_int(&mut line, face.len());
         for &i in face {
-            let _ = write!(line, " {i}");
+            line.push(' ');
+            push_int(&mut line, i);
         }
         line.push('\n');
         out.write_all(line.as_bytes())?;

@@ -6,7 +6,7 @@ use std::collections::BTreeSet;
 use std::io::Write;
 
 use super::template::{Attribute as FileAttribute, Builder, Form};
-use super::{coords_line, syntax, FileLines, Format, RawAttribute, RawMesh};
+use super::{coords_line, push_int, syntax, FileLines, Format, RawAttribute, RawMesh};
 use crate::error::Result;
 use crate::mesh::{Attribute, Domain, Mesh, ValueType, NO_ENTRY};
 use crate::quant::{Quantization, TextCoords};
@@ -691,18 +691,24 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
         line.clear();
         line.push('f');
         for (j, &i) in mesh.face(f).iter().enumerate() {
-            let _ = write!(line, " {}", i as u64 + 1);
+            line.push(' ');
+            push_int(&mut line, i as u64 + 1);
             let t = uv.and_then(|t| entry(t, s + j, i));
             match (t, normal.and_then(|n| entry(n, s + j, i))) {
                 (None, None) => {}
                 (Some(t), None) => {
-                    let _ = write!(line, "/{t}");
+                    line.push('/');
+                    push_int(&mut line, t);
                 }
                 (None, Some(n)) => {
-                    let _ = write!(line, "//{n}");
+                    line.push_str("//");
+                    push_int(&mut line, n);
                 }
                 (Some(t), Some(n)) => {
-                    let _ = write!(line, "/{t}/{n}");
+                    line.push('/');
+                    push_int(&mut line, t);
+                    line.push('/');
+                    push_int(&mut line, n);
                 }
             }
         }

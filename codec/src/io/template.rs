@@ -205,7 +205,7 @@ fn attribute_marker(
             .checked_sub(1)
             .and_then(|c| attribute_corner(a, c))
             .ok_or_else(|| bad("a corner marker past the attribute's faces"))?;
-        out.extend_from_slice(v.to_string().as_bytes());
+        out.extend_from_slice(itoa::Buffer::new().format(v).as_bytes());
         return Ok(());
     }
     form.write(a, used[g], out).ok_or_else(|| {
@@ -377,12 +377,13 @@ impl<'m> Builder<'m> {
     pub(super) fn index_text(&mut self, token: &[u8], base: u32) {
         let c = self.corner;
         self.corner += 1;
+        let mut text = itoa::Buffer::new();
         let want = self
             .mesh
             .faces
             .get(c)
-            .map(|&i| (i as u64 + base as u64).to_string());
-        if want.as_deref().map(str::as_bytes) == Some(token) {
+            .map(|&i| text.format(i as u64 + base as u64));
+        if want.map(str::as_bytes) == Some(token) {
             self.out.push(if base == 1 {
                 INDEX_TEXT_1
             } else {
@@ -644,6 +645,8 @@ pub(crate) fn expand_into<W: std::io::Write>(
     let mut written = 0u64;
     let (mut coord, mut corner) = (0usize, 0usize);
     let mut used = [0usize; MAX_CHANNELS];
+    // Integers written as text (corner indices), without an allocation each.
+    let mut digits = itoa::Buffer::new();
     let mut text = String::new();
     let mut i = 0;
     let next_coord = |coord: &mut usize| {
@@ -694,8 +697,8 @@ pub(crate) fn expand_into<W: std::io::Write>(
                 let v =
                     next_corner(&mut corner).ok_or_else(|| bad("more corners than faces have"))?;
                 match b {
-                    INDEX_TEXT_1 => out.extend_from_slice((v as u64 + 1).to_string().as_bytes()),
-                    INDEX_TEXT_0 => out.extend_from_slice(v.to_string().as_bytes()),
+                    INDEX_TEXT_1 => out.extend_from_slice(digits.format(v as u64 + 1).as_bytes()),
+                    INDEX_TEXT_0 => out.extend_from_slice(digits.format(v).as_bytes()),
                     INDEX_32_LE => out.extend_from_slice(&v.to_le_bytes()),
                     _ => out.extend_from_slice(&v.to_be_bytes()),
                 }

@@ -6,7 +6,9 @@
 use std::collections::{BTreeSet, HashMap};
 use std::io::Write;
 
-use super::{value_f32, value_f64, write_counted_text, FileLines, Format, RawAttribute, RawMesh};
+use super::{
+    push_int, value_f32, value_f64, write_counted_text, FileLines, Format, RawAttribute, RawMesh,
+};
 
 mod walk;
 use crate::error::{Error, Result};
@@ -1187,10 +1189,10 @@ pub(crate) fn write<W: Write>(
     for (f, face) in mesh.iter_faces().enumerate() {
         line.clear();
         if !binary {
-            use std::fmt::Write as _;
-            let _ = write!(line, "{}", face.len());
+            push_int(&mut line, face.len());
             for &i in face {
-                let _ = write!(line, " {i}");
+                line.push(' ');
+                push_int(&mut line, i);
             }
         } else if cty == "uchar" {
             buf.push(face.len() as u8);
