@@ -422,25 +422,24 @@ fn scale_pow2(x: f64, e: i32) -> f64 {
     x * 2f64.powi(h) * 2f64.powi(e - h)
 }
 
-/// Writes `n / 10^decimals` with exactly `decimals` decimals.
+/// Writes `n / 10^decimals` with exactly `decimals` decimals (at most [`MAX_DECIMALS`]).
 pub fn write_decimal(n: i64, decimals: u8, out: &mut String) {
-    use std::fmt::Write;
     let a = n.unsigned_abs();
     if n < 0 {
         out.push('-');
     }
+    // (itoa: the digits without a formatter.)
+    let mut digits = itoa::Buffer::new();
     if decimals == 0 {
-        let _ = write!(out, "{a}");
+        out.push_str(digits.format(a));
         return;
     }
     let p = POW10[decimals as usize] as u64;
-    let _ = write!(
-        out,
-        "{}.{:0width$}",
-        a / p,
-        a % p,
-        width = decimals as usize
-    );
+    out.push_str(digits.format(a / p));
+    out.push('.');
+    let fraction = digits.format(a % p);
+    out.extend(std::iter::repeat_n('0', decimals as usize - fraction.len()));
+    out.push_str(fraction);
 }
 
 fn range_error(what: String) -> Error {
@@ -629,6 +628,32 @@ mod tests {
             "nan", "-inf", "Infinity", "1.2.3", "", "-", "abc", "1e", "1e999",
         ] {
             assert!(Decimal::parse(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn decimal_text_is_the_formatters() {
+        // What `{}.{:0width$}` writes, for mantissas near every power of ten and the
+        // extremes, with every number of decimals.
+        let mut ns = vec![0i64, 1, -1, 5, i64::MAX, i64::MIN, i64::MIN + 1];
+        for p in POW10 {
+            ns.extend([p - 1, p, p + 1, -p + 1, -p, -p - 1, p / 2 + 7]);
+        }
+        for decimals in 0..=18u8 {
+            for &n in &ns {
+                let a = n.unsigned_abs();
+                let sign = if n < 0 { "-" } else { "" };
+                let want = match decimals {
+                    0 => format!("{sign}{a}"),
+                    d => {
+                        let p = POW10[d as usize] as u64;
+                        format!("{sign}{}.{:0w$}", a / p, a % p, w = d as usize)
+                    }
+                };
+                let mut out = String::new();
+                write_decimal(n, decimals, &mut out);
+                assert_eq!(out, want, "{n} with {decimals} decimals");
+            }
         }
     }
 
