@@ -416,14 +416,33 @@ pub fn encode(mesh: &Mesh, q: &Quantization, opts: &EncodeOptions) -> Result<Enc
 /// container decodes to (the input's with an ORDR section, else canonical) and coded as
 /// a nested container with its order kept.
 fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<Encoded> {
-    let dec = crate::decoder::decode(&enc.bytes, &crate::DecodeOptions::default())?;
-    let out = &dec.mesh;
-    let identity = dec.input_order;
+    use crate::mesh::Domain;
+    // The decoded mesh, for channels that follow its vertices, faces or corners: a
+    // file's own records (an OBJ's comments, a PLY's other elements) need only the
+    // vertex order, which the header tells (an ORDR section keeps the input's).
+    let on_mesh = mesh.attributes.iter().any(|a| a.domain != Domain::File);
+    let dec = match on_mesh {
+        true => Some(crate::decoder::decode(
+            &enc.bytes,
+            &crate::DecodeOptions::default(),
+        )?),
+        false => None,
+    };
+    let none = Mesh::new();
+    let out = dec.as_ref().map_or(&none, |d| &d.mesh);
+    let identity = dec.as_ref().map_or(enc.header.has_order, |d| d.input_order);
+    debug_assert_eq!(identity, enc.header.has_order);
     let vertex_of = |i: usize| if identity { i } else { enc.order[i] as usize };
-    // Each decoded face's input face and the rotation between them.
-    let faces = match identity {
-        true => (0..out.face_count()).map(|f| (f, 0)).collect(),
-        false => match_faces(mesh, out, &enc.order)?,
+    // Each decoded face's input face and the rotation between them (for channels on
+    // faces or corners).
+    let on_faces = mesh
+        .attributes
+        .iter()
+        .any(|a| matches!(a.domain, Domain::Face | Domain::Corner));
+    let faces = match (on_faces, identity) {
+        (false, _) => Vec::new(),
+        (true, true) => (0..out.face_count()).map(|f| (f, 0)).collect(),
+        (true, false) => match_faces(mesh, out, &enc.order)?,
     };
     let mut chans = Vec::with_capacity(mesh.attributes.len());
     let o = nested_options(opts);
