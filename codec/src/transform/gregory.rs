@@ -60,14 +60,50 @@ fn cos_sin_q60(k: usize, n: usize) -> (i128, i128) {
     }
 }
 
-/// `cos(2 pi k / n)` at 2^-40 (SPEC.md 9.10).
+/// `cos(2 pi k / n)` at 2^-40 (SPEC.md 9.10). Each valence's cosines are made once
+/// ([`Valence`]): a series of 24 terms in 128-bit divisions per value, where every
+/// edge point of an end cap takes three per edge.
 pub fn cos_q40(k: usize, n: usize) -> i128 {
+    match Valence::of(n) {
+        Some(v) => v.cos[k % n],
+        None => cos_q40_series(k, n),
+    }
+}
+
+fn cos_q40_series(k: usize, n: usize) -> i128 {
     round128(cos_sin_q60(k % n, n).0, 1 << 20)
 }
 
+/// A valence's cosines and tangent scale, made at their first use.
+struct Valence {
+    cos: Vec<i128>,
+    tangent_scale: i128,
+}
+
+impl Valence {
+    /// Valence `n`'s, for `1 <= n <= MAX_VALENCE` (the end caps' corners).
+    fn of(n: usize) -> Option<&'static Valence> {
+        static MADE: [std::sync::OnceLock<Valence>; MAX_VALENCE + 1] =
+            [const { std::sync::OnceLock::new() }; MAX_VALENCE + 1];
+        let made = MADE.get(n).filter(|_| n > 0)?;
+        Some(made.get_or_init(|| Valence {
+            cos: (0..n).map(|k| cos_q40_series(k, n)).collect(),
+            tangent_scale: tangent_scale_series(n),
+        }))
+    }
+}
+
 /// OpenSubdiv's tangent scale of a vertex of `n` edges at 2^-40 (SPEC.md 9.10):
-/// `16 / (n ((c + 5) + sqrt((c + 9)(c + 1))))`, `c = cos(2 pi / n)`.
+/// `16 / (n ((c + 5) + sqrt((c + 9)(c + 1))))`, `c = cos(2 pi / n)`; made once per
+/// valence ([`Valence`]).
 pub fn tangent_scale_q40(n: usize) -> i128 {
+    match Valence::of(n) {
+        Some(v) => v.tangent_scale,
+        None => tangent_scale_series(n),
+    }
+}
+
+fn tangent_scale_series(n: usize) -> i128 {
     let c = cos_sin_q60(1 % n, n).0;
     let prod = ((c + 9 * ONE_Q60) * (c + ONE_Q60)) as u128;
     let root = super::isqrt(prod) as i128;
@@ -469,6 +505,13 @@ mod tests {
             assert!((tangent_scale_q40(n) - want).abs() <= 1, "scale {n}");
         }
         // Exact where the value is: a quarter turn, and the regular vertex's 1/2.
+        // The valences' tables are the series' values.
+        for n in 1..=MAX_VALENCE + 2 {
+            assert_eq!(tangent_scale_q40(n), tangent_scale_series(n), "scale {n}");
+            for k in 0..2 * n {
+                assert_eq!(cos_q40(k, n), cos_q40_series(k, n), "cos {k}/{n}");
+            }
+        }
         assert_eq!(cos_q40(1, 4), 0);
         assert_eq!(cos_q40(2, 4), -W);
         assert_eq!(tangent_scale_q40(4), W / 2);
