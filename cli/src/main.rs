@@ -74,9 +74,11 @@ enum Command {
     Decompress {
         #[command(flatten)]
         io: Files,
-        /// Output format. By default the output's extension says (.obj, .off; .ply and
-        /// .stl are ASCII for decimal values and binary for float values, so values
-        /// stay exact), else the input's format.
+        /// Output format, written by subwave's writer. By default the output's extension
+        /// says (.obj, .off; .ply and .stl are ASCII for decimal values and binary for
+        /// float values, so values stay exact), else the input's format; without this
+        /// option, a container that keeps the input file's bytes writes them back to
+        /// an output of the input's kind (or `-`).
         #[arg(long, value_enum)]
         format: Option<OutFormat>,
         /// Write the mesh of refinement level K (0 = base mesh); works on a file cut off
