@@ -61,7 +61,7 @@ fn cos_sin_q60(k: usize, n: usize) -> (i128, i128) {
 }
 
 /// `cos(2 pi k / n)` at 2^-40 (SPEC.md 9.10). Each valence's cosines are made once
-/// ([`Valence`]): a series of 24 terms in 128-bit divisions per value, where every
+/// (`Valence`): a series of 24 terms in 128-bit divisions per value, where every
 /// edge point of an end cap takes three per edge.
 pub fn cos_q40(k: usize, n: usize) -> i128 {
     match Valence::of(n) {
@@ -95,7 +95,7 @@ impl Valence {
 
 /// OpenSubdiv's tangent scale of a vertex of `n` edges at 2^-40 (SPEC.md 9.10):
 /// `16 / (n ((c + 5) + sqrt((c + 9)(c + 1))))`, `c = cos(2 pi / n)`; made once per
-/// valence ([`Valence`]).
+/// valence (`Valence`).
 pub fn tangent_scale_q40(n: usize) -> i128 {
     match Valence::of(n) {
         Some(v) => v.tangent_scale,
