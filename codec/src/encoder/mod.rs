@@ -430,8 +430,9 @@ fn with_channels(mut enc: Encoded, mesh: &Mesh, opts: &EncodeOptions) -> Result<
     };
     let none = Mesh::new();
     let out = dec.as_ref().map_or(&none, |d| &d.mesh);
-    let identity = dec.as_ref().map_or(enc.header.has_order, |d| d.input_order);
-    debug_assert_eq!(identity, enc.header.has_order);
+    // Decoded vertex i is input vertex i with an ORDR section.
+    let identity = enc.header.has_order;
+    debug_assert!(dec.as_ref().is_none_or(|d| d.input_order == identity));
     let vertex_of = |i: usize| if identity { i } else { enc.order[i] as usize };
     // Each decoded face's input face and the rotation between them (for channels on
     // faces or corners).

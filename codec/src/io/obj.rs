@@ -622,7 +622,6 @@ pub(crate) fn writes(a: &Attribute) -> bool {
 }
 
 pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Result<()> {
-    use std::fmt::Write as _;
     let find = |name: &str| mesh.attributes.iter().find(|a| a.name == name && writes(a));
     let (colour, uv, normal) = (find("color"), find("uv"), find("normal"));
     let mut line = String::with_capacity(128);
@@ -736,7 +735,8 @@ pub(crate) fn write<W: Write>(out: &mut W, mesh: &Mesh, q: &Quantization) -> Res
             line.clear();
             line.push_str(keyword);
             for v in &a.values[items] {
-                let _ = write!(line, " {}", number(v[0])?);
+                line.push(' ');
+                push_int(&mut line, number(v[0])?);
             }
             line.push('\n');
             out.write_all(line.as_bytes())?;

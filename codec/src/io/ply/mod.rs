@@ -1042,8 +1042,8 @@ impl<'a> Column<'a> {
         let n = items.len();
         match (binary, self.count) {
             (false, _) => {
-                use std::fmt::Write as _;
-                let _ = write!(text, " {n}");
+                text.push(' ');
+                push_int(text, n);
             }
             (true, "uchar") => buf.push(n as u8),
             (true, _) => buf.extend_from_slice(&(n as u32).to_le_bytes()),
@@ -1211,8 +1211,8 @@ pub(crate) fn write<W: Write>(
         for (a, &lty) in cchan.iter().zip(&ltys) {
             let n = corners.len() * a.width as usize;
             if !binary {
-                use std::fmt::Write as _;
-                let _ = write!(line, " {n}");
+                line.push(' ');
+                push_int(&mut line, n);
             } else if lty == "uchar" {
                 buf.push(n as u8);
             } else {
